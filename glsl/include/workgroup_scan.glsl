@@ -1,0 +1,41 @@
+// Workgroup-wide exclusive sum of one float per invocation, for 1D workgroups.
+//
+// Subgroup arithmetic first (8 lanes on lavapipe, 32 on NVIDIA, 64 on AMD wave64), then each
+// invocation adds the totals of the subgroups before its own, read from shared memory: one
+// barrier in all (DESIGN.md: barriers are what costs on lavapipe). The sums form a tree, so the
+// rounding error grows with log2(workgroup size), not with the workgroup size.
+//
+// Requires: GL_KHR_shader_subgroup_arithmetic, a 1D workgroup of at most WORKGROUP_SUM_SLOTS
+// subgroups, and at most one call per workgroup invocation (the shared slots are not reset).
+
+#ifndef WORKGROUP_SCAN_GLSL
+#define WORKGROUP_SCAN_GLSL
+
+#ifndef WORKGROUP_SUM_SLOTS
+#define WORKGROUP_SUM_SLOTS 64
+#endif
+
+shared float workgroup_subgroup_totals[WORKGROUP_SUM_SLOTS];
+
+// Returns the sum of `value` over the invocations before this one (exclusive) and writes the sum
+// over the whole workgroup to `total`. Exclusive sums are formed directly, never as an inclusive
+// sum minus the own value: that subtraction cancels catastrophically after a large value.
+float workgroup_exclusive_add(float value, out float total) {
+    float within = subgroupExclusiveAdd(value);
+    if (gl_SubgroupInvocationID == gl_SubgroupSize - 1u) {
+        workgroup_subgroup_totals[gl_SubgroupID] = within + value;
+    }
+    barrier();
+    float before = 0.0;
+    total = 0.0;
+    for (uint s = 0u; s < gl_NumSubgroups; ++s) {
+        float t = workgroup_subgroup_totals[s];
+        if (s < gl_SubgroupID) {
+            before += t;
+        }
+        total += t;
+    }
+    return before + within;
+}
+
+#endif

@@ -1,0 +1,311 @@
+//! Recording of one submission: dispatches grouped into named passes, each pass bracketed by
+//! GPU timestamps, a memory barrier after every dispatch so each pass sees the last one's
+//! writes, then submit, wait, and the per-pass times.
+//!
+//! `Commands<'a>` borrows every kernel and buffer it records for 'a, so none can be dropped
+//! before the submission has completed.
+
+use std::marker::PhantomData;
+use std::time::Instant;
+
+use ash::vk;
+
+use super::buffer::GpuBuffer;
+use super::context::Context;
+use super::error::{GpuError, GpuResult, VkContext};
+use super::kernel::{descriptor_type, Kernel};
+use super::reflect::BindingInfo;
+use super::timing::{PassTime, Timings};
+
+/// At most this many passes per submission (two timestamps each).
+pub const MAX_PASSES: u32 = 512;
+const SETS_PER_POOL: u32 = 64;
+
+pub struct Commands<'a> {
+    ctx: Context,
+    cb: vk::CommandBuffer,
+    descriptor_pools: Vec<vk::DescriptorPool>,
+    query_pool: Option<vk::QueryPool>,
+    passes: Vec<(String, u32)>,
+    open_pass: Option<String>,
+    _borrows: PhantomData<&'a ()>,
+}
+
+impl<'a> Commands<'a> {
+    pub fn new(ctx: &Context) -> GpuResult<Self> {
+        let cb = ctx.allocate_command_buffer()?;
+        let mut cmd = Commands {
+            ctx: ctx.clone(),
+            cb,
+            descriptor_pools: Vec::new(),
+            query_pool: None,
+            passes: Vec::new(),
+            open_pass: None,
+            _borrows: PhantomData,
+        };
+        let device = ctx.device();
+        let begin = vk::CommandBufferBeginInfo::default()
+            .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
+        unsafe { device.begin_command_buffer(cb, &begin) }.vk("vkBeginCommandBuffer")?;
+        if ctx.info().timestamps() {
+            let info = vk::QueryPoolCreateInfo::default()
+                .query_type(vk::QueryType::TIMESTAMP)
+                .query_count(2 * MAX_PASSES);
+            let pool = unsafe { device.create_query_pool(&info, None) }.vk("vkCreateQueryPool")?;
+            cmd.query_pool = Some(pool);
+            unsafe { device.cmd_reset_query_pool(cb, pool, 0, 2 * MAX_PASSES) };
+        }
+        Ok(cmd)
+    }
+
+    /// Records the work `record` does as one pass named `name`, timed on the GPU.
+    pub fn pass<R>(
+        &mut self,
+        name: &str,
+        record: impl FnOnce(&mut Self) -> GpuResult<R>,
+    ) -> GpuResult<R> {
+        if let Some(open) = &self.open_pass {
+            return Err(GpuError::Pass {
+                pass: name.into(),
+                reason: format!("passes do not nest (inside `{open}`)"),
+            });
+        }
+        let index = self.passes.len() as u32;
+        if index >= MAX_PASSES {
+            return Err(GpuError::Pass {
+                pass: name.into(),
+                reason: format!("over {MAX_PASSES} passes in one submission"),
+            });
+        }
+        self.open_pass = Some(name.to_string());
+        self.timestamp(2 * index);
+        let result = record(self);
+        self.timestamp(2 * index + 1);
+        self.open_pass = None;
+        self.passes.push((name.to_string(), index));
+        result
+    }
+
+    fn timestamp(&mut self, query: u32) {
+        if let Some(pool) = self.query_pool {
+            unsafe {
+                self.ctx.device().cmd_write_timestamp(
+                    self.cb,
+                    vk::PipelineStageFlags::BOTTOM_OF_PIPE,
+                    pool,
+                    query,
+                )
+            };
+        }
+    }
+
+    pub(crate) fn record_dispatch(
+        &mut self,
+        kernel: &'a Kernel,
+        buffers: &[(&BindingInfo, &'a dyn GpuBuffer)],
+        push: &[u8],
+        groups: [u32; 3],
+    ) -> GpuResult<()> {
+        let (pipeline, layout, set_layout) = kernel.raw();
+        let set = self.allocate_set(set_layout)?;
+        let device = self.ctx.device();
+        let infos: Vec<[vk::DescriptorBufferInfo; 1]> = buffers
+            .iter()
+            .map(|(_, b)| {
+                [vk::DescriptorBufferInfo::default()
+                    .buffer(b.handle())
+                    .offset(0)
+                    .range(vk::WHOLE_SIZE)]
+            })
+            .collect();
+        let writes: Vec<vk::WriteDescriptorSet> = buffers
+            .iter()
+            .zip(&infos)
+            .map(|((info, _), buffer_info)| {
+                vk::WriteDescriptorSet::default()
+                    .dst_set(set)
+                    .dst_binding(info.binding)
+                    .descriptor_type(descriptor_type(info.kind))
+                    .buffer_info(buffer_info)
+            })
+            .collect();
+        unsafe {
+            device.update_descriptor_sets(&writes, &[]);
+            device.cmd_bind_pipeline(self.cb, vk::PipelineBindPoint::COMPUTE, pipeline);
+            device.cmd_bind_descriptor_sets(
+                self.cb,
+                vk::PipelineBindPoint::COMPUTE,
+                layout,
+                0,
+                &[set],
+                &[],
+            );
+            if !push.is_empty() {
+                device.cmd_push_constants(self.cb, layout, vk::ShaderStageFlags::COMPUTE, 0, push);
+            }
+            if groups.iter().all(|&g| g > 0) {
+                device.cmd_dispatch(self.cb, groups[0], groups[1], groups[2]);
+            }
+        }
+        self.barrier(
+            vk::PipelineStageFlags::COMPUTE_SHADER | vk::PipelineStageFlags::TRANSFER,
+            vk::AccessFlags::SHADER_READ
+                | vk::AccessFlags::SHADER_WRITE
+                | vk::AccessFlags::TRANSFER_READ
+                | vk::AccessFlags::TRANSFER_WRITE,
+        );
+        Ok(())
+    }
+
+    /// Copies all of `src` into the start of `dst` (as many bytes as the smaller holds).
+    pub fn copy(&mut self, src: &'a dyn GpuBuffer, dst: &'a dyn GpuBuffer) {
+        let size = src.byte_size().min(dst.byte_size());
+        if size > 0 {
+            let region = [vk::BufferCopy::default().size(size)];
+            unsafe {
+                self.ctx
+                    .device()
+                    .cmd_copy_buffer(self.cb, src.handle(), dst.handle(), &region)
+            };
+        }
+        self.barrier(
+            vk::PipelineStageFlags::COMPUTE_SHADER | vk::PipelineStageFlags::TRANSFER,
+            vk::AccessFlags::SHADER_READ
+                | vk::AccessFlags::SHADER_WRITE
+                | vk::AccessFlags::TRANSFER_READ
+                | vk::AccessFlags::TRANSFER_WRITE,
+        );
+    }
+
+    fn barrier(&mut self, dst_stage: vk::PipelineStageFlags, dst_access: vk::AccessFlags) {
+        let barrier = [vk::MemoryBarrier::default()
+            .src_access_mask(vk::AccessFlags::SHADER_WRITE | vk::AccessFlags::TRANSFER_WRITE)
+            .dst_access_mask(dst_access)];
+        unsafe {
+            self.ctx.device().cmd_pipeline_barrier(
+                self.cb,
+                vk::PipelineStageFlags::COMPUTE_SHADER | vk::PipelineStageFlags::TRANSFER,
+                dst_stage,
+                vk::DependencyFlags::empty(),
+                &barrier,
+                &[],
+                &[],
+            )
+        };
+    }
+
+    fn allocate_set(&mut self, layout: vk::DescriptorSetLayout) -> GpuResult<vk::DescriptorSet> {
+        let device = self.ctx.device();
+        let layouts = [layout];
+        if let Some(&pool) = self.descriptor_pools.last() {
+            let info = vk::DescriptorSetAllocateInfo::default()
+                .descriptor_pool(pool)
+                .set_layouts(&layouts);
+            match unsafe { device.allocate_descriptor_sets(&info) } {
+                Ok(sets) => return Ok(sets[0]),
+                Err(vk::Result::ERROR_OUT_OF_POOL_MEMORY | vk::Result::ERROR_FRAGMENTED_POOL) => {}
+                Err(result) => {
+                    return Err(GpuError::Vulkan {
+                        call: "vkAllocateDescriptorSets",
+                        result,
+                    })
+                }
+            }
+        }
+        let sizes = [
+            vk::DescriptorPoolSize::default()
+                .ty(vk::DescriptorType::STORAGE_BUFFER)
+                .descriptor_count(SETS_PER_POOL * 16),
+            vk::DescriptorPoolSize::default()
+                .ty(vk::DescriptorType::UNIFORM_BUFFER)
+                .descriptor_count(SETS_PER_POOL * 4),
+        ];
+        let info = vk::DescriptorPoolCreateInfo::default()
+            .max_sets(SETS_PER_POOL)
+            .pool_sizes(&sizes);
+        let pool =
+            unsafe { device.create_descriptor_pool(&info, None) }.vk("vkCreateDescriptorPool")?;
+        self.descriptor_pools.push(pool);
+        let info = vk::DescriptorSetAllocateInfo::default()
+            .descriptor_pool(pool)
+            .set_layouts(&layouts);
+        Ok(unsafe { device.allocate_descriptor_sets(&info) }.vk("vkAllocateDescriptorSets")?[0])
+    }
+
+    /// Submits, waits for completion and returns every pass's GPU time and the wall clock.
+    pub fn submit_and_wait(self) -> GpuResult<Timings> {
+        let device = self.ctx.device();
+        // Make every write visible to the host reads that follow.
+        let barrier = [vk::MemoryBarrier::default()
+            .src_access_mask(vk::AccessFlags::SHADER_WRITE | vk::AccessFlags::TRANSFER_WRITE)
+            .dst_access_mask(vk::AccessFlags::HOST_READ)];
+        unsafe {
+            device.cmd_pipeline_barrier(
+                self.cb,
+                vk::PipelineStageFlags::COMPUTE_SHADER | vk::PipelineStageFlags::TRANSFER,
+                vk::PipelineStageFlags::HOST,
+                vk::DependencyFlags::empty(),
+                &barrier,
+                &[],
+                &[],
+            );
+            device.end_command_buffer(self.cb)
+        }
+        .vk("vkEndCommandBuffer")?;
+        let start = Instant::now();
+        self.ctx.submit_and_wait(self.cb)?;
+        let wall_ms = start.elapsed().as_secs_f64() * 1e3;
+
+        let mut ticks = vec![0u64; 2 * self.passes.len()];
+        if let (Some(pool), false) = (self.query_pool, ticks.is_empty()) {
+            unsafe {
+                device.get_query_pool_results(
+                    pool,
+                    0,
+                    &mut ticks,
+                    vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
+                )
+            }
+            .vk("vkGetQueryPoolResults")?;
+        }
+        let info = self.ctx.info();
+        let mask = if info.timestamp_valid_bits >= 64 {
+            u64::MAX
+        } else {
+            (1u64 << info.timestamp_valid_bits) - 1
+        };
+        let passes = self
+            .passes
+            .iter()
+            .map(|(name, i)| {
+                let gpu_ms = self.query_pool.map(|_| {
+                    let (a, b) = (
+                        ticks[2 * *i as usize] & mask,
+                        ticks[2 * *i as usize + 1] & mask,
+                    );
+                    b.wrapping_sub(a) as f64 * info.timestamp_period_ns as f64 * 1e-6
+                });
+                PassTime {
+                    name: name.clone(),
+                    gpu_ms,
+                }
+            })
+            .collect();
+        Ok(Timings { passes, wall_ms })
+    }
+}
+
+impl Drop for Commands<'_> {
+    fn drop(&mut self) {
+        let device = self.ctx.device();
+        unsafe {
+            for &pool in &self.descriptor_pools {
+                device.destroy_descriptor_pool(pool, None);
+            }
+            if let Some(pool) = self.query_pool {
+                device.destroy_query_pool(pool, None);
+            }
+        }
+        self.ctx.free_command_buffer(self.cb);
+    }
+}

@@ -1,0 +1,249 @@
+//! The GPU context: one logical device with one compute queue on the chosen physical device.
+//! Everything created from it (buffers, kernels, command recordings) holds it alive, so
+//! teardown always runs in the right order and destroys every object.
+
+use std::sync::{Arc, Mutex};
+
+use ash::vk;
+
+use super::device_info::{self, DeviceInfo, DeviceSelector};
+use super::error::{GpuError, GpuResult, VkContext};
+use super::instance::{Instance, Validation, ValidationLog};
+
+#[derive(Clone, Debug)]
+pub struct ContextOptions {
+    pub device: Option<DeviceSelector>,
+    pub validation: Validation,
+}
+
+impl Default for ContextOptions {
+    /// The best device; validation as IRAD_VALIDATE says.
+    fn default() -> Self {
+        ContextOptions {
+            device: None,
+            validation: Validation::from_env(),
+        }
+    }
+}
+
+/// Lists every device the loader sees, in `--device` index order.
+pub fn list_devices() -> GpuResult<Vec<DeviceInfo>> {
+    let instance = Instance::new(Validation::Off)?;
+    Ok(device_info::enumerate(&instance.raw)?
+        .into_iter()
+        .map(|(_, info)| info)
+        .collect())
+}
+
+/// A cheap handle; clones share the device.
+#[derive(Clone)]
+pub struct Context {
+    pub(crate) shared: Arc<Shared>,
+}
+
+pub(crate) struct Shared {
+    pub(crate) device: ash::Device,
+    pub(crate) queue: Mutex<vk::Queue>,
+    pub(crate) command_pool: Mutex<vk::CommandPool>,
+    pub(crate) memory: vk::PhysicalDeviceMemoryProperties,
+    pub(crate) info: DeviceInfo,
+    pub(crate) debug_names: Option<ash::ext::debug_utils::Device>,
+    // Dropped last: the device must go before the instance.
+    pub(crate) instance: Arc<Instance>,
+}
+
+impl Context {
+    pub fn new(options: &ContextOptions) -> GpuResult<Self> {
+        let instance = Instance::new(options.validation)?;
+        let devices = device_info::enumerate(&instance.raw)?;
+        let infos: Vec<DeviceInfo> = devices.iter().map(|(_, i)| i.clone()).collect();
+        let chosen = device_info::choose(&infos, options.device.as_ref())?;
+        let (physical, info) = devices[chosen].clone();
+        if !info.subgroup_arithmetic {
+            return Err(GpuError::MissingFeature {
+                device: info.name.clone(),
+                feature: "subgroup arithmetic in compute shaders (Vulkan 1.1)".into(),
+            });
+        }
+        let family = info.compute_queue_family.ok_or(GpuError::NoDevice)?;
+
+        let priorities = [1.0f32];
+        let queues = [vk::DeviceQueueCreateInfo::default()
+            .queue_family_index(family)
+            .queue_priorities(&priorities)];
+        let mut extensions = Vec::new();
+        let mut atomics = vk::PhysicalDeviceShaderAtomicFloatFeaturesEXT::default();
+        if info.float_atomic_add {
+            // Enabled explicitly: lavapipe runs float atomics without it, but that is invalid usage.
+            extensions.push(ash::ext::shader_atomic_float::NAME.as_ptr());
+            atomics = atomics
+                .shader_buffer_float32_atomics(true)
+                .shader_buffer_float32_atomic_add(true);
+        }
+        let mut create = vk::DeviceCreateInfo::default()
+            .queue_create_infos(&queues)
+            .enabled_extension_names(&extensions);
+        if info.float_atomic_add {
+            create = create.push_next(&mut atomics);
+        }
+        let device =
+            unsafe { instance.raw.create_device(physical, &create, None) }.vk("vkCreateDevice")?;
+        let queue = unsafe { device.get_device_queue(family, 0) };
+        let pool_info = vk::CommandPoolCreateInfo::default()
+            .queue_family_index(family)
+            .flags(
+                vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER
+                    | vk::CommandPoolCreateFlags::TRANSIENT,
+            );
+        let command_pool = match unsafe { device.create_command_pool(&pool_info, None) } {
+            Ok(p) => p,
+            Err(result) => {
+                unsafe { device.destroy_device(None) };
+                return Err(GpuError::Vulkan {
+                    call: "vkCreateCommandPool",
+                    result,
+                });
+            }
+        };
+        let memory = unsafe { instance.raw.get_physical_device_memory_properties(physical) };
+        let debug_names = instance
+            .validating()
+            .then(|| ash::ext::debug_utils::Device::new(&instance.raw, &device));
+        Ok(Context {
+            shared: Arc::new(Shared {
+                device,
+                queue: Mutex::new(queue),
+                command_pool: Mutex::new(command_pool),
+                memory,
+                info,
+                debug_names,
+                instance,
+            }),
+        })
+    }
+
+    pub fn info(&self) -> &DeviceInfo {
+        &self.shared.info
+    }
+
+    /// Whether the validation layer is on for this context.
+    pub fn validating(&self) -> bool {
+        self.shared.instance.validating()
+    }
+
+    /// The validation layer's messages so far; the log outlives the context, so dropping every
+    /// handle and then reading it also catches objects leaked at teardown.
+    pub fn validation_log(&self) -> ValidationLog {
+        self.shared.instance.log.clone()
+    }
+
+    pub(crate) fn device(&self) -> &ash::Device {
+        &self.shared.device
+    }
+
+    /// Records `record` into a fresh command buffer, submits it and waits for it.
+    pub(crate) fn one_shot(&self, record: impl FnOnce(vk::CommandBuffer)) -> GpuResult<()> {
+        let cb = self.allocate_command_buffer()?;
+        let result = (|| {
+            let begin = vk::CommandBufferBeginInfo::default()
+                .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
+            unsafe { self.device().begin_command_buffer(cb, &begin) }.vk("vkBeginCommandBuffer")?;
+            record(cb);
+            unsafe { self.device().end_command_buffer(cb) }.vk("vkEndCommandBuffer")?;
+            self.submit_and_wait(cb)
+        })();
+        self.free_command_buffer(cb);
+        result
+    }
+
+    pub(crate) fn allocate_command_buffer(&self) -> GpuResult<vk::CommandBuffer> {
+        let pool = self.shared.command_pool.lock().expect("command pool lock");
+        let info = vk::CommandBufferAllocateInfo::default()
+            .command_pool(*pool)
+            .level(vk::CommandBufferLevel::PRIMARY)
+            .command_buffer_count(1);
+        Ok(unsafe { self.device().allocate_command_buffers(&info) }
+            .vk("vkAllocateCommandBuffers")?[0])
+    }
+
+    pub(crate) fn free_command_buffer(&self, cb: vk::CommandBuffer) {
+        let pool = self.shared.command_pool.lock().expect("command pool lock");
+        unsafe { self.device().free_command_buffers(*pool, &[cb]) };
+    }
+
+    pub(crate) fn submit_and_wait(&self, cb: vk::CommandBuffer) -> GpuResult<()> {
+        let device = self.device();
+        let fence = unsafe { device.create_fence(&vk::FenceCreateInfo::default(), None) }
+            .vk("vkCreateFence")?;
+        let cbs = [cb];
+        let submit = [vk::SubmitInfo::default().command_buffers(&cbs)];
+        let result = {
+            let queue = self.shared.queue.lock().expect("queue lock");
+            unsafe { device.queue_submit(*queue, &submit, fence) }.vk("vkQueueSubmit")
+        }
+        .and_then(|_| {
+            unsafe { device.wait_for_fences(&[fence], true, u64::MAX) }.vk("vkWaitForFences")
+        });
+        unsafe { device.destroy_fence(fence, None) };
+        result
+    }
+
+    /// The index of a memory type allowed by `type_bits` with all of `required`, preferring one
+    /// that also has `preferred`.
+    pub(crate) fn memory_type(
+        &self,
+        type_bits: u32,
+        required: vk::MemoryPropertyFlags,
+        preferred: vk::MemoryPropertyFlags,
+    ) -> Option<u32> {
+        let mem = &self.shared.memory;
+        let candidates = || {
+            (0..mem.memory_type_count).filter(move |&i| {
+                type_bits & (1 << i) != 0
+                    && mem.memory_types[i as usize]
+                        .property_flags
+                        .contains(required)
+            })
+        };
+        candidates()
+            .find(|&i| {
+                mem.memory_types[i as usize]
+                    .property_flags
+                    .contains(preferred)
+            })
+            .or_else(|| candidates().next())
+    }
+
+    pub(crate) fn memory_flags(&self, index: u32) -> vk::MemoryPropertyFlags {
+        self.shared.memory.memory_types[index as usize].property_flags
+    }
+
+    pub(crate) fn heap_size(&self, index: u32) -> u64 {
+        let heap = self.shared.memory.memory_types[index as usize].heap_index;
+        self.shared.memory.memory_heaps[heap as usize].size
+    }
+
+    /// Names an object for the validation layer's messages (only when validating).
+    pub(crate) fn name_object<H: vk::Handle>(&self, handle: H, name: &str) {
+        if let Some(names) = &self.shared.debug_names {
+            if let Ok(cname) = std::ffi::CString::new(name) {
+                let info = vk::DebugUtilsObjectNameInfoEXT::default()
+                    .object_handle(handle)
+                    .object_name(&cname);
+                let _ = unsafe { names.set_debug_utils_object_name(&info) };
+            }
+        }
+    }
+}
+
+impl Drop for Shared {
+    fn drop(&mut self) {
+        unsafe {
+            let _ = self.device.device_wait_idle();
+            if let Ok(pool) = self.command_pool.lock() {
+                self.device.destroy_command_pool(*pool, None);
+            }
+            self.device.destroy_device(None);
+        }
+    }
+}

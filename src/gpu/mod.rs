@@ -1,0 +1,25 @@
+//! The ash compute core: instance and validation, device choice, context, typed buffers,
+//! kernels with reflected layouts, command recording with per-pass GPU timestamps, and the
+//! kernels every method shares (prefix sum).
+
+pub mod buffer;
+pub mod commands;
+pub mod context;
+pub mod copy;
+pub mod device_info;
+pub mod error;
+pub mod instance;
+pub mod kernel;
+pub mod prefix_sum;
+pub mod reflect;
+pub mod spirv;
+pub mod timing;
+
+pub use buffer::{Buffer, GpuBuffer};
+pub use commands::Commands;
+pub use context::{list_devices, Context, ContextOptions};
+pub use device_info::{DeviceInfo, DeviceKind, DeviceSelector};
+pub use error::{GpuError, GpuResult};
+pub use instance::{validation_layer_available, Validation, ValidationLog};
+pub use kernel::{bind, Binding, Kernel};
+pub use timing::{PassTime, Timings};

@@ -1,0 +1,8 @@
+//! irad: a research renderer for many-light and light-source importance sampling, run as
+//! Vulkan compute kernels through raw `ash`. See DESIGN.md (shared/) for the map.
+
+pub mod bench;
+pub mod gpu;
+pub mod sampling;
+pub mod selfcheck;
+pub mod shaders;

@@ -1,0 +1,4 @@
+//! CPU mirrors of the GPU samplers and tables, for tests and self-checks.
+
+pub mod pcg;
+pub mod scan;
