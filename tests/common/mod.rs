@@ -1,0 +1,27 @@
+//! Shared by the integration tests: a GPU context with the Khronos validation layer on whenever
+//! it is installed (always under CI), and a check that it reported nothing, teardown included.
+#![allow(dead_code)]
+
+use irad::gpu::{validation_layer_available, Context, ContextOptions, Validation};
+
+/// Whether the tests run under CI (`CI=true`), where every optional tool must be present.
+pub fn under_ci() -> bool {
+    std::env::var("CI").is_ok_and(|v| !v.is_empty() && v != "false" && v != "0")
+}
+
+/// Runs `test` on the default device with validation on when the layer is installed, then
+/// drops the context and fails on any validation message (leaks are reported at teardown).
+pub fn with_gpu(test: impl FnOnce(&Context)) {
+    let validate = validation_layer_available();
+    if !validate {
+        assert!(!under_ci(), "the Khronos validation layer is not installed (apt-get install vulkan-validationlayers)");
+        eprintln!("note: validation layer not installed; running without it");
+    }
+    let options = ContextOptions { device: None, validation: if validate { Validation::On } else { Validation::Off } };
+    let ctx = Context::new(&options).unwrap_or_else(|e| panic!("no GPU context: {e}"));
+    let log = ctx.validation_log();
+    test(&ctx);
+    drop(ctx);
+    let messages = log.messages();
+    assert!(messages.is_empty(), "{} validation message(s):\n{}", messages.len(), messages.join("\n"));
+}
