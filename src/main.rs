@@ -76,6 +76,12 @@ fn parse_case(s: &str) -> Result<scan_bench::ScanCase, String> {
     if row_length == 0 || row_count == 0 {
         return Err(format!("`{s}`: sizes must be positive"));
     }
+    if row_length
+        .checked_mul(row_count)
+        .is_none_or(|n| n > u32::MAX as usize)
+    {
+        return Err(format!("`{s}`: more elements than a u32 can index"));
+    }
     Ok(scan_bench::ScanCase {
         row_length,
         row_count,

@@ -24,7 +24,10 @@ fn writes_of_the_wrong_length_are_errors() {
     common::with_gpu(|ctx| {
         let b = Buffer::<f32>::zeroed(ctx, "four", 4).unwrap();
         let err = b.write(&[1.0; 3]).unwrap_err();
-        assert!(matches!(&err, GpuError::BufferLength { name, expected: 4, given: 3 } if name == "four"), "{err}");
+        assert!(
+            matches!(&err, GpuError::BufferLength { name, expected: 4, given: 3 } if name == "four"),
+            "{err}"
+        );
     });
 }
 
@@ -36,6 +39,11 @@ fn a_buffer_over_max_storage_buffer_range_is_an_error_naming_it_and_the_sizes() 
         let err = Buffer::<f32>::zeroed(ctx, "huge table", len).err().unwrap();
         let msg = err.to_string();
         assert!(matches!(err, GpuError::BufferTooLarge { .. }), "{msg}");
-        assert!(msg.contains("huge table") && msg.contains(&(len * 4).to_string()) && msg.contains(&limit.to_string()), "{msg}");
+        assert!(
+            msg.contains("huge table")
+                && msg.contains(&(len * 4).to_string())
+                && msg.contains(&limit.to_string()),
+            "{msg}"
+        );
     });
 }

@@ -5,7 +5,9 @@ use std::process::{Command, Output};
 
 fn irad(args: &[&str], env: &[(&str, &str)]) -> Output {
     let mut cmd = Command::new(env!("CARGO_BIN_EXE_irad"));
-    cmd.args(args).env_remove("IRAD_VALIDATE").env_remove("IRAD_VULKAN_LIBRARY");
+    cmd.args(args)
+        .env_remove("IRAD_VALIDATE")
+        .env_remove("IRAD_VULKAN_LIBRARY");
     for (k, v) in env {
         cmd.env(k, v);
     }
@@ -34,41 +36,82 @@ fn info_lists_lavapipe_and_its_limits() {
     let o = irad(&["info"], &[]);
     let out = String::from_utf8_lossy(&o.stdout);
     assert!(o.status.success(), "{}", stderr(&o));
-    assert!(out.contains("llvmpipe") || out.contains("lavapipe") || !out.contains("CPU"), "{out}");
-    for label in ["max storage buffer range", "shared memory", "workgroup", "subgroup size", "f32 atomic add", "timestamps"] {
+    assert!(
+        out.contains("llvmpipe") || out.contains("lavapipe") || !out.contains("CPU"),
+        "{out}"
+    );
+    for label in [
+        "max storage buffer range",
+        "shared memory",
+        "workgroup",
+        "subgroup size",
+        "f32 atomic add",
+        "timestamps",
+    ] {
         assert!(out.contains(label), "`{label}` missing:\n{out}");
     }
-    assert!(out.contains("* 0:") || out.contains("* 1:") || out.contains("* 2:"), "no device marked:\n{out}");
+    assert!(
+        out.contains("* 0:") || out.contains("* 1:") || out.contains("* 2:"),
+        "no device marked:\n{out}"
+    );
 }
 
 #[test]
 fn selfcheck_passes_with_validation() {
     let o = irad(&["selfcheck"], &[("IRAD_VALIDATE", "1")]);
-    assert!(o.status.success(), "{}{}", String::from_utf8_lossy(&o.stdout), stderr(&o));
+    assert!(
+        o.status.success(),
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        stderr(&o)
+    );
     assert!(String::from_utf8_lossy(&o.stdout).contains("selfcheck passed"));
 }
 
 #[test]
 fn a_bad_device_is_one_line_naming_it_and_the_devices() {
-    assert_clean_error(&irad(&["--device", "99", "selfcheck"], &[]), &["--device 99", "0: "]);
-    assert_clean_error(&irad(&["--device", "no-such-gpu", "selfcheck"], &[]), &["no-such-gpu", "irad info"]);
+    assert_clean_error(
+        &irad(&["--device", "99", "selfcheck"], &[]),
+        &["--device 99", "0: "],
+    );
+    assert_clean_error(
+        &irad(&["--device", "no-such-gpu", "selfcheck"], &[]),
+        &["no-such-gpu", "irad info"],
+    );
 }
 
 #[test]
 fn a_missing_loader_says_what_to_install() {
-    let o = irad(&["info"], &[("IRAD_VULKAN_LIBRARY", "/nonexistent/libvulkan.so.1")]);
+    let o = irad(
+        &["info"],
+        &[("IRAD_VULKAN_LIBRARY", "/nonexistent/libvulkan.so.1")],
+    );
     assert_clean_error(&o, &["Vulkan loader", "libvulkan1"]);
 }
 
 #[test]
 fn no_device_says_what_to_install() {
-    let o = irad(&["selfcheck"], &[("VK_ICD_FILENAMES", "/nonexistent/icd.json"), ("VK_DRIVER_FILES", "/nonexistent/icd.json")]);
+    let o = irad(
+        &["selfcheck"],
+        &[
+            ("VK_ICD_FILENAMES", "/nonexistent/icd.json"),
+            ("VK_DRIVER_FILES", "/nonexistent/icd.json"),
+        ],
+    );
     assert_clean_error(&o, &["no Vulkan device", "mesa-vulkan-drivers"]);
 }
 
 #[test]
 fn a_missing_validation_layer_says_what_to_install() {
-    let o = irad(&["selfcheck"], &[("IRAD_VALIDATE", "1"), ("VK_LAYER_PATH", "/nonexistent"), ("XDG_DATA_HOME", "/nonexistent"), ("XDG_DATA_DIRS", "/nonexistent")]);
+    let o = irad(
+        &["selfcheck"],
+        &[
+            ("IRAD_VALIDATE", "1"),
+            ("VK_LAYER_PATH", "/nonexistent"),
+            ("XDG_DATA_HOME", "/nonexistent"),
+            ("XDG_DATA_DIRS", "/nonexistent"),
+        ],
+    );
     assert_clean_error(&o, &["validation layer", "vulkan-validationlayers"]);
 }
 
@@ -77,7 +120,14 @@ fn help_explains_the_commands() {
     let o = irad(&["--help"], &[]);
     let out = String::from_utf8_lossy(&o.stdout);
     assert!(o.status.success());
-    for c in ["info", "selfcheck", "shaders", "bench", "--device", "IRAD_VALIDATE"] {
+    for c in [
+        "info",
+        "selfcheck",
+        "shaders",
+        "bench",
+        "--device",
+        "IRAD_VALIDATE",
+    ] {
         assert!(out.contains(c), "`{c}` missing from --help:\n{out}");
     }
 }

@@ -17,15 +17,22 @@ fn check(ctx: &Context, row_length: usize, row_count: usize, seed: u32) {
     let totals = Buffer::<f32>::zeroed(ctx, "row totals", row_count).unwrap();
     let scan = PrefixSum::new(ctx, row_length, row_count).unwrap();
     let mut cmd = Commands::new(ctx).unwrap();
-    cmd.pass("scan", |cmd| scan.record(cmd, &input, &output, &totals)).unwrap();
+    cmd.pass("scan", |cmd| scan.record(cmd, &input, &output, &totals))
+        .unwrap();
     cmd.submit_and_wait().unwrap();
 
     let (expected, expected_totals) = inclusive_scan_rows(&values, row_length);
     let got = output.read().unwrap();
     let err = max_relative_error(&got, &expected);
-    assert!(err <= TOLERANCE, "{row_length} x {row_count}: max relative error {err:e}");
+    assert!(
+        err <= TOLERANCE,
+        "{row_length} x {row_count}: max relative error {err:e}"
+    );
     let err = max_relative_error(&totals.read().unwrap(), &expected_totals);
-    assert!(err <= TOLERANCE, "{row_length} x {row_count}: row totals relative error {err:e}");
+    assert!(
+        err <= TOLERANCE,
+        "{row_length} x {row_count}: row totals relative error {err:e}"
+    );
 }
 
 #[test]
@@ -33,7 +40,12 @@ fn single_rows_of_many_lengths() {
     common::with_gpu(|ctx| {
         // 1, around the invocation (16) and block (1024) sizes, non-powers of two, and lengths
         // needing two and three levels of block sums.
-        for (i, &n) in [1, 2, 3, 15, 16, 17, 1000, 1023, 1024, 1025, 4097, 65_537, 1_048_577].iter().enumerate() {
+        for (i, &n) in [
+            1, 2, 3, 15, 16, 17, 1000, 1023, 1024, 1025, 4097, 65_537, 1_048_577,
+        ]
+        .iter()
+        .enumerate()
+        {
             check(ctx, n, 1, i as u32);
         }
     });
@@ -69,7 +81,8 @@ fn one_plan_scans_new_data_in_later_submissions() {
             let values = cdf_like_values(100 + seed, n);
             let input = Buffer::from_slice(ctx, "values", &values).unwrap();
             let mut cmd = Commands::new(ctx).unwrap();
-            cmd.pass("scan", |cmd| scan.record(cmd, &input, &output, &totals)).unwrap();
+            cmd.pass("scan", |cmd| scan.record(cmd, &input, &output, &totals))
+                .unwrap();
             cmd.submit_and_wait().unwrap();
             let (expected, _) = inclusive_scan_rows(&values, n);
             assert!(max_relative_error(&output.read().unwrap(), &expected) <= TOLERANCE);
@@ -86,6 +99,24 @@ fn mismatched_buffers_are_errors_naming_the_buffer() {
         let totals = Buffer::<f32>::zeroed(ctx, "totals", 2).unwrap();
         let mut cmd = Commands::new(ctx).unwrap();
         let err = scan.record(&mut cmd, &input, &short, &totals).unwrap_err();
-        assert!(matches!(&err, GpuError::BufferLength { name, expected: 200, given: 150 } if name == "short output"), "{err}");
+        assert!(
+            matches!(&err, GpuError::BufferLength { name, expected: 200, given: 150 } if name == "short output"),
+            "{err}"
+        );
+    });
+}
+
+#[test]
+fn empty_rows_total_zero() {
+    common::with_gpu(|ctx| {
+        let scan = PrefixSum::new(ctx, 0, 3).unwrap();
+        let none = Buffer::<f32>::zeroed(ctx, "no values", 0).unwrap();
+        let out = Buffer::<f32>::zeroed(ctx, "no scan", 0).unwrap();
+        let totals = Buffer::from_slice(ctx, "totals", &[5.0f32; 3]).unwrap();
+        let mut cmd = Commands::new(ctx).unwrap();
+        cmd.pass("scan", |cmd| scan.record(cmd, &none, &out, &totals))
+            .unwrap();
+        cmd.submit_and_wait().unwrap();
+        assert_eq!(totals.read().unwrap(), [0.0; 3]);
     });
 }

@@ -22,7 +22,11 @@ fn spv_is_in_sync_with_glsl() {
     }
     let tree = ShaderTree::source_checkout();
     let problems = tree.check().unwrap();
-    assert!(problems.is_empty(), "run `irad shaders`:\n{}", problems.join("\n"));
+    assert!(
+        problems.is_empty(),
+        "run `irad shaders`:\n{}",
+        problems.join("\n")
+    );
 }
 
 #[test]
@@ -42,5 +46,12 @@ fn spirv_val_accepts_every_module() {
 fn every_kernel_source_is_embedded() {
     let tree = ShaderTree::source_checkout();
     let embedded: Vec<&str> = irad::gpu::spirv::embedded_names().collect();
-    assert_eq!(embedded, tree.kernel_names().unwrap().iter().map(String::as_str).collect::<Vec<_>>());
+    assert_eq!(
+        embedded,
+        tree.kernel_names()
+            .unwrap()
+            .iter()
+            .map(String::as_str)
+            .collect::<Vec<_>>()
+    );
 }

@@ -7,6 +7,8 @@
 //
 // Requires: GL_KHR_shader_subgroup_arithmetic, a 1D workgroup of at most WORKGROUP_SUM_SLOTS
 // subgroups, and at most one call per workgroup invocation (the shared slots are not reset).
+// The sums run in (gl_SubgroupID, lane) order; callers index data by gl_LocalInvocationIndex,
+// which every driver we know maps onto that order linearly (the spec does not promise it).
 
 #ifndef WORKGROUP_SCAN_GLSL
 #define WORKGROUP_SCAN_GLSL
@@ -22,8 +24,13 @@ shared float workgroup_subgroup_totals[WORKGROUP_SUM_SLOTS];
 // sum minus the own value: that subtraction cancels catastrophically after a large value.
 float workgroup_exclusive_add(float value, out float total) {
     float within = subgroupExclusiveAdd(value);
-    if (gl_SubgroupInvocationID == gl_SubgroupSize - 1u) {
-        workgroup_subgroup_totals[gl_SubgroupID] = within + value;
+    // Written by one active lane, not by lane gl_SubgroupSize - 1: subgroups may be partly
+    // filled (Intel and MoltenVK may run narrower than gl_SubgroupSize; a 128-wide Adreno
+    // subgroup is half empty in a 64-invocation workgroup).
+    float subgroup_total = subgroupAdd(value);
+        // The lowest active lane (subgroupElect's choice; naga's reflection rejects OpGroupNonUniformElect).
+    if (gl_SubgroupInvocationID == subgroupMin(gl_SubgroupInvocationID)) {
+        workgroup_subgroup_totals[gl_SubgroupID] = subgroup_total;
     }
     barrier();
     float before = 0.0;

@@ -83,10 +83,11 @@ pub fn run_case(
         n % 4 == 0,
         "bench scan: {n} elements is not a multiple of 4 (the copy kernel moves vec4s)"
     );
-    let input = Buffer::from_slice(ctx, "bench input", &cdf_like_values(7, n))?;
+    // Device-side sizes are checked (against the device's limits) before any host data is made.
+    let scan = PrefixSum::new(ctx, case.row_length, case.row_count)?;
     let output = Buffer::<f32>::zeroed(ctx, "bench output", n)?;
     let totals = Buffer::<f32>::zeroed(ctx, "bench row totals", case.row_count)?;
-    let scan = PrefixSum::new(ctx, case.row_length, case.row_count)?;
+    let input = Buffer::from_slice(ctx, "bench input", &cdf_like_values(7, n))?;
     let copy = CopyValues::new(ctx)?;
     let (mut scan_ms, mut copy_ms) = (Vec::new(), Vec::new());
     for i in 0..warmup + repeats {

@@ -180,9 +180,21 @@ impl RawBuffer {
         )?;
         let region = [vk::BufferCopy::default().size(self.bytes)];
         self.ctx.one_shot(|cb| unsafe {
-            self.ctx
-                .device()
-                .cmd_copy_buffer(cb, self.buffer, staging.buffer, &region)
+            let device = self.ctx.device();
+            device.cmd_copy_buffer(cb, self.buffer, staging.buffer, &region);
+            // A fence wait alone does not make device writes visible to the host.
+            let to_host = [vk::MemoryBarrier::default()
+                .src_access_mask(vk::AccessFlags::TRANSFER_WRITE)
+                .dst_access_mask(vk::AccessFlags::HOST_READ)];
+            device.cmd_pipeline_barrier(
+                cb,
+                vk::PipelineStageFlags::TRANSFER,
+                vk::PipelineStageFlags::HOST,
+                vk::DependencyFlags::empty(),
+                &to_host,
+                &[],
+                &[],
+            );
         })?;
         staging.read_bytes(out)
     }
@@ -215,8 +227,10 @@ impl<T: Pod> Buffer<T> {
         if let Some(ptr) = buffer.raw.mapped {
             unsafe { std::ptr::write_bytes(ptr.as_ptr(), 0, buffer.raw.bytes as usize) };
         } else {
-            let (b, size) = (buffer.raw.buffer, buffer.raw.bytes.max(16));
-            ctx.one_shot(|cb| unsafe { ctx.device().cmd_fill_buffer(cb, b, 0, size, 0) })?;
+            let b = buffer.raw.buffer;
+            ctx.one_shot(|cb| unsafe {
+                ctx.device().cmd_fill_buffer(cb, b, 0, vk::WHOLE_SIZE, 0)
+            })?;
         }
         Ok(buffer)
     }

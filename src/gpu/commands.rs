@@ -177,6 +177,22 @@ impl<'a> Commands<'a> {
         );
     }
 
+    /// Fills all of `buffer` with zero bytes.
+    pub fn fill_zero(&mut self, buffer: &'a dyn GpuBuffer) {
+        unsafe {
+            self.ctx
+                .device()
+                .cmd_fill_buffer(self.cb, buffer.handle(), 0, vk::WHOLE_SIZE, 0)
+        };
+        self.barrier(
+            vk::PipelineStageFlags::COMPUTE_SHADER | vk::PipelineStageFlags::TRANSFER,
+            vk::AccessFlags::SHADER_READ
+                | vk::AccessFlags::SHADER_WRITE
+                | vk::AccessFlags::TRANSFER_READ
+                | vk::AccessFlags::TRANSFER_WRITE,
+        );
+    }
+
     fn barrier(&mut self, dst_stage: vk::PipelineStageFlags, dst_access: vk::AccessFlags) {
         let barrier = [vk::MemoryBarrier::default()
             .src_access_mask(vk::AccessFlags::SHADER_WRITE | vk::AccessFlags::TRANSFER_WRITE)
@@ -279,11 +295,9 @@ impl<'a> Commands<'a> {
             .iter()
             .map(|(name, i)| {
                 let gpu_ms = self.query_pool.map(|_| {
-                    let (a, b) = (
-                        ticks[2 * *i as usize] & mask,
-                        ticks[2 * *i as usize + 1] & mask,
-                    );
-                    b.wrapping_sub(a) as f64 * info.timestamp_period_ns as f64 * 1e-6
+                    // Masked after subtracting, so a counter of fewer than 64 bits may wrap.
+                    let (a, b) = (ticks[2 * *i as usize], ticks[2 * *i as usize + 1]);
+                    (b.wrapping_sub(a) & mask) as f64 * info.timestamp_period_ns as f64 * 1e-6
                 });
                 PassTime {
                     name: name.clone(),

@@ -72,6 +72,16 @@ impl Context {
             .queue_family_index(family)
             .queue_priorities(&priorities)];
         let mut extensions = Vec::new();
+        let device_extensions =
+            unsafe { instance.raw.enumerate_device_extension_properties(physical) }
+                .vk("vkEnumerateDeviceExtensionProperties")?;
+        if device_extensions
+            .iter()
+            .any(|e| e.extension_name_as_c_str() == Ok(ash::khr::portability_subset::NAME))
+        {
+            // Required wherever a device lists it (MoltenVK).
+            extensions.push(ash::khr::portability_subset::NAME.as_ptr());
+        }
         let mut atomics = vk::PhysicalDeviceShaderAtomicFloatFeaturesEXT::default();
         if info.float_atomic_add {
             // Enabled explicitly: lavapipe runs float atomics without it, but that is invalid usage.
@@ -260,12 +270,23 @@ mod tests {
             eprintln!("note: validation layer not installed; skipping");
             return;
         }
-        let ctx = Context::new(&ContextOptions { device: None, validation: Validation::On }).unwrap();
+        let ctx = Context::new(&ContextOptions {
+            device: None,
+            validation: Validation::On,
+        })
+        .unwrap();
         let log = ctx.validation_log();
-        unsafe { ctx.device().create_fence(&vk::FenceCreateInfo::default(), None) }.unwrap();
+        unsafe {
+            ctx.device()
+                .create_fence(&vk::FenceCreateInfo::default(), None)
+        }
+        .unwrap();
         assert!(log.messages().is_empty());
         drop(ctx);
         let messages = log.messages();
-        assert!(messages.iter().any(|m| m.contains("VkFence")), "no leak reported: {messages:?}");
+        assert!(
+            messages.iter().any(|m| m.contains("VkFence")),
+            "no leak reported: {messages:?}"
+        );
     }
 }

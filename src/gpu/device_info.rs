@@ -104,6 +104,7 @@ fn describe(
 ) -> GpuResult<DeviceInfo> {
     let props = unsafe { instance.get_physical_device_properties(pd) };
     let api = props.api_version;
+    let has_1_1 = vk::api_version_minor(api) >= 1 || vk::api_version_major(api) > 1;
     let has_1_2 = vk::api_version_minor(api) >= 2 || vk::api_version_major(api) > 1;
 
     let mut subgroup = vk::PhysicalDeviceSubgroupProperties::default();
@@ -112,7 +113,9 @@ fn describe(
     if has_1_2 {
         props2 = props2.push_next(&mut driver);
     }
-    unsafe { instance.get_physical_device_properties2(pd, &mut props2) };
+    if has_1_1 {
+        unsafe { instance.get_physical_device_properties2(pd, &mut props2) };
+    }
     let limits = props.limits;
 
     let extensions = unsafe { instance.enumerate_device_extension_properties(pd) }
@@ -231,7 +234,7 @@ impl fmt::Display for DeviceSelector {
 
 /// Picks the device to run on among `devices` (in enumeration order).
 pub fn choose(devices: &[DeviceInfo], selector: Option<&DeviceSelector>) -> GpuResult<usize> {
-    let usable = |d: &DeviceInfo| d.compute_queue_family.is_some();
+    let usable = |d: &DeviceInfo| d.compute_queue_family.is_some() && d.subgroup_arithmetic;
     let available = || {
         if devices.is_empty() {
             return "none".to_string();
@@ -256,7 +259,10 @@ pub fn choose(devices: &[DeviceInfo], selector: Option<&DeviceSelector>) -> GpuR
             .ok_or(GpuError::NoDevice),
         Some(sel @ DeviceSelector::Index(i)) => match devices.get(*i) {
             None => Err(bad(sel, "no device has that index")),
-            Some(d) if !usable(d) => Err(bad(sel, "that device has no compute queue")),
+            Some(d) if !usable(d) => Err(bad(
+                sel,
+                "that device lacks a compute queue or subgroup arithmetic",
+            )),
             Some(d) => Ok(d.index),
         },
         Some(sel @ DeviceSelector::Name(name)) => {

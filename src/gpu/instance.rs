@@ -2,6 +2,7 @@
 //! debug messenger whose messages are printed and kept in a [`ValidationLog`].
 
 use std::ffi::{c_void, CStr};
+use std::io::Write;
 use std::sync::{Arc, Mutex};
 
 use ash::{ext::debug_utils, vk};
@@ -238,7 +239,8 @@ unsafe extern "system" fn on_validation_message(
             .unwrap_or_default()
     };
     let line = format!("[vulkan {severity:?} {kind:?}] {text}");
-    eprintln!("{line}");
+    // Never panic across the FFI boundary, even with stderr closed.
+    let _ = writeln!(std::io::stderr(), "{line}");
     if !user_data.is_null() {
         unsafe { &*(user_data as *const ValidationLog) }.push(line);
     }

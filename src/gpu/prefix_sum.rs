@@ -197,6 +197,10 @@ impl PrefixSum {
             }
         }
         if n == 0 {
+            // Empty rows sum to zero.
+            if self.row_count > 0 {
+                cmd.fill_zero(row_totals);
+            }
             return Ok(());
         }
         let params = |level: &Level| ScanParams {

@@ -17,11 +17,23 @@ pub fn with_gpu(test: impl FnOnce(&Context)) {
         assert!(!under_ci(), "the Khronos validation layer is not installed (apt-get install vulkan-validationlayers)");
         eprintln!("note: validation layer not installed; running without it");
     }
-    let options = ContextOptions { device: None, validation: if validate { Validation::On } else { Validation::Off } };
+    let options = ContextOptions {
+        device: None,
+        validation: if validate {
+            Validation::On
+        } else {
+            Validation::Off
+        },
+    };
     let ctx = Context::new(&options).unwrap_or_else(|e| panic!("no GPU context: {e}"));
     let log = ctx.validation_log();
     test(&ctx);
     drop(ctx);
     let messages = log.messages();
-    assert!(messages.is_empty(), "{} validation message(s):\n{}", messages.len(), messages.join("\n"));
+    assert!(
+        messages.is_empty(),
+        "{} validation message(s):\n{}",
+        messages.len(),
+        messages.join("\n")
+    );
 }
