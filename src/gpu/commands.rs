@@ -147,13 +147,7 @@ impl<'a> Commands<'a> {
                 device.cmd_dispatch(self.cb, groups[0], groups[1], groups[2]);
             }
         }
-        self.barrier(
-            vk::PipelineStageFlags::COMPUTE_SHADER | vk::PipelineStageFlags::TRANSFER,
-            vk::AccessFlags::SHADER_READ
-                | vk::AccessFlags::SHADER_WRITE
-                | vk::AccessFlags::TRANSFER_READ
-                | vk::AccessFlags::TRANSFER_WRITE,
-        );
+        self.barrier_between_passes();
         Ok(())
     }
 
@@ -168,13 +162,7 @@ impl<'a> Commands<'a> {
                     .cmd_copy_buffer(self.cb, src.handle(), dst.handle(), &region)
             };
         }
-        self.barrier(
-            vk::PipelineStageFlags::COMPUTE_SHADER | vk::PipelineStageFlags::TRANSFER,
-            vk::AccessFlags::SHADER_READ
-                | vk::AccessFlags::SHADER_WRITE
-                | vk::AccessFlags::TRANSFER_READ
-                | vk::AccessFlags::TRANSFER_WRITE,
-        );
+        self.barrier_between_passes();
     }
 
     /// Fills all of `buffer` with zero bytes.
@@ -184,6 +172,12 @@ impl<'a> Commands<'a> {
                 .device()
                 .cmd_fill_buffer(self.cb, buffer.handle(), 0, vk::WHOLE_SIZE, 0)
         };
+        self.barrier_between_passes();
+    }
+
+    /// Every compute or transfer write before it is visible to every compute or transfer access
+    /// after it: recorded after each dispatch, copy and fill.
+    fn barrier_between_passes(&mut self) {
         self.barrier(
             vk::PipelineStageFlags::COMPUTE_SHADER | vk::PipelineStageFlags::TRANSFER,
             vk::AccessFlags::SHADER_READ
