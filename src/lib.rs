@@ -2,7 +2,10 @@
 //! Vulkan compute kernels through raw `ash`. See DESIGN.md (shared/) for the map.
 
 pub mod bench;
+pub mod bvh;
 pub mod gpu;
+pub mod image;
 pub mod sampling;
+pub mod scene;
 pub mod selfcheck;
 pub mod shaders;

@@ -1,0 +1,96 @@
+//! Scenes (DESIGN.md "Scene files"): the CPU description every method starts from. A TOML file
+//! names a camera, OBJ/MTL meshes, analytic lights and an optional environment map; `load`
+//! turns it into flat triangle, material and light lists, checked and in irad's conventions.
+//! `gpu` uploads a `Scene` as a `GpuScene`.
+
+use glam::Vec3;
+use std::path::PathBuf;
+
+/// A pinhole camera. Pixel (x, y) with subpixel offset (sx, sy) in [0, 1)^2 looks along
+/// `normalize(forward + a * right + b * true_up)` with
+/// `forward = normalize(look_at - position)`, `right = normalize(cross(forward, up))`,
+/// `true_up = cross(right, forward)`, `t = tan(fov_y / 2)`,
+/// `a = (2 (x + sx) / width - 1) * t * width / height`, `b = (1 - 2 (y + sy) / height) * t`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Camera {
+    pub position: Vec3,
+    pub look_at: Vec3,
+    pub up: Vec3,
+    /// Vertical field of view in degrees, in (0, 180).
+    pub fov_y: f32,
+    pub width: u32,
+    pub height: u32,
+}
+
+/// Lambert plus one normalized Phong lobe, plus diffuse emission (DESIGN.md "Conventions").
+#[derive(Clone, Debug, PartialEq)]
+pub struct Material {
+    pub name: String,
+    pub kd: Vec3,
+    pub ks: Vec3,
+    /// Phong exponent (MTL `Ns`), >= 0.
+    pub ns: f32,
+    /// Emitted radiance (MTL `Ke`), one-sided, on the side of the geometric normal.
+    pub ke: Vec3,
+}
+
+impl Material {
+    pub fn is_emissive(&self) -> bool {
+        self.ke.max_element() > 0.0
+    }
+}
+
+/// One triangle; counter-clockwise `positions` give the geometric normal
+/// `cross(p1 - p0, p2 - p0)`. `normals` are unit shading normals per corner (the geometric
+/// normal on all three when the OBJ has none).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Triangle {
+    pub positions: [Vec3; 3],
+    pub normals: [Vec3; 3],
+    pub material: u32,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub enum Light {
+    /// Radiant intensity `intensity` (W/sr per channel) in every direction.
+    Point { position: Vec3, intensity: Vec3 },
+    /// `intensity * smoothstep(cos(falloff_angle), cos(cone_angle), cos(theta))`, theta from
+    /// `direction` (unit). Angles in degrees, 0 < cone_angle <= falloff_angle <= 180.
+    Spot {
+        position: Vec3,
+        intensity: Vec3,
+        direction: Vec3,
+        cone_angle: f32,
+        falloff_angle: f32,
+    },
+}
+
+/// An equirectangular environment map (DESIGN.md "Conventions"), radiance already multiplied by
+/// the scene's `scale`. Texel (i, j) is `texels[j * width + i]`, row 0 at the top (+Y).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Environment {
+    pub width: u32,
+    pub height: u32,
+    pub texels: Vec<Vec3>,
+    pub source: PathBuf,
+}
+
+#[derive(Clone, Debug)]
+pub struct Scene {
+    /// The scene file, or None for a scene built in code or the embedded default.
+    pub source: Option<PathBuf>,
+    /// A short name for reports ("cornell-box").
+    pub name: String,
+    /// FNV-1a 64 of the scene file and every file it references, in a fixed order: the key
+    /// under which references are cached.
+    pub content_hash: u64,
+    pub camera: Camera,
+    pub triangles: Vec<Triangle>,
+    pub materials: Vec<Material>,
+    pub lights: Vec<Light>,
+    pub environment: Option<Environment>,
+    /// Things the loader fixed and reports (for example "dropped 2 degenerate triangles").
+    pub warnings: Vec<String>,
+}
+
+pub mod gpu;
