@@ -5,6 +5,7 @@ pub mod bench;
 pub mod bvh;
 pub mod gpu;
 pub mod image;
+pub mod methods;
 pub mod sampling;
 pub mod scene;
 pub mod selfcheck;

@@ -22,4 +22,4 @@ pub use device_info::{DeviceInfo, DeviceKind, DeviceSelector};
 pub use error::{GpuError, GpuResult};
 pub use instance::{validation_layer_available, Validation, ValidationLog};
 pub use kernel::{bind, Binding, Kernel};
-pub use timing::{PassTime, Timings};
+pub use timing::{PassTime, PassTotals, Timings};

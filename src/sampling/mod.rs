@@ -1,4 +1,6 @@
 //! CPU mirrors of the GPU samplers and tables, for tests and self-checks.
 
+pub mod distribution;
+pub mod environment;
 pub mod pcg;
 pub mod scan;

@@ -1,2 +1,355 @@
-//! GpuScene: a Scene on the GPU (triangles in BVH order, BVH nodes, materials, lights and
-//! their sampling tables).
+//! GpuScene: a `Scene` uploaded for the kernels (glsl/include/scene.glsl and bvh.glsl): the
+//! BVH, shading data per triangle in BVH order, materials, analytic lights, the light
+//! selection table (every light by power), the emissive triangles and the environment map
+//! with its texel CDF. Buffers are sized from the scene; an absent part gets a one-element
+//! placeholder because every binding of a kernel must be bound.
+
+use std::f64::consts::PI;
+
+use bytemuck::{Pod, Zeroable};
+use glam::{Vec3, Vec4};
+
+use crate::bvh::{Bvh, GpuBvh};
+use crate::gpu::{bind, Binding, Buffer, Context, GpuResult};
+use crate::sampling::distribution::Distribution1D;
+use crate::sampling::environment::{luminance, sampling_weights};
+
+use super::{Light, Scene};
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct ShadingTriangle {
+    pub n0: Vec4,
+    pub n1: Vec4,
+    pub n2: Vec4,
+    pub geometric_normal: Vec4,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct GpuMaterial {
+    pub kd: Vec4,
+    pub ks: Vec4,
+    pub ke: Vec4,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct LightEntry {
+    pub kind: u32,
+    pub index: u32,
+    pub probability: f32,
+    pub cdf: f32,
+}
+
+pub const LIGHT_TRIANGLE: u32 = 0;
+pub const LIGHT_POINT: u32 = 1;
+pub const LIGHT_SPOT: u32 = 2;
+pub const LIGHT_ENVIRONMENT: u32 = 3;
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct GpuLight {
+    pub position: Vec4,
+    pub intensity: Vec4,
+    pub direction: Vec4,
+    pub cone: Vec4,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct EmitterTriangle {
+    pub p0: Vec4,
+    pub e1: Vec4,
+    pub e2: Vec4,
+    pub normal: Vec4,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct SceneConstants {
+    pub camera_position: Vec4,
+    pub camera_forward: Vec4,
+    pub camera_right: Vec4,
+    pub camera_up: Vec4,
+    pub size: [u32; 4],
+    pub env_size: [u32; 4],
+    pub env: Vec4,
+    pub bounds: Vec4,
+}
+
+/// What the light table holds, for reports and tests.
+#[derive(Clone, Debug)]
+pub struct LightTable {
+    pub entries: Vec<LightEntry>,
+    /// Probability of choosing the environment (0 without one).
+    pub environment_probability: f64,
+}
+
+pub struct GpuScene {
+    pub bvh: GpuBvh,
+    pub shading_triangles: Buffer<ShadingTriangle>,
+    pub materials: Buffer<GpuMaterial>,
+    pub lights: Buffer<GpuLight>,
+    pub light_entries: Buffer<LightEntry>,
+    pub emitter_triangles: Buffer<EmitterTriangle>,
+    pub env_texels: Buffer<Vec4>,
+    pub env_cdf: Buffer<f32>,
+    pub constants: Buffer<SceneConstants>,
+    pub light_table: LightTable,
+    pub width: u32,
+    pub height: u32,
+    pub triangle_count: usize,
+}
+
+/// Centre and radius of a sphere around the triangles and point lights.
+fn bounds(scene: &Scene) -> (Vec3, f32) {
+    let mut lo = Vec3::splat(f32::MAX);
+    let mut hi = Vec3::splat(f32::MIN);
+    let points = scene
+        .triangles
+        .iter()
+        .flat_map(|t| t.positions)
+        .chain(scene.lights.iter().map(|l| match l {
+            Light::Point { position, .. } | Light::Spot { position, .. } => *position,
+        }));
+    for p in points {
+        lo = lo.min(p);
+        hi = hi.max(p);
+    }
+    if lo.x > hi.x {
+        return (Vec3::ZERO, 1.0);
+    }
+    let centre = 0.5 * (lo + hi);
+    (centre, (0.5 * (hi - lo).length()).max(1e-6))
+}
+
+fn spot_cosines(cone_angle: f32, falloff_angle: f32) -> (f32, f32) {
+    (
+        cone_angle.to_radians().cos(),
+        falloff_angle.to_radians().cos(),
+    )
+}
+
+/// Power of each light for light selection (luminance, watts): pbrt-v4's Light::Phi.
+/// Emissive triangle: pi A Y(Le); point: 4 pi Y(I); spot: 2 pi Y(I) (1 - (cos_start +
+/// cos_end) / 2); environment: pi r^2 times the integral of Y(L) over the sphere, r the scene
+/// radius (the power crossing the scene's cross-section).
+fn light_power(light: &Light) -> f64 {
+    match light {
+        Light::Point { intensity, .. } => 4.0 * PI * luminance(*intensity),
+        Light::Spot {
+            intensity,
+            cone_angle,
+            falloff_angle,
+            ..
+        } => {
+            let (cos_start, cos_end) = spot_cosines(*cone_angle, *falloff_angle);
+            2.0 * PI * luminance(*intensity) * (1.0 - 0.5 * (cos_start as f64 + cos_end as f64))
+        }
+    }
+}
+
+impl GpuScene {
+    pub fn upload(ctx: &Context, scene: &Scene) -> GpuResult<GpuScene> {
+        let positions: Vec<[Vec3; 3]> = scene.triangles.iter().map(|t| t.positions).collect();
+        let bvh = Bvh::build(&positions);
+        let (centre, radius) = bounds(scene);
+
+        // Shading data and emitters, in the BVH's triangle order.
+        let mut shading = Vec::with_capacity(scene.triangles.len());
+        let mut emitters = Vec::new();
+        let mut emitter_gpu_index = Vec::new();
+        let mut powers: Vec<(u32, u32, f64)> = Vec::new(); // (kind, index, power)
+        for (gpu_index, &original) in bvh.triangle_order.iter().enumerate() {
+            let t = &scene.triangles[original as usize];
+            let [p0, p1, p2] = t.positions;
+            let cross = (p1 - p0).cross(p2 - p0);
+            let area = 0.5 * cross.length();
+            let ng = cross.normalize_or_zero();
+            let material = t.material;
+            shading.push(ShadingTriangle {
+                n0: t.normals[0].extend(f32::from_bits(material)),
+                n1: t.normals[1].extend(0.0),
+                n2: t.normals[2].extend(area),
+                geometric_normal: ng.extend(0.0),
+            });
+            let m = &scene.materials[material as usize];
+            let power = PI * area as f64 * luminance(m.ke);
+            if m.is_emissive() && power > 0.0 {
+                powers.push((LIGHT_TRIANGLE, emitters.len() as u32, power));
+                emitter_gpu_index.push(gpu_index);
+                emitters.push(EmitterTriangle {
+                    p0: p0.extend(0.0),
+                    e1: (p1 - p0).extend(0.0),
+                    e2: (p2 - p0).extend(area),
+                    normal: ng.extend(f32::from_bits(material)),
+                });
+            }
+        }
+
+        let mut lights = Vec::new();
+        for (i, light) in scene.lights.iter().enumerate() {
+            let power = light_power(light);
+            let gpu = match light {
+                Light::Point {
+                    position,
+                    intensity,
+                } => {
+                    powers.push((LIGHT_POINT, i as u32, power));
+                    GpuLight {
+                        position: position.extend(LIGHT_POINT as f32),
+                        intensity: intensity.extend(0.0),
+                        direction: Vec4::ZERO,
+                        cone: Vec4::ZERO,
+                    }
+                }
+                Light::Spot {
+                    position,
+                    intensity,
+                    direction,
+                    cone_angle,
+                    falloff_angle,
+                } => {
+                    powers.push((LIGHT_SPOT, i as u32, power));
+                    let (cos_cone, cos_falloff) = spot_cosines(*cone_angle, *falloff_angle);
+                    GpuLight {
+                        position: position.extend(LIGHT_SPOT as f32),
+                        intensity: intensity.extend(0.0),
+                        direction: direction.normalize().extend(cos_falloff),
+                        cone: Vec4::new(cos_cone, 0.0, 0.0, 0.0),
+                    }
+                }
+            };
+            lights.push(gpu);
+        }
+
+        // The environment: texels, their CDF, and its power for light selection.
+        let mut env_texels = vec![Vec4::ZERO];
+        let mut env_cdf = vec![1.0f32];
+        let mut env_size = [0u32; 4];
+        let mut env_total = 0.0f64;
+        if let Some(env) = &scene.environment {
+            env_texels = env.texels.iter().map(|t| t.extend(0.0)).collect();
+            env_size = [env.width, env.height, 1, 0];
+            if let Some(d) = Distribution1D::new(&sampling_weights(env)) {
+                env_total = d.total;
+                env_cdf = d.cdf;
+                let power = PI * (radius as f64).powi(2) * d.total;
+                powers.push((LIGHT_ENVIRONMENT, 0, power));
+            }
+        }
+
+        powers.retain(|p| p.2 > 0.0 && p.2.is_finite());
+        let mut entries = Vec::new();
+        let mut environment_probability = 0.0;
+        if let Some(d) = Distribution1D::new(&powers.iter().map(|p| p.2).collect::<Vec<_>>()) {
+            for (i, &(kind, index, _)) in powers.iter().enumerate() {
+                let probability = d.probabilities[i];
+                entries.push(LightEntry {
+                    kind,
+                    index,
+                    probability: probability as f32,
+                    cdf: d.cdf[i],
+                });
+                match kind {
+                    LIGHT_TRIANGLE => {
+                        shading[emitter_gpu_index[index as usize]].n1.w = probability as f32
+                    }
+                    LIGHT_ENVIRONMENT => environment_probability = probability,
+                    _ => {}
+                }
+            }
+        }
+
+        let materials: Vec<GpuMaterial> = scene
+            .materials
+            .iter()
+            .map(|m| {
+                let (yd, ys) = (luminance(m.kd), luminance(m.ks));
+                let p_spec = if ys > 0.0 { ys / (yd + ys) } else { 0.0 };
+                GpuMaterial {
+                    kd: m.kd.extend(p_spec as f32),
+                    ks: m.ks.extend(m.ns),
+                    ke: m.ke.extend(if m.is_emissive() { 1.0 } else { 0.0 }),
+                }
+            })
+            .collect();
+
+        let cam = &scene.camera;
+        let forward = (cam.look_at - cam.position).normalize();
+        let right = forward.cross(cam.up).normalize();
+        let up = right.cross(forward);
+        let constants = SceneConstants {
+            camera_position: cam.position.extend((cam.fov_y.to_radians() * 0.5).tan()),
+            camera_forward: forward.extend(cam.width as f32 / cam.height as f32),
+            camera_right: right.extend(0.0),
+            camera_up: up.extend(0.0),
+            size: [
+                cam.width,
+                cam.height,
+                entries.len() as u32,
+                shading.len() as u32,
+            ],
+            env_size,
+            env: Vec4::new(environment_probability as f32, env_total as f32, 0.0, 0.0),
+            bounds: centre.extend(radius),
+        };
+
+        Ok(GpuScene {
+            bvh: GpuBvh::upload(ctx, &bvh)?,
+            shading_triangles: Buffer::from_slice(ctx, "ShadingTriangles", &shading)?,
+            materials: Buffer::from_slice(ctx, "Materials", &materials)?,
+            lights: Buffer::from_slice(ctx, "Lights", &or_placeholder(lights, GpuLight::zeroed()))?,
+            light_entries: Buffer::from_slice(
+                ctx,
+                "LightEntries",
+                &or_placeholder(entries.clone(), LightEntry::zeroed()),
+            )?,
+            emitter_triangles: Buffer::from_slice(
+                ctx,
+                "EmitterTriangles",
+                &or_placeholder(emitters, EmitterTriangle::zeroed()),
+            )?,
+            env_texels: Buffer::from_slice(ctx, "EnvTexels", &env_texels)?,
+            env_cdf: Buffer::from_slice(ctx, "EnvCdf", &env_cdf)?,
+            constants: Buffer::from_slice(ctx, "SceneParams", &[constants])?,
+            light_table: LightTable {
+                entries,
+                environment_probability,
+            },
+            width: cam.width,
+            height: cam.height,
+            triangle_count: scene.triangles.len(),
+        })
+    }
+
+    /// Every scene binding (bvh.glsl and scene.glsl), by block name.
+    pub fn bindings(&self) -> Vec<Binding<'_>> {
+        let mut b: Vec<Binding<'_>> = self.bvh.bindings().into_iter().collect();
+        b.extend([
+            bind("ShadingTriangles", &self.shading_triangles),
+            bind("Materials", &self.materials),
+            bind("Lights", &self.lights),
+            bind("LightEntries", &self.light_entries),
+            bind("EmitterTriangles", &self.emitter_triangles),
+            bind("EnvTexels", &self.env_texels),
+            bind("EnvCdf", &self.env_cdf),
+            bind("SceneParams", &self.constants),
+        ]);
+        b
+    }
+
+    pub fn pixel_count(&self) -> usize {
+        self.width as usize * self.height as usize
+    }
+}
+
+/// `v`, or one zeroed element when it is empty (a binding cannot be an empty buffer).
+fn or_placeholder<T: Pod>(v: Vec<T>, zero: T) -> Vec<T> {
+    if v.is_empty() {
+        vec![zero]
+    } else {
+        v
+    }
+}

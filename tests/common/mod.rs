@@ -2,6 +2,8 @@
 //! it is installed (always under CI), and a check that it reported nothing, teardown included.
 #![allow(dead_code)]
 
+pub mod shapes;
+
 use irad::gpu::{validation_layer_available, Context, ContextOptions, Validation};
 
 /// Whether the tests run under CI (`CI=true`), where every optional tool must be present.

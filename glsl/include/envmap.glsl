@@ -1,0 +1,58 @@
+// The environment map (DESIGN.md "Conventions"): equirectangular, piecewise constant over
+// texels, u = frac(atan2(x, -z) / 2 pi), v = acos(y) / pi, row 0 at +Y. Importance sampled
+// by texel in proportion to luminance times solid angle (EnvCdf, built on the CPU in f64),
+// then uniformly in solid angle within the texel, so pdf(w) = Y(L(w)) / sum(Y * solid angle)
+// exactly (src/sampling/environment.rs mirrors it).
+#ifndef ENVMAP_GLSL
+#define ENVMAP_GLSL
+
+#include "sampling.glsl"
+#include "scene.glsl"
+
+uint env_texel_index(vec3 d) {
+    uint w = scene.env_size.x;
+    uint h = scene.env_size.y;
+    float u = fract(atan(d.x, -d.z) * (0.5 * INV_PI));
+    float v = acos(clamp(d.y, -1.0, 1.0)) * INV_PI;
+    uint i = min(uint(u * float(w)), w - 1u);
+    uint j = min(uint(v * float(h)), h - 1u);
+    return j * w + i;
+}
+
+vec3 env_radiance(vec3 d) {
+    if (scene.env_size.z == 0u) return vec3(0.0);
+    return env_texels[env_texel_index(d)].rgb;
+}
+
+// Solid-angle pdf of env_sample, before light selection.
+float env_pdf(vec3 d) {
+    if (scene.env_size.z == 0u || scene.env.y <= 0.0) return 0.0;
+    return luminance(env_texels[env_texel_index(d)].rgb) / scene.env.y;
+}
+
+// Samples a direction: texel by binary search over the CDF, then uniform in the texel's
+// solid angle (phi uniform, cos(theta) uniform between the row's edges). Returns the texel's
+// radiance with it, so rounding at a texel edge cannot pair one texel's pdf with another's L.
+vec3 env_sample(vec3 u, out vec3 radiance, out float pdf) {
+    uint w = scene.env_size.x;
+    uint h = scene.env_size.y;
+    uint lo = 0u;
+    uint hi = w * h - 1u;
+    while (lo < hi) {
+        uint mid = (lo + hi) / 2u;
+        if (u.x < env_cdf[mid]) hi = mid; else lo = mid + 1u;
+    }
+    uint i = lo % w;
+    uint j = lo / w;
+    float phi = 2.0 * PI * (float(i) + u.y) / float(w);
+    float cos_top = cos(PI * float(j) / float(h));
+    float cos_bottom = cos(PI * float(j + 1u) / float(h));
+    float y = mix(cos_top, cos_bottom, u.z);
+    float r = sqrt(max(0.0, 1.0 - y * y));
+    vec3 d = vec3(r * sin(phi), y, -r * cos(phi));
+    radiance = env_texels[lo].rgb;
+    pdf = luminance(radiance) / scene.env.y;
+    return d;
+}
+
+#endif

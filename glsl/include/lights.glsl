@@ -1,0 +1,99 @@
+// Next-event estimation: pick one light from LightEntries in proportion to its power (CPU
+// table, src/scene/gpu.rs), then sample it: a uniform point on an emissive triangle (area
+// pdf converted to solid angle, pbrt-v4 Section 4.3 / 12.2), the delta direction of a point
+// or spot light, or a direction from the environment map. The pdfs of the non-delta lights
+// are also what MIS needs when a BSDF-sampled ray hits them (light_pdf_triangle, envmap).
+#ifndef LIGHTS_GLSL
+#define LIGHTS_GLSL
+
+#include "sampling.glsl"
+#include "scene.glsl"
+#include "envmap.glsl"
+
+struct LightSample {
+    vec3 direction;  // unit, from the shading point toward the light
+    float distance;  // to the light point; infinity for the environment
+    vec3 radiance;   // Le (area, environment) or I * falloff / d^2 (delta lights)
+    float pdf;       // selection probability times the solid-angle pdf (delta: selection only)
+    bool delta;
+};
+
+uint select_light(float u) {
+    uint lo = 0u;
+    uint hi = scene.size.z - 1u;
+    while (lo < hi) {
+        uint mid = (lo + hi) / 2u;
+        if (u < light_entries[mid].cdf) hi = mid; else lo = mid + 1u;
+    }
+    return lo;
+}
+
+// pbrt-v4 SpotLight::I: smoothstep from cos(falloff) to cos(cone).
+float spot_falloff(Light l, vec3 from_light) {
+    float cos_theta = dot(from_light, l.direction.xyz);
+    float edge0 = l.direction.w;
+    float edge1 = l.cone.x;
+    if (edge1 <= edge0) return cos_theta >= edge1 ? 1.0 : 0.0;
+    return smoothstep(edge0, edge1, cos_theta);
+}
+
+// Samples a light for shading point p; false when the sample carries nothing (a triangle seen
+// from behind, zero pdf). u.x selects the light, u.yz sample it.
+bool sample_light(vec3 p, vec3 u, out LightSample s) {
+    s.delta = false;
+    s.radiance = vec3(0.0);
+    s.pdf = 0.0;
+    s.distance = 0.0;
+    s.direction = vec3(0.0, 1.0, 0.0);
+    if (scene.size.z == 0u) return false;
+    LightEntry e = light_entries[select_light(u.x)];
+    if (e.kind == 0u) {
+        EmitterTriangle t = emitter_triangles[e.index];
+        vec2 b = sample_uniform_triangle(u.yz);
+        vec3 q = t.p0.xyz + b.x * t.e1.xyz + b.y * t.e2.xyz;
+        vec3 d = q - p;
+        float dist2 = dot(d, d);
+        if (dist2 <= 0.0) return false;
+        float dist = sqrt(dist2);
+        s.direction = d / dist;
+        s.distance = dist;
+        float cos_light = -dot(s.direction, t.normal.xyz);
+        if (cos_light <= 0.0) return false;
+        uint m = floatBitsToUint(t.normal.w);
+        s.radiance = materials[m].ke.rgb;
+        s.pdf = e.probability * dist2 / (cos_light * t.e2.w);
+        return s.pdf > 0.0;
+    }
+    if (e.kind == 3u) {
+        s.direction = env_sample(u.yzx, s.radiance, s.pdf);
+        s.pdf *= e.probability;
+        s.distance = infinity();
+        return s.pdf > 0.0;
+    }
+    Light l = lights[e.index];
+    vec3 d = l.position.xyz - p;
+    float dist2 = dot(d, d);
+    if (dist2 <= 0.0) return false;
+    s.distance = sqrt(dist2);
+    s.direction = d / s.distance;
+    float falloff = e.kind == 2u ? spot_falloff(l, -s.direction) : 1.0;
+    s.radiance = l.intensity.rgb * (falloff / dist2);
+    s.pdf = e.probability;
+    s.delta = true;
+    return falloff > 0.0;
+}
+
+// Solid-angle pdf with which sample_light picks the point hit at distance t along unit
+// direction d on GPU triangle `triangle`, from the emitting side.
+float light_pdf_triangle(uint triangle, vec3 d, float t) {
+    ShadingTriangle st = shading_triangles[triangle];
+    float cos_light = -dot(d, st.geometric_normal.xyz);
+    if (cos_light <= 0.0) return 0.0;
+    return st.n1.w * t * t / (cos_light * st.n2.w);
+}
+
+float light_pdf_environment(vec3 d) {
+    return scene.env.x * env_pdf(d);
+}
+
+#endif

@@ -1,0 +1,20 @@
+// The accumulation buffer every method adds its per-frame estimates into (sums; the host
+// divides by the frame count), and the counter of non-finite estimates a kernel dropped.
+// Bindings 11 and 12.
+#ifndef RADIANCE_GLSL
+#define RADIANCE_GLSL
+
+layout(set = 0, binding = 11, std430) buffer Radiance { vec4 radiance[]; };
+layout(set = 0, binding = 12, std430) buffer Diagnostics { uint nonfinite_estimates; };
+
+// Adds one estimate to the pixel's sum; a NaN or Inf estimate is counted and dropped (the
+// host reports the count), so no non-finite value ever reaches an image.
+void accumulate_radiance(uint pixel, vec3 estimate) {
+    if (any(isnan(estimate)) || any(isinf(estimate))) {
+        atomicAdd(nonfinite_estimates, 1u);
+        return;
+    }
+    radiance[pixel] += vec4(estimate, 0.0);
+}
+
+#endif

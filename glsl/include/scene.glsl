@@ -1,0 +1,82 @@
+// The scene as every method's kernels see it (src/scene/gpu.rs uploads it): shading data per
+// triangle in BVH order, materials, analytic lights, the light-selection table, emissive
+// triangles, the environment map and its CDF, and the scene constants. Bindings 2-9
+// (bvh.glsl holds 0 and 1); kernels number their own from 10.
+#ifndef SCENE_GLSL
+#define SCENE_GLSL
+
+struct ShadingTriangle {
+    vec4 n0;               // shading normal at corner 0; w: material index (uint bits)
+    vec4 n1;               // corner 1; w: probability that light selection picks this triangle
+    vec4 n2;               // corner 2; w: area
+    vec4 geometric_normal; // unit, counter-clockwise side; w: unused
+};
+
+struct Material {
+    vec4 kd;    // diffuse albedo; w: probability of sampling the Phong lobe
+    vec4 ks;    // Phong albedo; w: Phong exponent
+    vec4 ke;    // emitted radiance; w: 1 when emissive
+};
+
+// kind: 0 emissive triangle (index: EmitterTriangles entry), 1 point, 2 spot (index: Lights entry),
+// 3 environment. cdf: inclusive running sum of probabilities, the last exactly 1.
+struct LightEntry {
+    uint kind;
+    uint index;
+    float probability;
+    float cdf;
+};
+
+struct Light {
+    vec4 position;   // w: kind (1 point, 2 spot)
+    vec4 intensity;  // W/sr
+    vec4 direction;  // spot axis (unit); w: cos(falloff_angle)
+    vec4 cone;       // x: cos(cone_angle)
+};
+
+struct EmitterTriangle {
+    vec4 p0;
+    vec4 e1;
+    vec4 e2;       // w: area
+    vec4 normal;   // unit geometric normal (the emitting side); w: material index (uint bits)
+};
+
+struct SceneConstants {
+    vec4 camera_position; // w: tan(fov_y / 2)
+    vec4 camera_forward;  // w: width / height
+    vec4 camera_right;
+    vec4 camera_up;
+    uvec4 size;           // image width, height, light entry count, triangle count
+    uvec4 env_size;       // environment width, height, 1 when present
+    vec4 env;             // x: probability of selecting the environment, y: sum over texels of luminance * solid angle
+    vec4 bounds;          // xyz: scene centre, w: scene radius
+};
+
+layout(set = 0, binding = 2, std430) readonly buffer ShadingTriangles { ShadingTriangle shading_triangles[]; };
+layout(set = 0, binding = 3, std430) readonly buffer Materials { Material materials[]; };
+layout(set = 0, binding = 4, std430) readonly buffer Lights { Light lights[]; };
+layout(set = 0, binding = 5, std430) readonly buffer LightEntries { LightEntry light_entries[]; };
+layout(set = 0, binding = 6, std430) readonly buffer EmitterTriangles { EmitterTriangle emitter_triangles[]; };
+layout(set = 0, binding = 7, std430) readonly buffer EnvTexels { vec4 env_texels[]; };
+layout(set = 0, binding = 8, std430) readonly buffer EnvCdf { float env_cdf[]; };
+layout(set = 0, binding = 9, std430) readonly buffer SceneParams { SceneConstants scene; };
+
+uint triangle_material(uint triangle) {
+    return floatBitsToUint(shading_triangles[triangle].n0.w);
+}
+
+vec3 shading_normal(uint triangle, vec2 uv) {
+    ShadingTriangle t = shading_triangles[triangle];
+    vec3 n = (1.0 - uv.x - uv.y) * t.n0.xyz + uv.x * t.n1.xyz + uv.y * t.n2.xyz;
+    float len2 = dot(n, n);
+    return len2 > 1e-20 ? n * inversesqrt(len2) : t.geometric_normal.xyz;
+}
+
+// Offsets a ray origin off the surface on the side of `side_normal`: scaled to the scene so
+// large coordinates do not self-intersect through float rounding.
+vec3 offset_origin(vec3 p, vec3 side_normal) {
+    float scale = max(max(abs(p.x), abs(p.y)), max(abs(p.z), scene.bounds.w));
+    return p + side_normal * (1e-4 * scale);
+}
+
+#endif

@@ -1,0 +1,134 @@
+#version 450
+// The reference: one unidirectional path per pixel per frame from the G-buffer's first hit
+// (pbrt-v4 PathIntegrator, Pharr et al. 2023 Section 13.4): emission, next-event estimation
+// of one light chosen by power (lights.glsl), BSDF sampling (bsdf.glsl), the two combined by
+// the power heuristic (Veach 1997 Section 9.2), Russian roulette from bounce 3 on. Delta
+// lights are reached by next-event estimation only, with weight 1.
+//
+// Random dimensions per (seed, pixel, frame): 0-1 subpixel (write_gbuffer.comp), then 8 per
+// bounce from 2: light selection and position (3), BSDF lobe and direction (3), roulette (1).
+
+#extension GL_GOOGLE_include_directive : require
+
+layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
+
+#include "bvh.glsl"
+#include "scene.glsl"
+#include "sampling.glsl"
+#include "bsdf.glsl"
+#include "lights.glsl"
+#include "gbuffer.glsl"
+#include "radiance.glsl"
+
+layout(push_constant) uniform PathParams {
+    uint frame;
+    uint seed;
+    uint max_depth;       // most scattering events per path (pbrt's maxdepth)
+    uint roulette_depth;  // first bounce at which Russian roulette may end the path
+} params;
+
+const uint DIMENSIONS_PER_BOUNCE = 8u;
+
+float max_component(vec3 v) {
+    return max(max(v.x, v.y), v.z);
+}
+
+void main() {
+    uvec2 pixel = gl_GlobalInvocationID.xy;
+    if (pixel.x >= scene.size.x || pixel.y >= scene.size.y) return;
+    uint index = pixel.y * scene.size.x + pixel.x;
+    GBufferTexel g = gbuffer[index];
+
+    vec3 dir = g.direction.xyz;
+    bool found = g.position.w >= 0.0;
+    vec3 p = g.position.xyz;
+    float t = g.position.w;
+    uint tri = floatBitsToUint(g.geometric_normal.w);
+    vec3 ns = g.shading_normal.xyz;
+    vec3 ng = g.geometric_normal.xyz;
+    uint mat = floatBitsToUint(g.shading_normal.w);
+
+    vec3 L = vec3(0.0);
+    vec3 beta = vec3(1.0);
+    float bsdf_pdf_prev = 0.0;
+
+    for (uint depth = 0u;; ++depth) {
+        if (!found) {
+            vec3 le = env_radiance(dir);
+            if (max_component(le) > 0.0) {
+                float w = depth == 0u ? 1.0 : power_heuristic(bsdf_pdf_prev, light_pdf_environment(dir));
+                L += beta * le * w;
+            }
+            break;
+        }
+        Material m = materials[mat];
+        vec3 wo = -dir;
+        if (m.ke.w > 0.0 && dot(wo, ng) > 0.0) {
+            float w = depth == 0u ? 1.0 : power_heuristic(bsdf_pdf_prev, light_pdf_triangle(tri, dir, t));
+            L += beta * m.ke.rgb * w;
+        }
+        if (depth >= params.max_depth) break;
+
+        // Two-sided scattering: work on the side the path arrives from.
+        vec3 side = dot(wo, ng) >= 0.0 ? ng : -ng;
+        vec3 n = dot(ns, side) >= 0.0 ? ns : -ns;
+        vec3 origin = offset_origin(p, side);
+        uint dim = 2u + depth * DIMENSIONS_PER_BOUNCE;
+
+        LightSample ls;
+        vec3 u_light = vec3(random(params.seed, index, params.frame, dim),
+                            random(params.seed, index, params.frame, dim + 1u),
+                            random(params.seed, index, params.frame, dim + 2u));
+        if (sample_light(p, u_light, ls)) {
+            float cos_i = dot(ls.direction, n);
+            if (cos_i > 0.0 && dot(ls.direction, side) > 0.0) {
+                vec3 f = bsdf_eval(m, n, wo, ls.direction);
+                if (max_component(f) > 0.0) {
+                    bool visible;
+                    if (isinf(ls.distance)) {
+                        visible = !trace_any(origin, ls.direction, infinity());
+                    } else {
+                        // Aim at the light point itself and stop just short of it.
+                        vec3 to_light = p + ls.direction * ls.distance - origin;
+                        visible = !trace_any(origin, to_light, 0.9999);
+                    }
+                    if (visible) {
+                        float w = ls.delta ? 1.0 : power_heuristic(ls.pdf, bsdf_pdf(m, n, wo, ls.direction));
+                        L += beta * f * cos_i * ls.radiance * (w / ls.pdf);
+                    }
+                }
+            }
+        }
+
+        vec3 u_bsdf = vec3(random(params.seed, index, params.frame, dim + 3u),
+                           random(params.seed, index, params.frame, dim + 4u),
+                           random(params.seed, index, params.frame, dim + 5u));
+        vec3 wi;
+        if (!bsdf_sample(m, n, wo, u_bsdf, wi)) break;
+        float pdf = bsdf_pdf(m, n, wo, wi);
+        float cos_i = dot(wi, n);
+        if (pdf <= 0.0 || cos_i <= 0.0 || dot(wi, side) <= 0.0) break;
+        beta *= bsdf_eval(m, n, wo, wi) * (cos_i / pdf);
+        if (max_component(beta) <= 0.0) break;
+        bsdf_pdf_prev = pdf;
+
+        if (depth + 1u >= params.roulette_depth) {
+            float q = max(0.0, 1.0 - max_component(beta));
+            if (random(params.seed, index, params.frame, dim + 6u) < q) break;
+            beta /= 1.0 - q;
+        }
+
+        RayHit hit;
+        dir = wi;
+        found = trace_closest(origin, wi, infinity(), hit);
+        if (found) {
+            tri = hit.triangle;
+            t = hit.t;
+            p = origin + t * wi;
+            ns = shading_normal(tri, hit.barycentrics);
+            ng = shading_triangles[tri].geometric_normal.xyz;
+            mat = triangle_material(tri);
+        }
+    }
+    accumulate_radiance(index, L);
+}

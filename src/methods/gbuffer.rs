@@ -1,0 +1,75 @@
+//! glsl/write_gbuffer.comp: the first hit of one jittered camera ray per pixel (Keller 97
+//! Section 4.1 jittered Halton subpixel positions), shared by every method.
+
+use bytemuck::{Pod, Zeroable};
+use glam::Vec4;
+
+use crate::gpu::{bind, Buffer, Commands, Context, GpuResult, Kernel};
+use crate::scene::gpu::GpuScene;
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct GBufferTexel {
+    /// Hit point; w: hit distance, negative for a miss.
+    pub position: Vec4,
+    /// w: material index (u32 bits).
+    pub shading_normal: Vec4,
+    /// w: GPU triangle index (u32 bits).
+    pub geometric_normal: Vec4,
+    pub direction: Vec4,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct FrameParams {
+    frame: u32,
+    frame_count: u32,
+    seed: u32,
+    _pad: u32,
+}
+
+pub struct GBuffer {
+    pub texels: Buffer<GBufferTexel>,
+}
+
+impl GBuffer {
+    pub fn new(ctx: &Context, scene: &GpuScene) -> GpuResult<GBuffer> {
+        Ok(GBuffer {
+            texels: Buffer::zeroed(ctx, "GBuffer", scene.pixel_count())?,
+        })
+    }
+}
+
+pub struct WriteGBuffer(Kernel);
+
+impl WriteGBuffer {
+    pub fn new(ctx: &Context) -> GpuResult<Self> {
+        Ok(WriteGBuffer(Kernel::new(ctx, "write_gbuffer")?))
+    }
+
+    /// Frame `frame` of `frame_count` (the count sets the jitter grid).
+    pub fn record<'a>(
+        &'a self,
+        cmd: &mut Commands<'a>,
+        scene: &'a GpuScene,
+        gbuffer: &'a GBuffer,
+        frame: u32,
+        frame_count: u32,
+        seed: u32,
+    ) -> GpuResult<()> {
+        let mut bindings = scene.bindings();
+        bindings.push(bind("GBuffer", &gbuffer.texels));
+        let params = FrameParams {
+            frame,
+            frame_count,
+            seed,
+            _pad: 0,
+        };
+        self.0.dispatch(
+            cmd,
+            &bindings,
+            &params,
+            [scene.width.div_ceil(8), scene.height.div_ceil(8), 1],
+        )
+    }
+}
