@@ -74,7 +74,12 @@ fn furnace_sphere_gives_le_over_one_minus_rho() {
 
 /// Pixel-footprint average of (Kd / pi) I cos(theta) / r^2 on the plane y = 0, by a 16 x 16
 /// midpoint rule over the pixel through the camera mapping of src/scene/mod.rs.
-fn point_light_expected(scene: &Scene, kd: f64, light: Vec3, intensity: f64) -> Vec<f64> {
+fn point_light_expected(
+    scene: &Scene,
+    kd: f64,
+    light: Vec3,
+    intensity: impl Fn(Vec3) -> f64,
+) -> Vec<f64> {
     let cam = &scene.camera;
     let forward = (cam.look_at - cam.position).normalize();
     let right = forward.cross(cam.up).normalize();
@@ -95,7 +100,7 @@ fn point_light_expected(scene: &Scene, kd: f64, light: Vec3, intensity: f64) -> 
                     let to_light = light - hit;
                     let r2 = to_light.length_squared() as f64;
                     let cos = (to_light.y as f64) / r2.sqrt();
-                    sum += kd / PI * intensity * cos / r2;
+                    sum += kd / PI * intensity(-to_light.normalize()) * cos / r2;
                 }
             }
             out.push(sum / 256.0);
@@ -120,12 +125,68 @@ fn point_light_over_diffuse_plane_matches_per_pixel() {
             intensity: Vec3::splat(intensity),
         });
         let image = render(ctx, &scene, 64, 2);
-        let expected = point_light_expected(&scene, kd as f64, light, intensity as f64);
+        let expected = point_light_expected(&scene, kd as f64, light, |_| intensity as f64);
         let mut worst = 0.0f64;
         for (p, e) in image.pixels.iter().zip(&expected) {
             worst = worst.max((p[0] as f64 / e - 1.0).abs());
         }
         eprintln!("point light: worst per-pixel relative error {worst:.5}");
+        assert!(worst < 0.01, "worst per-pixel error {worst}");
+    });
+}
+
+/// pbrt-v4's spot falloff: smoothstep from cos(falloff_angle) to cos(cone_angle).
+fn spot_falloff(direction: Vec3, axis: Vec3, cone: f32, falloff: f32) -> f64 {
+    let (e0, e1) = (
+        falloff.to_radians().cos() as f64,
+        cone.to_radians().cos() as f64,
+    );
+    let x = ((direction.dot(axis) as f64 - e0) / (e1 - e0)).clamp(0.0, 1.0);
+    x * x * (3.0 - 2.0 * x)
+}
+
+#[test]
+fn spot_light_over_diffuse_plane_matches_per_pixel() {
+    with_gpu(|ctx| {
+        let (kd, intensity) = (0.5f32, 4.0f32);
+        let light = Vec3::new(0.0, 1.2, 0.0);
+        let axis = Vec3::new(0.2, -1.0, 0.1).normalize();
+        let (cone, falloff) = (20.0f32, 35.0f32);
+        let mut scene = scene(
+            "spot light over a plane",
+            camera(Vec3::new(0.0, 2.5, 1.0), Vec3::ZERO, Vec3::Y, 50.0, 16),
+            plane_y(20.0, 0.0, 0),
+            vec![material("plane", kd, 0.0, 1.0, 0.0)],
+        );
+        scene.lights.push(Light::Spot {
+            position: light,
+            intensity: Vec3::splat(intensity),
+            direction: axis,
+            cone_angle: cone,
+            falloff_angle: falloff,
+        });
+        let image = render(ctx, &scene, 512, 6);
+        let expected = point_light_expected(&scene, kd as f64, light, |d| {
+            intensity as f64 * spot_falloff(d, axis, cone, falloff)
+        });
+        // Inside the cone, each pixel within 1%; in the penumbra's steep edge and outside,
+        // the footprint average is compared in absolute terms against the peak.
+        let peak = expected.iter().cloned().fold(0.0, f64::max);
+        let (mut lit, mut worst) = (0, 0.0f64);
+        for (p, e) in image.pixels.iter().zip(&expected) {
+            let error = (p[0] as f64 - e).abs();
+            if *e > 0.5 * peak {
+                lit += 1;
+                worst = worst.max(error / e);
+            } else {
+                assert!(
+                    error < 0.01 * peak,
+                    "penumbra pixel off by {error} (peak {peak})"
+                );
+            }
+        }
+        eprintln!("spot light: {lit} lit pixels, worst relative error {worst:.5}");
+        assert!(lit > 20, "the spot should light part of the image");
         assert!(worst < 0.01, "worst per-pixel error {worst}");
     });
 }
