@@ -2,6 +2,8 @@
 //! tone map, the JSON sidecar, and the error metrics every accuracy figure uses.
 
 pub mod exr;
+pub mod png;
+pub mod tonemap;
 
 /// A linear RGB image, row 0 at the top, `pixels[y * width + x]`.
 #[derive(Clone, Debug, PartialEq)]
