@@ -2,6 +2,13 @@
 //! tone map, the JSON sidecar, and the error metrics every accuracy figure uses.
 
 pub mod exr;
+pub mod metrics;
+pub mod png;
+pub mod sidecar;
+pub mod tonemap;
+
+pub use metrics::{compare, Metrics, MetricsError};
+pub use sidecar::{output_paths, write_all, PassRecord, RenderRecord};
 
 /// A linear RGB image, row 0 at the top, `pixels[y * width + x]`.
 #[derive(Clone, Debug, PartialEq)]

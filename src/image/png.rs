@@ -1,0 +1,50 @@
+//! PNG out through the `png` crate: 8-bit sRGB RGB after the tone map of `tonemap.rs`, with an
+//! sRGB chunk so viewers do not re-interpret the gamma.
+
+use std::fs::File;
+use std::io::BufWriter;
+use std::path::Path;
+
+use anyhow::{ensure, Context, Result};
+
+use super::{tonemap, Image};
+
+/// Writes `image` tone-mapped at `exposure` stops (0 for none) as an 8-bit sRGB RGB PNG.
+pub fn write(path: &Path, image: &Image, exposure: f32) -> Result<()> {
+    ensure!(
+        exposure.is_finite(),
+        "writing {}: exposure must be a finite number of stops, got {exposure}",
+        path.display()
+    );
+    ensure!(
+        image.width > 0 && image.height > 0,
+        "writing {}: cannot write a {}x{} image",
+        path.display(),
+        image.width,
+        image.height
+    );
+    ensure!(
+        image.pixels.len() == image.width as usize * image.height as usize,
+        "writing {}: a {}x{} image holds {} pixels, not {}",
+        path.display(),
+        image.width,
+        image.height,
+        image.width as usize * image.height as usize,
+        image.pixels.len()
+    );
+    let data = tonemap::tonemap_rgb8(image, exposure);
+    let file = File::create(path).with_context(|| format!("creating {}", path.display()))?;
+    let mut encoder = ::png::Encoder::new(BufWriter::new(file), image.width, image.height);
+    encoder.set_color(::png::ColorType::Rgb);
+    encoder.set_depth(::png::BitDepth::Eight);
+    encoder.set_source_srgb(::png::SrgbRenderingIntent::Perceptual);
+    let mut writer = encoder
+        .write_header()
+        .with_context(|| format!("writing {}", path.display()))?;
+    writer
+        .write_image_data(&data)
+        .with_context(|| format!("writing {}", path.display()))?;
+    writer
+        .finish()
+        .with_context(|| format!("writing {}", path.display()))
+}
