@@ -6,6 +6,7 @@ pub mod bvh;
 pub mod gpu;
 pub mod image;
 pub mod methods;
+pub mod render;
 pub mod sampling;
 pub mod scene;
 pub mod selfcheck;
