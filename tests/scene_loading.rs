@@ -191,6 +191,14 @@ fn infinite_texel_in_exr() {
 }
 
 #[test]
+fn corrupt_exr() {
+    let toml = format!("{}[environment]\nexr = \"sky.exr\"\n", good_toml());
+    let s = scratch("corrupt-exr", &toml, OBJ, MTL);
+    s.write("sky.exr", "not an image");
+    s.error(&["sky.exr: environment.exr: ", "OpenEXR"]);
+}
+
+#[test]
 fn bad_environment_scale() {
     let toml = format!(
         "{}[environment]\nexr = \"sky.exr\"\nscale = -2.0\n",
