@@ -2,6 +2,12 @@
 //! names a camera, OBJ/MTL meshes, analytic lights and an optional environment map; `load`
 //! turns it into flat triangle, material and light lists, checked and in irad's conventions.
 //! `gpu` uploads a `Scene` as a `GpuScene`.
+//!
+//! Loading conventions: paths are relative to the scene file (MTL files to their OBJ); an MTL
+//! key a material does not set is 0; faces with no material get a grey default (Kd 0.5) and a
+//! warning; OBJ `vn` normals are normalized, and corners with no, zero or NaN `vn` get the
+//! geometric normal; triangles of area <= `DEGENERATE_AREA` x the squared scene diagonal are
+//! dropped with a warning; Kd + Ks may exceed 1 by at most 1e-5 per channel (decimal rounding).
 
 use glam::Vec3;
 use std::path::PathBuf;
@@ -93,4 +99,16 @@ pub struct Scene {
     pub warnings: Vec<String>,
 }
 
+mod camera;
+mod environment;
+mod error;
+mod file;
 pub mod gpu;
+pub mod hash;
+mod lights;
+mod load;
+mod mtl;
+mod obj;
+
+pub use error::SceneError;
+pub use load::{default_scene, load, load_str, DEGENERATE_AREA};

@@ -1,0 +1,134 @@
+//! The `[camera]` table checked and turned into a `Camera`.
+
+use glam::Vec3;
+
+use super::file::{fmt3, CameraFile};
+use super::{Camera, SceneError};
+
+/// Largest width or height accepted: anything larger is a typo, not a frame.
+pub const MAX_RESOLUTION: i64 = 65536;
+
+pub fn build(file: &str, c: &CameraFile) -> Result<Camera, SceneError> {
+    let invalid = |field: &str, value: String, problem: &str| SceneError::Invalid {
+        file: file.to_string(),
+        field: format!("camera.{field}"),
+        value,
+        problem: problem.to_string(),
+    };
+    for (field, v) in [
+        ("position", c.position),
+        ("look_at", c.look_at),
+        ("up", c.up),
+    ] {
+        if !v.iter().all(|x| x.is_finite()) {
+            return Err(invalid(field, fmt3(v), "must be finite"));
+        }
+    }
+    if !(c.fov_y > 0.0 && c.fov_y < 180.0) {
+        return Err(invalid(
+            "fov_y",
+            c.fov_y.to_string(),
+            "must be in (0, 180) degrees",
+        ));
+    }
+    let [w, h] = c.resolution;
+    if !(1..=MAX_RESOLUTION).contains(&w) || !(1..=MAX_RESOLUTION).contains(&h) {
+        return Err(invalid(
+            "resolution",
+            format!("[{w}, {h}]"),
+            &format!("width and height must be in 1..={MAX_RESOLUTION}"),
+        ));
+    }
+    let position = Vec3::from(c.position);
+    let look_at = Vec3::from(c.look_at);
+    let up = Vec3::from(c.up);
+    let forward = (look_at - position).normalize_or_zero();
+    if forward == Vec3::ZERO {
+        return Err(invalid(
+            "look_at",
+            fmt3(c.look_at),
+            "equals camera.position: the view direction is undefined",
+        ));
+    }
+    if forward.cross(up.normalize_or_zero()).length() < 1e-6 {
+        return Err(invalid(
+            "up",
+            fmt3(c.up),
+            &format!(
+                "is zero or parallel to the view direction {}",
+                fmt3(forward.to_array())
+            ),
+        ));
+    }
+    Ok(Camera {
+        position,
+        look_at,
+        up,
+        fov_y: c.fov_y,
+        width: w as u32,
+        height: h as u32,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn camera() -> CameraFile {
+        CameraFile {
+            position: [0.0, 1.0, 3.4],
+            look_at: [0.0, 1.0, 0.0],
+            up: [0.0, 1.0, 0.0],
+            fov_y: 40.0,
+            resolution: [256, 128],
+        }
+    }
+
+    fn message(c: CameraFile) -> String {
+        build("s.toml", &c).unwrap_err().to_string()
+    }
+
+    #[test]
+    fn a_good_camera_is_kept_as_given() {
+        let c = build("s.toml", &camera()).unwrap();
+        assert_eq!((c.width, c.height, c.fov_y), (256, 128, 40.0));
+        assert_eq!(c.up, Vec3::Y);
+    }
+
+    #[test]
+    fn each_bad_field_is_named() {
+        let m = message(CameraFile {
+            look_at: [0.0, 1.0, 3.4],
+            ..camera()
+        });
+        assert!(m.contains("camera.look_at = [0, 1, 3.4]"), "{m}");
+        let m = message(CameraFile {
+            up: [0.0, 0.0, -2.0],
+            ..camera()
+        });
+        assert!(
+            m.contains("camera.up = [0, 0, -2]") && m.contains("parallel"),
+            "{m}"
+        );
+        let m = message(CameraFile {
+            up: [0.0; 3],
+            ..camera()
+        });
+        assert!(m.contains("camera.up = [0, 0, 0]"), "{m}");
+        let m = message(CameraFile {
+            fov_y: 180.0,
+            ..camera()
+        });
+        assert!(m.contains("camera.fov_y = 180"), "{m}");
+        let m = message(CameraFile {
+            resolution: [-4, 4],
+            ..camera()
+        });
+        assert!(m.contains("camera.resolution = [-4, 4]"), "{m}");
+        let m = message(CameraFile {
+            position: [f32::NAN, 0.0, 0.0],
+            ..camera()
+        });
+        assert!(m.contains("camera.position = [NaN, 0, 0]"), "{m}");
+    }
+}

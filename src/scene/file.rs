@@ -1,0 +1,112 @@
+//! The scene file's TOML schema (DESIGN.md "Scene files"), deserialized with unknown fields
+//! refused. Values are checked where they become scene types (camera.rs, lights.rs, ...).
+
+use serde::Deserialize;
+
+use super::SceneError;
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneFile {
+    pub camera: CameraFile,
+    #[serde(default)]
+    pub mesh: Vec<MeshFile>,
+    #[serde(default)]
+    pub light: Vec<LightFile>,
+    pub environment: Option<EnvironmentFile>,
+    /// Light-field luminaires: any table is accepted here and refused by the loader until
+    /// their issue defines the format.
+    #[serde(default)]
+    pub luminaire: Vec<toml::Table>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CameraFile {
+    pub position: [f32; 3],
+    pub look_at: [f32; 3],
+    #[serde(default = "default_up")]
+    pub up: [f32; 3],
+    pub fov_y: f32,
+    /// Signed so that zero and negative sizes get the loader's message, not serde's.
+    pub resolution: [i64; 2],
+}
+
+fn default_up() -> [f32; 3] {
+    [0.0, 1.0, 0.0]
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MeshFile {
+    pub obj: String,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LightFile {
+    pub kind: String,
+    pub position: [f32; 3],
+    pub intensity: [f32; 3],
+    pub direction: Option<[f32; 3]>,
+    pub cone_angle: Option<f32>,
+    pub falloff_angle: Option<f32>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EnvironmentFile {
+    pub exr: String,
+    #[serde(default = "default_scale")]
+    pub scale: f32,
+}
+
+fn default_scale() -> f32 {
+    1.0
+}
+
+/// Parses the scene file's text; `file` names it in messages.
+pub fn parse(file: &str, text: &str) -> Result<SceneFile, SceneError> {
+    toml::from_str(text).map_err(|e| SceneError::Toml {
+        file: file.to_string(),
+        message: e.to_string().trim_end().to_string(),
+    })
+}
+
+/// `[a, b, c]` with f32 Display (NaN and inf spelled out), for messages.
+pub fn fmt3(v: [f32; 3]) -> String {
+    format!("[{}, {}, {}]", v[0], v[1], v[2])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const MINIMAL: &str =
+        "[camera]\nposition = [0, 1, 3]\nlook_at = [0, 1, 0]\nfov_y = 40\nresolution = [4, 3]\n";
+
+    #[test]
+    fn integers_are_accepted_where_floats_are_expected() {
+        let f = parse("s.toml", MINIMAL).unwrap();
+        assert_eq!(f.camera.position, [0.0, 1.0, 3.0]);
+        assert_eq!(f.camera.up, [0.0, 1.0, 0.0]);
+        assert!(f.mesh.is_empty() && f.light.is_empty() && f.environment.is_none());
+    }
+
+    #[test]
+    fn unknown_nested_field_is_refused_with_its_name_and_line() {
+        let text = format!("{MINIMAL}[[light]]\nkind = \"point\"\nposition = [0, 1, 0]\nintensity = [1, 1, 1]\ncolour = 3\n");
+        let e = parse("s.toml", &text).unwrap_err().to_string();
+        assert!(e.starts_with("s.toml: "), "{e}");
+        assert!(e.contains("colour") && e.contains("line 10"), "{e}");
+    }
+
+    #[test]
+    fn environment_scale_defaults_to_one() {
+        let text = format!("{MINIMAL}[environment]\nexr = \"sky.exr\"\n");
+        assert_eq!(
+            parse("s.toml", &text).unwrap().environment.unwrap().scale,
+            1.0
+        );
+    }
+}

@@ -1,0 +1,310 @@
+//! From a scene file to a checked `Scene`: reads every referenced file (from disk, or from the
+//! texts embedded in the binary for the default Cornell box), merges the meshes' triangles and
+//! materials, drops degenerate triangles, and refuses scenes with no triangle or no light.
+
+use std::path::{Path, PathBuf};
+
+use glam::Vec3;
+
+use super::hash::Fnv1a64;
+use super::{camera, environment, file, lights, obj};
+use super::{Material, Scene, SceneError, Triangle};
+
+/// A triangle whose area is at most this times the squared diagonal of the scene's bounding
+/// box is degenerate and dropped (with a warning).
+pub const DEGENERATE_AREA: f64 = 1e-12;
+
+/// Loads the scene file at `path`; files it names are relative to its folder.
+pub fn load(path: &Path) -> Result<Scene, SceneError> {
+    let display = path.display().to_string();
+    let bytes = std::fs::read(path).map_err(|source| SceneError::Read {
+        path: display.clone(),
+        referenced_by: "the scene file".into(),
+        source,
+    })?;
+    let text = String::from_utf8(bytes).map_err(|e| SceneError::File {
+        file: display.clone(),
+        message: format!("not UTF-8 text (TOML must be): {e}"),
+    })?;
+    let base = path.parent().unwrap_or(Path::new(""));
+    let mut scene = build(&display, &text, &Files::Disk(base))?;
+    scene.name = scene_name(path);
+    scene.source = Some(path.to_path_buf());
+    Ok(scene)
+}
+
+/// Loads a scene from TOML text; files it names are relative to `base_dir`. `name` names the
+/// text in messages and becomes `Scene::name`; `Scene::source` is None.
+pub fn load_str(toml_text: &str, base_dir: &Path, name: &str) -> Result<Scene, SceneError> {
+    let mut scene = build(name, toml_text, &Files::Disk(base_dir))?;
+    scene.name = name.to_string();
+    Ok(scene)
+}
+
+const CORNELL_TOML: &str = include_str!("../../scenes/cornell-box/scene.toml");
+const CORNELL_OBJ: &str = include_str!("../../scenes/cornell-box/cornell-box.obj");
+const CORNELL_MTL: &str = include_str!("../../scenes/cornell-box/cornell-box.mtl");
+
+/// The Cornell box of scenes/cornell-box/, built from copies of its files embedded in the
+/// binary (it needs no file at run time). Its content hash is that of the same files on disk.
+pub fn default_scene() -> Scene {
+    let files = Files::Embedded {
+        label: "(embedded) scenes/cornell-box/",
+        files: &[
+            ("cornell-box.obj", CORNELL_OBJ),
+            ("cornell-box.mtl", CORNELL_MTL),
+        ],
+    };
+    let mut scene = build(
+        "(embedded) scenes/cornell-box/scene.toml",
+        CORNELL_TOML,
+        &files,
+    )
+    .expect("the embedded Cornell box loads (tested)");
+    scene.name = "cornell-box".into();
+    scene
+}
+
+/// "cornell-box" for scenes/cornell-box/scene.toml, else the file's stem.
+fn scene_name(path: &Path) -> String {
+    let stem = path.file_stem().map(|s| s.to_string_lossy().into_owned());
+    match stem.as_deref() {
+        Some("scene") | None => path
+            .canonicalize()
+            .ok()
+            .as_deref()
+            .unwrap_or(path)
+            .parent()
+            .and_then(|p| p.file_name())
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_else(|| "scene".into()),
+        Some(s) => s.to_string(),
+    }
+}
+
+/// Where the files a scene references come from.
+enum Files<'a> {
+    /// Relative to this folder on disk.
+    Disk(&'a Path),
+    /// Texts embedded in the binary, by relative path; `label` prefixes their names.
+    Embedded {
+        label: &'static str,
+        files: &'a [(&'static str, &'static str)],
+    },
+}
+
+impl Files<'_> {
+    fn display(&self, rel: &Path) -> String {
+        match self {
+            Files::Disk(base) => base.join(rel).display().to_string(),
+            Files::Embedded { label, .. } => format!("{label}{}", rel.display()),
+        }
+    }
+
+    /// (name for messages, bytes) of the file at `rel`.
+    fn read(&self, rel: &Path, referenced_by: String) -> Result<(String, Vec<u8>), SceneError> {
+        let display = self.display(rel);
+        let bytes = match self {
+            Files::Disk(base) => {
+                std::fs::read(base.join(rel)).map_err(|source| SceneError::Read {
+                    path: display.clone(),
+                    referenced_by,
+                    source,
+                })?
+            }
+            Files::Embedded { files, .. } => {
+                let key = rel.to_string_lossy().replace('\\', "/");
+                let found = files.iter().find(|(name, _)| *name == key);
+                found
+                    .map(|(_, text)| text.as_bytes().to_vec())
+                    .ok_or_else(|| SceneError::Read {
+                        path: display.clone(),
+                        referenced_by,
+                        source: std::io::ErrorKind::NotFound.into(),
+                    })?
+            }
+        };
+        Ok((display, bytes))
+    }
+
+    fn disk_path(&self, rel: &Path) -> Option<PathBuf> {
+        match self {
+            Files::Disk(base) => Some(base.join(rel)),
+            Files::Embedded { .. } => None,
+        }
+    }
+}
+
+fn build(file: &str, toml_text: &str, files: &Files) -> Result<Scene, SceneError> {
+    let mut hash = Fnv1a64::default();
+    hash.write(toml_text.as_bytes());
+    let f = file::parse(file, toml_text)?;
+
+    if let Some(l) = f.luminaire.first() {
+        let (field, value) = match l.get("path") {
+            Some(p) => ("luminaire[0].path", p.to_string()),
+            None => ("luminaire[0]", "{ ... }".to_string()),
+        };
+        return Err(SceneError::Unsupported {
+            file: file.to_string(),
+            field: field.into(),
+            value,
+            what: "light-field luminaires".into(),
+        });
+    }
+    let camera = camera::build(file, &f.camera)?;
+    let lights = f
+        .light
+        .iter()
+        .enumerate()
+        .map(|(i, l)| lights::build(file, i, l))
+        .collect::<Result<Vec<_>, _>>()?;
+    if let Some(env) = &f.environment {
+        environment::check(file, env)?;
+    }
+
+    let mut warnings = Vec::new();
+    let mut materials: Vec<Material> = Vec::new();
+    let mut default_material = None;
+    // Per mesh: (OBJ name for messages, its triangles).
+    let mut meshes: Vec<(String, Vec<Triangle>)> = Vec::new();
+    for (i, m) in f.mesh.iter().enumerate() {
+        let rel = Path::new(&m.obj);
+        let (obj_file, bytes) = files.read(
+            rel,
+            format!("referenced by {file}: mesh[{i}].obj = {:?}", m.obj),
+        )?;
+        hash.write(&bytes);
+        let dir = rel.parent().unwrap_or(Path::new(""));
+        let mut read_mtl = |name: &str, by: &str| files.read(&dir.join(name), by.to_string());
+        let mesh = obj::load(&obj_file, &String::from_utf8_lossy(&bytes), &mut read_mtl)?;
+        for b in &mesh.mtl_bytes {
+            hash.write(b);
+        }
+        warnings.extend(mesh.warnings);
+        let offset = materials.len() as u32;
+        materials.extend(mesh.materials);
+        let mut triangles = Vec::with_capacity(mesh.triangles.len());
+        for t in mesh.triangles {
+            let material = match t.material {
+                Some(k) => offset + k,
+                None => *default_material.get_or_insert_with(|| {
+                    materials.push(Material {
+                        name: "default".into(),
+                        kd: Vec3::splat(0.5),
+                        ks: Vec3::ZERO,
+                        ns: 0.0,
+                        ke: Vec3::ZERO,
+                    });
+                    materials.len() as u32 - 1
+                }),
+            };
+            triangles.push(Triangle {
+                positions: t.positions,
+                normals: t.normals,
+                material,
+            });
+        }
+        meshes.push((obj_file, triangles));
+    }
+
+    let environment = match &f.environment {
+        Some(env) => {
+            let rel = Path::new(&env.exr);
+            let (display, bytes) = files.read(
+                rel,
+                format!("referenced by {file}: environment.exr = {:?}", env.exr),
+            )?;
+            hash.write(&bytes);
+            let Some(path) = files.disk_path(rel) else {
+                return Err(SceneError::Unsupported {
+                    file: file.to_string(),
+                    field: "environment.exr".into(),
+                    value: format!("{:?}", env.exr),
+                    what: "environment maps in embedded scenes".into(),
+                });
+            };
+            Some(environment::read(&display, &path, env.scale)?)
+        }
+        None => None,
+    };
+
+    let triangles = drop_degenerate(meshes, &mut warnings);
+    if triangles.is_empty() {
+        let detail = if f.mesh.is_empty() {
+            " (it names no [[mesh]])".to_string()
+        } else {
+            format!(" in its {} mesh file(s)", f.mesh.len())
+        };
+        return Err(SceneError::Empty {
+            file: file.to_string(),
+            detail,
+        });
+    }
+    let emits = triangles
+        .iter()
+        .any(|t| materials[t.material as usize].is_emissive())
+        || lights.iter().any(|l| match l {
+            super::Light::Point { intensity, .. } | super::Light::Spot { intensity, .. } => {
+                intensity.max_element() > 0.0
+            }
+        })
+        || environment
+            .as_ref()
+            .is_some_and(|e| e.texels.iter().any(|t| t.max_element() > 0.0));
+    if !emits {
+        return Err(SceneError::NoLight {
+            file: file.to_string(),
+        });
+    }
+
+    Ok(Scene {
+        source: None,
+        name: String::new(),
+        content_hash: hash.finish(),
+        camera,
+        triangles,
+        materials,
+        lights,
+        environment,
+        warnings,
+    })
+}
+
+/// Drops triangles of (near) zero area, relative to the whole scene's extent, with one
+/// warning per mesh file that had any.
+fn drop_degenerate(
+    meshes: Vec<(String, Vec<Triangle>)>,
+    warnings: &mut Vec<String>,
+) -> Vec<Triangle> {
+    let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+    for t in meshes.iter().flat_map(|(_, ts)| ts) {
+        for p in t.positions {
+            lo = lo.min(p);
+            hi = hi.max(p);
+        }
+    }
+    let extent2 = if lo.x <= hi.x {
+        (hi.as_dvec3() - lo.as_dvec3()).length_squared()
+    } else {
+        0.0
+    };
+    let threshold = DEGENERATE_AREA * extent2;
+    let mut kept = Vec::new();
+    for (obj_file, triangles) in meshes {
+        let (count, kept_before) = (triangles.len(), kept.len());
+        kept.extend(
+            triangles
+                .into_iter()
+                .filter(|t| 0.5 * obj::double_area(t.positions) > threshold),
+        );
+        let dropped = count - (kept.len() - kept_before);
+        if dropped > 0 {
+            warnings.push(format!(
+                "{obj_file}: dropped {dropped} degenerate triangles (area <= {DEGENERATE_AREA:e} \
+                 x the squared scene extent)"
+            ));
+        }
+    }
+    kept
+}

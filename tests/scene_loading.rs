@@ -1,0 +1,590 @@
+//! Scene loading (DESIGN.md "Scene files", issue 3 items 1 and 8), CPU only: every committed
+//! scene and the embedded default load with the documented conventions; every kind of bad input
+//! gives one error naming the file, the field and the value.
+
+use std::path::{Path, PathBuf};
+
+use glam::Vec3;
+use irad::image::{exr, Image};
+use irad::scene::{self, hash::fnv1a64, Scene};
+
+fn scenes_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes")
+}
+
+/// A scratch folder under the system temp dir, removed when dropped.
+struct Scratch(PathBuf);
+
+impl Scratch {
+    fn new(name: &str) -> Scratch {
+        let dir = std::env::temp_dir().join(format!("irad-scene-{}-{name}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        Scratch(dir)
+    }
+
+    fn write(&self, name: &str, text: &str) -> &Scratch {
+        std::fs::write(self.0.join(name), text).unwrap();
+        self
+    }
+
+    fn path(&self, name: &str) -> PathBuf {
+        self.0.join(name)
+    }
+
+    fn load(&self) -> Result<Scene, scene::SceneError> {
+        scene::load(&self.path("scene.toml"))
+    }
+
+    /// The error of loading scene.toml, checked to contain every one of `parts`.
+    fn error(&self, parts: &[&str]) -> String {
+        let message = match self.load() {
+            Ok(_) => panic!(
+                "{} loaded, expected an error",
+                self.path("scene.toml").display()
+            ),
+            Err(e) => e.to_string(),
+        };
+        for part in parts {
+            assert!(message.contains(part), "`{part}` not in: {message}");
+        }
+        message
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+const CAMERA: &str = "[camera]\nposition = [0, 1, 3]\nlook_at = [0, 1, 0]\nup = [0, 1, 0]\n\
+                      fov_y = 40\nresolution = [16, 16]\n";
+const MESH: &str = "[[mesh]]\nobj = \"m.obj\"\n";
+const POINT: &str = "[[light]]\nkind = \"point\"\nposition = [0, 1, 0]\nintensity = [1, 1, 1]\n";
+/// A 2 x 2 quad at y = 0 facing +Y (lines 2-5 are its vertices).
+const OBJ: &str = "mtllib m.mtl\nv -1 0 -1\nv 1 0 -1\nv 1 0 1\nv -1 0 1\nusemtl grey\nf 1 4 3 2\n";
+const MTL: &str = "newmtl grey\nKd 0.5 0.5 0.5\n";
+
+/// A valid scene (quad + point light) in which `replace` swaps one piece of text.
+fn scratch(name: &str, toml: &str, obj: &str, mtl: &str) -> Scratch {
+    let s = Scratch::new(name);
+    s.write("scene.toml", toml)
+        .write("m.obj", obj)
+        .write("m.mtl", mtl);
+    s
+}
+
+fn good_toml() -> String {
+    format!("{CAMERA}{MESH}{POINT}")
+}
+
+fn sky(width: u32, height: u32, bad: Option<(u32, u32, [f32; 3])>) -> Image {
+    let mut image = Image::new(width, height);
+    image.pixels.iter_mut().for_each(|p| *p = [0.5, 0.6, 0.8]);
+    if let Some((x, y, v)) = bad {
+        image.pixels[(y * width + x) as usize] = v;
+    }
+    image
+}
+
+// ---- bad input: one test per case -------------------------------------------------------
+
+#[test]
+fn missing_scene_file() {
+    let s = Scratch::new("missing-toml");
+    let e = s.error(&["scene.toml", "cannot read it", "the scene file"]);
+    assert!(
+        e.contains(&s.path("scene.toml").display().to_string()),
+        "{e}"
+    );
+}
+
+#[test]
+fn missing_obj() {
+    let toml = format!("{CAMERA}[[mesh]]\nobj = \"gone.obj\"\n{POINT}");
+    let s = scratch("missing-obj", &toml, OBJ, MTL);
+    s.error(&[
+        "gone.obj",
+        "cannot read it",
+        "scene.toml: mesh[0].obj = \"gone.obj\"",
+    ]);
+}
+
+#[test]
+fn missing_mtl() {
+    let obj = OBJ.replace("mtllib m.mtl", "mtllib gone.mtl");
+    let s = scratch("missing-mtl", &good_toml(), &obj, MTL);
+    s.error(&[
+        "gone.mtl",
+        "cannot read it",
+        "m.obj line 1: mtllib gone.mtl",
+    ]);
+}
+
+#[test]
+fn missing_exr() {
+    let toml = format!("{}[environment]\nexr = \"gone.exr\"\n", good_toml());
+    let s = scratch("missing-exr", &toml, OBJ, MTL);
+    s.error(&[
+        "gone.exr",
+        "cannot read it",
+        "scene.toml: environment.exr = \"gone.exr\"",
+    ]);
+}
+
+#[test]
+fn malformed_toml() {
+    let toml = good_toml().replace("fov_y = 40", "fov_y = 40 40");
+    let s = scratch("malformed", &toml, OBJ, MTL);
+    s.error(&["scene.toml: ", "line 5", "fov_y = 40 40"]);
+}
+
+#[test]
+fn unknown_field() {
+    let toml = good_toml().replace("fov_y = 40", "fov_y = 40\nfocus_distance = 2.5");
+    let s = scratch("unknown-field", &toml, OBJ, MTL);
+    s.error(&["scene.toml: ", "line 6", "unknown field `focus_distance`"]);
+}
+
+#[test]
+fn wrong_type() {
+    let toml = good_toml().replace("fov_y = 40", "fov_y = \"wide\"");
+    let s = scratch("wrong-type", &toml, OBJ, MTL);
+    s.error(&["scene.toml: ", "line 5", "fov_y = \"wide\""]);
+}
+
+#[test]
+fn nan_texel_in_exr() {
+    let toml = format!("{}[environment]\nexr = \"sky.exr\"\n", good_toml());
+    let s = scratch("nan-texel", &toml, OBJ, MTL);
+    exr::write(
+        &s.path("sky.exr"),
+        &sky(8, 4, Some((3, 1, [0.5, f32::NAN, 0.5]))),
+    )
+    .unwrap();
+    s.error(&["sky.exr: texel (x 3, y 1) = [0.5, NaN, 0.5]", "finite"]);
+}
+
+#[test]
+fn negative_texel_in_exr() {
+    let toml = format!("{}[environment]\nexr = \"sky.exr\"\n", good_toml());
+    let s = scratch("negative-texel", &toml, OBJ, MTL);
+    exr::write(
+        &s.path("sky.exr"),
+        &sky(8, 4, Some((0, 2, [-1.0, 0.0, 0.0]))),
+    )
+    .unwrap();
+    s.error(&["sky.exr: texel (x 0, y 2) = [-1, 0, 0]", ">= 0"]);
+}
+
+#[test]
+fn infinite_texel_in_exr() {
+    let toml = format!("{}[environment]\nexr = \"sky.exr\"\n", good_toml());
+    let s = scratch("inf-texel", &toml, OBJ, MTL);
+    exr::write(
+        &s.path("sky.exr"),
+        &sky(8, 4, Some((7, 3, [f32::INFINITY, 0.0, 0.0]))),
+    )
+    .unwrap();
+    s.error(&["sky.exr: texel (x 7, y 3) = [inf, 0, 0]"]);
+}
+
+#[test]
+fn corrupt_exr() {
+    let toml = format!("{}[environment]\nexr = \"sky.exr\"\n", good_toml());
+    let s = scratch("corrupt-exr", &toml, OBJ, MTL);
+    s.write("sky.exr", "not an image");
+    s.error(&["sky.exr: environment.exr: ", "OpenEXR"]);
+}
+
+#[test]
+fn bad_environment_scale() {
+    let toml = format!(
+        "{}[environment]\nexr = \"sky.exr\"\nscale = -2.0\n",
+        good_toml()
+    );
+    let s = scratch("bad-scale", &toml, OBJ, MTL);
+    exr::write(&s.path("sky.exr"), &sky(8, 4, None)).unwrap();
+    s.error(&["scene.toml: environment.scale = -2", ">= 0"]);
+}
+
+#[test]
+fn nan_in_mtl_kd() {
+    let s = scratch("nan-kd", &good_toml(), OBJ, "newmtl grey\nKd 0.5 nan 0.5\n");
+    s.error(&[
+        "m.mtl: material `grey` Kd (line 2) = [0.5, NaN, 0.5]",
+        "finite",
+    ]);
+}
+
+#[test]
+fn negative_ke() {
+    let s = scratch(
+        "negative-ke",
+        &good_toml(),
+        OBJ,
+        "newmtl grey\nKd 0.5\nKe -1 0 0\n",
+    );
+    s.error(&["m.mtl: material `grey` Ke (line 3) = [-1, 0, 0]", ">= 0"]);
+}
+
+#[test]
+fn kd_plus_ks_above_one() {
+    let mtl = "newmtl grey\nKd 0.75\nKs 0.5 0.25 0.25\nNs 10\n";
+    let s = scratch("kd-ks", &good_toml(), OBJ, mtl);
+    s.error(&[
+        "m.mtl: material `grey` Kd + Ks = [1.25, 1, 1]",
+        "Kd = [0.75, 0.75, 0.75]",
+        "Ks = [0.5, 0.25, 0.25]",
+    ]);
+}
+
+#[test]
+fn degenerate_triangles_are_dropped_with_a_warning() {
+    // A collinear triangle and one with a repeated corner beside the quad.
+    let obj = format!("{OBJ}v 2 0 0\nv 3 0 0\nv 4 0 0\nf 5 6 7\nf 1 1 2\n");
+    let s = scratch("degenerate", &good_toml(), &obj, MTL);
+    let scene = s.load().unwrap();
+    assert_eq!(scene.triangles.len(), 2);
+    let w = scene.warnings.join("\n");
+    assert!(w.contains("m.obj: dropped 2 degenerate triangles"), "{w}");
+}
+
+#[test]
+fn nan_vertex() {
+    let obj = OBJ.replace("v 1 0 1", "v 1 nan 1");
+    let s = scratch("nan-vertex", &good_toml(), &obj, MTL);
+    s.error(&["m.obj line 4: vertex position [1, NaN, 1] is not finite"]);
+}
+
+#[test]
+fn empty_scene() {
+    let obj = "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\n";
+    let s = scratch("empty", &good_toml(), obj, MTL);
+    s.error(&["scene.toml: the scene has no triangles in its 1 mesh file(s)"]);
+    let s = scratch("no-mesh", &format!("{CAMERA}{POINT}"), OBJ, MTL);
+    s.error(&["scene.toml: the scene has no triangles (it names no [[mesh]])"]);
+}
+
+#[test]
+fn no_lights() {
+    let s = scratch("no-light", &format!("{CAMERA}{MESH}"), OBJ, MTL);
+    s.error(&[
+        "scene.toml: the scene has no light",
+        "Ke",
+        "[[light]]",
+        "[environment]",
+    ]);
+    // A light of zero intensity does not count either.
+    let toml = good_toml().replace("intensity = [1, 1, 1]", "intensity = [0, 0, 0]");
+    let s = scratch("dark-light", &toml, OBJ, MTL);
+    s.error(&["scene.toml: the scene has no light"]);
+}
+
+#[test]
+fn zero_resolution() {
+    let toml = good_toml().replace("resolution = [16, 16]", "resolution = [0, 16]");
+    let s = scratch("zero-res", &toml, OBJ, MTL);
+    s.error(&[
+        "scene.toml: camera.resolution = [0, 16]",
+        "width and height",
+    ]);
+    let toml = good_toml().replace("resolution = [16, 16]", "resolution = [16, -3]");
+    let s = scratch("negative-res", &toml, OBJ, MTL);
+    s.error(&["scene.toml: camera.resolution = [16, -3]"]);
+}
+
+#[test]
+fn bad_fov() {
+    for fov in ["0", "180", "-5", "nan"] {
+        let toml = good_toml().replace("fov_y = 40", &format!("fov_y = {fov}"));
+        let s = scratch("bad-fov", &toml, OBJ, MTL);
+        let shown = if fov == "nan" { "NaN" } else { fov };
+        s.error(&[&format!("scene.toml: camera.fov_y = {shown}: "), "(0, 180)"]);
+    }
+}
+
+#[test]
+fn camera_position_equals_look_at() {
+    let toml = good_toml().replace("look_at = [0, 1, 0]", "look_at = [0, 1, 3]");
+    let s = scratch("look-at", &toml, OBJ, MTL);
+    s.error(&["scene.toml: camera.look_at = [0, 1, 3]", "camera.position"]);
+}
+
+#[test]
+fn bad_spot_angles() {
+    let spot = |cone: &str, falloff: &str| {
+        format!(
+            "{CAMERA}{MESH}[[light]]\nkind = \"spot\"\nposition = [0, 1, 0]\nintensity = [1, 1, 1]\n\
+             direction = [0, -1, 0]\ncone_angle = {cone}\nfalloff_angle = {falloff}\n"
+        )
+    };
+    let s = scratch("spot-order", &spot("40", "30"), OBJ, MTL);
+    s.error(&["scene.toml: light[0].cone_angle = 40", "falloff_angle (30)"]);
+    let s = scratch("spot-range", &spot("30", "200"), OBJ, MTL);
+    s.error(&["scene.toml: light[0].falloff_angle = 200", "(0, 180]"]);
+    let s = scratch("spot-zero", &spot("0", "30"), OBJ, MTL);
+    s.error(&["scene.toml: light[0].cone_angle = 0", "(0, 180]"]);
+}
+
+#[test]
+fn bad_light_intensity_and_direction() {
+    let toml = good_toml().replace("intensity = [1, 1, 1]", "intensity = [1, -1, 1]");
+    let s = scratch("neg-intensity", &toml, OBJ, MTL);
+    s.error(&["scene.toml: light[0].intensity = [1, -1, 1]"]);
+    let toml = format!(
+        "{CAMERA}{MESH}{POINT}[[light]]\nkind = \"spot\"\nposition = [0, 1, 0]\n\
+         intensity = [1, 1, 1]\ndirection = [0, 0, 0]\ncone_angle = 10\nfalloff_angle = 20\n"
+    );
+    let s = scratch("zero-direction", &toml, OBJ, MTL);
+    s.error(&["scene.toml: light[1].direction = [0, 0, 0]", "non-zero"]);
+}
+
+#[test]
+fn environment_glob_is_not_supported_yet() {
+    let toml = format!("{}[environment]\nexr = \"sky/*.exr\"\n", good_toml());
+    let s = scratch("glob", &toml, OBJ, MTL);
+    s.error(&[
+        "scene.toml: environment.exr = \"sky/*.exr\"",
+        "not supported yet",
+    ]);
+}
+
+#[test]
+fn luminaire_is_not_supported_yet() {
+    let toml = format!(
+        "{}[[luminaire]]\npath = \"headlight/luminaire.toml\"\nposition = [0, 1, 0]\n\
+         look_at = [0, 0, 0]\n",
+        good_toml()
+    );
+    let s = scratch("luminaire", &toml, OBJ, MTL);
+    s.error(&[
+        "scene.toml: luminaire[0].path = \"headlight/luminaire.toml\"",
+        "light-field luminaires are not supported yet",
+    ]);
+}
+
+#[test]
+fn bad_obj_face_index() {
+    let obj = OBJ.replace("f 1 4 3 2", "f 1 4 3 9");
+    let s = scratch("face-index", &good_toml(), &obj, MTL);
+    s.error(&["m.obj line 7: face corner `9`: vertex index 9 is out of range"]);
+}
+
+// ---- handled as documented ----------------------------------------------------------------
+
+#[test]
+fn faces_without_material_get_the_default_with_a_warning() {
+    let obj = OBJ.replace("usemtl grey\n", "");
+    let s = scratch("no-material", &good_toml(), &obj, MTL);
+    let scene = s.load().unwrap();
+    let m = &scene.materials[scene.triangles[0].material as usize];
+    assert_eq!(
+        (m.kd, m.ks, m.ke),
+        (Vec3::splat(0.5), Vec3::ZERO, Vec3::ZERO)
+    );
+    let w = scene.warnings.join("\n");
+    assert!(w.contains("m.obj: 2 triangles have no material"), "{w}");
+}
+
+#[test]
+fn obj_normals_are_used_normalized_with_geometric_fallback() {
+    let obj =
+        "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 0 -1\nvn 0 3 0.0\nvn 0 0 0\nvn 1 0 0\nusemtl grey\n\
+               f 1//1 2//2 3//3\nf 1 2 3\n";
+    let s = scratch("normals", &good_toml(), obj, MTL);
+    let scene = s.load().unwrap();
+    assert_eq!(scene.triangles[0].normals, [Vec3::Y, Vec3::Y, Vec3::X]);
+    assert_eq!(scene.triangles[1].normals, [Vec3::Y; 3]);
+}
+
+#[test]
+fn environment_is_scaled_and_row_major() {
+    let toml = format!(
+        "{}[environment]\nexr = \"sky.exr\"\nscale = 2.0\n",
+        good_toml()
+    );
+    let s = scratch("env-scale", &toml, OBJ, MTL);
+    let mut image = sky(8, 4, None);
+    image.pixels[2 * 8 + 5] = [1.0, 2.0, 3.0];
+    exr::write(&s.path("sky.exr"), &image).unwrap();
+    let env = s.load().unwrap().environment.unwrap();
+    assert_eq!((env.width, env.height), (8, 4));
+    assert_eq!(env.texels[2 * 8 + 5], Vec3::new(2.0, 4.0, 6.0));
+    assert_eq!(env.texels[0], Vec3::new(1.0, 1.2, 1.6));
+    assert_eq!(env.source, s.path("sky.exr"));
+}
+
+#[test]
+fn content_hash_covers_every_file_in_order() {
+    let toml = format!("{}[environment]\nexr = \"sky.exr\"\n", good_toml());
+    let s = scratch("hash", &toml, OBJ, MTL);
+    exr::write(&s.path("sky.exr"), &sky(4, 2, None)).unwrap();
+    let exr_bytes = std::fs::read(s.path("sky.exr")).unwrap();
+    let all = [toml.as_bytes(), OBJ.as_bytes(), MTL.as_bytes(), &exr_bytes].concat();
+    let first = s.load().unwrap().content_hash;
+    assert_eq!(first, fnv1a64(&all));
+    s.write("m.mtl", "newmtl grey\nKd 0.5 0.5 0.25\n");
+    assert_ne!(s.load().unwrap().content_hash, first);
+}
+
+#[test]
+fn load_str_reads_files_relative_to_base_dir() {
+    let s = scratch("load-str", "", OBJ, MTL);
+    let scene = scene::load_str(&good_toml(), &s.0, "inline").unwrap();
+    assert_eq!(scene.name, "inline");
+    assert!(scene.source.is_none());
+    assert_eq!(scene.triangles.len(), 2);
+    let e = scene::load_str("[camera]\n", &s.0, "inline")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.starts_with("inline: ") && e.contains("missing field"),
+        "{e}"
+    );
+}
+
+// ---- the committed scenes ------------------------------------------------------------------
+
+fn check_scene(scene: &Scene) {
+    let label = &scene.name;
+    assert!(!scene.triangles.is_empty(), "{label}");
+    assert!(scene.warnings.is_empty(), "{label}: {:?}", scene.warnings);
+    assert!(scene.camera.width > 0 && scene.camera.height > 0, "{label}");
+    assert_ne!(scene.content_hash, 0);
+    for m in &scene.materials {
+        assert!((m.kd + m.ks).max_element() <= 1.0, "{label}: {m:?}");
+        assert!(m.kd.min_element() >= 0.0 && m.ks.min_element() >= 0.0 && m.ns >= 0.0);
+    }
+    for t in &scene.triangles {
+        assert!((t.material as usize) < scene.materials.len(), "{label}");
+        assert!(t.positions.iter().all(|p| p.is_finite()), "{label}");
+        for n in t.normals {
+            assert!((n.length() - 1.0).abs() < 1e-5, "{label}: {n}");
+        }
+    }
+}
+
+fn committed(name: &str) -> Scene {
+    scene::load(&scenes_dir().join(name).join("scene.toml"))
+        .unwrap_or_else(|e| panic!("scenes/{name}: {e}"))
+}
+
+#[test]
+fn every_committed_scene_loads() {
+    let mut count = 0;
+    for entry in std::fs::read_dir(scenes_dir()).unwrap() {
+        let dir = entry.unwrap().path();
+        if dir.join("scene.toml").is_file() {
+            let scene = scene::load(&dir.join("scene.toml"))
+                .unwrap_or_else(|e| panic!("{}: {e}", dir.display()));
+            assert_eq!(scene.name, dir.file_name().unwrap().to_string_lossy());
+            check_scene(&scene);
+            count += 1;
+        }
+    }
+    assert!(count >= 4, "only {count} scenes under scenes/");
+}
+
+#[test]
+fn cornell_box_facts() {
+    let scene = committed("cornell-box");
+    assert_eq!((scene.camera.width, scene.camera.height), (256, 256));
+    assert_eq!(scene.camera.fov_y, 40.0);
+    assert!(scene.lights.is_empty() && scene.environment.is_none());
+    let geometric = |t: &irad::scene::Triangle| {
+        let [a, b, c] = t.positions;
+        (b - a).cross(c - a).normalize()
+    };
+    let emissive: Vec<_> = scene
+        .triangles
+        .iter()
+        .filter(|t| scene.materials[t.material as usize].is_emissive())
+        .collect();
+    assert_eq!(emissive.len(), 2);
+    for t in &emissive {
+        assert!(geometric(t).y < -0.999, "the light must face down");
+        assert!(t.positions.iter().all(|p| p.y > 1.9 && p.y < 2.0));
+    }
+    // The five walls face into the box.
+    let inward = [
+        (0usize, -1.0f32, Vec3::X, "red"),
+        (0, 1.0, -Vec3::X, "green"),
+        (1, 0.0, Vec3::Y, "white"),
+        (1, 2.0, -Vec3::Y, "white"),
+        (2, -1.0, Vec3::Z, "white"),
+    ];
+    for (axis, at, normal, material) in inward {
+        let on_wall: Vec<_> = scene
+            .triangles
+            .iter()
+            .filter(|t| t.positions.iter().all(|p| p[axis] == at))
+            .collect();
+        assert_eq!(on_wall.len(), 2, "wall at axis {axis} = {at}");
+        for t in on_wall {
+            assert_eq!(geometric(t), normal);
+            assert_eq!(scene.materials[t.material as usize].name, material);
+        }
+    }
+}
+
+#[test]
+fn default_scene_is_the_cornell_box_from_embedded_copies() {
+    let embedded = scene::default_scene();
+    let file = committed("cornell-box");
+    assert_eq!(embedded.name, "cornell-box");
+    assert!(embedded.source.is_none());
+    assert_eq!(embedded.content_hash, file.content_hash);
+    assert_eq!(embedded.camera, file.camera);
+    assert_eq!(embedded.triangles, file.triangles);
+    assert_eq!(embedded.materials, file.materials);
+    check_scene(&embedded);
+}
+
+#[test]
+fn small_scenes_facts() {
+    let plane = committed("point-light-plane");
+    assert!(matches!(plane.lights[..], [scene::Light::Point { .. }]));
+    let spot = committed("spot-light");
+    match &spot.lights[..] {
+        [scene::Light::Spot { direction, .. }] => assert!((direction.length() - 1.0).abs() < 1e-6),
+        l => panic!("{l:?}"),
+    }
+    let glossy = committed("glossy-env");
+    let env = glossy.environment.as_ref().unwrap();
+    assert_eq!((env.width, env.height), (64, 32));
+    assert!(env
+        .texels
+        .iter()
+        .all(|t| t.is_finite() && t.min_element() >= 0.0));
+    assert!(glossy
+        .materials
+        .iter()
+        .any(|m| m.ks.max_element() > 0.0 && m.ns >= 1000.0));
+}
+
+/// Regenerates scenes/glossy-env/sky.exr: a blue sky brightening to the horizon, a dim ground
+/// and a small sun (4 texels). `cargo test --test scene_loading -- --ignored`.
+#[test]
+#[ignore]
+fn regenerate_glossy_env_sky() {
+    let (w, h) = (64u32, 32u32);
+    let mut image = Image::new(w, h);
+    for j in 0..h {
+        let y = (std::f32::consts::PI * (j as f32 + 0.5) / h as f32).cos();
+        for i in 0..w {
+            let v = if y > 0.0 {
+                let t = y.powf(0.5);
+                Vec3::new(1.0, 1.0, 1.05).lerp(Vec3::new(0.25, 0.45, 1.0), t)
+            } else {
+                Vec3::new(0.2, 0.18, 0.15)
+            };
+            image.pixels[(j * w + i) as usize] = v.to_array();
+        }
+    }
+    for (i, j) in [(40, 9), (41, 9), (40, 10), (41, 10)] {
+        image.pixels[(j * w + i) as usize] = [400.0, 380.0, 340.0];
+    }
+    exr::write(&scenes_dir().join("glossy-env/sky.exr"), &image).unwrap();
+}
