@@ -1,5 +1,6 @@
 //! The `irad` command line.
 
+use std::path::PathBuf;
 use std::process::ExitCode;
 
 use anyhow::{bail, Result};
@@ -8,6 +9,9 @@ use indicatif::{ProgressBar, ProgressStyle};
 
 use irad::bench::scan as scan_bench;
 use irad::gpu::{self, Context, ContextOptions, DeviceInfo, DeviceSelector, Validation};
+use irad::methods::reference::ReferenceSettings;
+use irad::render::{self, Method, RenderJob};
+use irad::scene;
 use irad::selfcheck;
 use irad::shaders::ShaderTree;
 
@@ -33,6 +37,11 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// Render a scene and write <OUT>.exr (float32 linear RGB), <OUT>.png (tone-mapped sRGB)
+    /// and <OUT>.json (method, parameters, device, per-pass GPU times, metrics).
+    ///
+    /// With no scene, renders the Cornell box built into irad.
+    Render(RenderArgs),
     /// List every Vulkan device with the limits irad depends on; the one irad picks is marked.
     Info,
     /// Check the GPU against the CPU: prefix sums of random rows against an f64 scan.
@@ -47,6 +56,43 @@ enum Command {
     /// Benchmarks that measure and print.
     #[command(subcommand)]
     Bench(Bench),
+}
+
+#[derive(clap::Args)]
+struct RenderArgs {
+    /// Scene TOML file (DESIGN.md "Scene files"); default: the embedded Cornell box.
+    scene: Option<PathBuf>,
+    /// Rendering method.
+    #[arg(long, value_enum, default_value_t = MethodArg::Reference)]
+    method: MethodArg,
+    /// Samples per pixel (reference: one path per pixel per frame).
+    #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..))]
+    spp: u32,
+    /// Seed of every random and quasi-random number: same seed, same device, same bits.
+    #[arg(long, default_value_t = 0)]
+    seed: u32,
+    /// Most scattering events per path (a safety cap: Russian roulette ends paths first).
+    #[arg(long, default_value_t = 1024)]
+    max_depth: u32,
+    /// First bounce at which Russian roulette may end a path.
+    #[arg(long, default_value_t = 3)]
+    roulette_depth: u32,
+    /// Output stem: writes OUT.exr, OUT.png and OUT.json [default: out/<scene name>].
+    #[arg(short, long, value_name = "OUT")]
+    out: Option<PathBuf>,
+    /// Exposure of the PNG in stops (the EXR is never tone mapped).
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    exposure: f32,
+    /// Reference EXR of the same scene and size: adds relMSE, RMSE, Lab error, bias and
+    /// outliers against it to the JSON and the summary.
+    #[arg(long, value_name = "EXR")]
+    reference: Option<PathBuf>,
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum MethodArg {
+    /// The unbiased path tracer every accuracy figure is measured against.
+    Reference,
 }
 
 #[derive(Subcommand)]
@@ -111,6 +157,7 @@ fn run(cli: Cli) -> Result<()> {
     };
     match cli.command {
         Command::Info => info(cli.device.as_ref()),
+        Command::Render(args) => render(&options, args),
         Command::Selfcheck => run_selfcheck(&Context::new(&options)?),
         Command::Shaders { check } => shaders(check),
         Command::Bench(Bench::Scan { repeats, sizes }) => {
@@ -132,6 +179,82 @@ fn run(cli: Cli) -> Result<()> {
             Ok(())
         }
     }
+}
+
+fn render(options: &ContextOptions, args: RenderArgs) -> Result<()> {
+    let scene = match &args.scene {
+        Some(path) => scene::load(path)?,
+        None => scene::default_scene(),
+    };
+    for w in &scene.warnings {
+        eprintln!("warning: {w}");
+    }
+    let ctx = Context::new(options)?;
+    let method = match args.method {
+        MethodArg::Reference => Method::Reference(ReferenceSettings {
+            spp: args.spp,
+            seed: args.seed,
+            max_depth: args.max_depth,
+            roulette_depth: args.roulette_depth,
+        }),
+    };
+    let out = args
+        .out
+        .unwrap_or_else(|| PathBuf::from("out").join(&scene.name));
+    let job = RenderJob {
+        scene: &scene,
+        method,
+        out,
+        exposure: args.exposure,
+        reference: args.reference,
+    };
+    let cam = &scene.camera;
+    println!(
+        "rendering {} ({}x{}, {} triangles) with {} on {}",
+        render::scene_label(&scene),
+        cam.width,
+        cam.height,
+        scene.triangles.len(),
+        job.method.name(),
+        device_line(ctx.info())
+    );
+    let bar = progress(job.method_samples(), "render");
+    let report = render::render(&ctx, &job, |done, _| bar.set_position(done as u64))?;
+    bar.finish_and_clear();
+    let r = &report.record;
+    println!("per-pass GPU time:\n{}", report.passes);
+    if let Some(gpu_ms) = r.gpu_ms_total {
+        let paths = r.samples as f64 * cam.width as f64 * cam.height as f64;
+        println!(
+            "{} samples per pixel in {:.3} s GPU ({:.3} s wall): {:.2} M samples/s",
+            r.samples,
+            gpu_ms / 1e3,
+            r.wall_ms / 1e3,
+            paths / gpu_ms / 1e3
+        );
+    }
+    if let Some(m) = &r.metrics {
+        println!(
+            "against the reference: relMSE {:.4e}, RMSE {:.4e}, Lab error {:.3}, bias {:.3}%, outliers {:.4}%, NaN/Inf {}",
+            m.rel_mse,
+            m.rmse,
+            m.lab_error,
+            100.0 * m.bias,
+            100.0 * m.outliers,
+            m.nan_inf
+        );
+    }
+    for w in &r.warnings {
+        eprintln!("warning: {w}");
+    }
+    let (exr, png, json) = &report.paths;
+    println!(
+        "wrote {}, {} and {}",
+        exr.display(),
+        png.display(),
+        json.display()
+    );
+    Ok(())
 }
 
 fn progress(len: u64, what: &str) -> ProgressBar {
