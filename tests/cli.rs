@@ -131,3 +131,79 @@ fn help_explains_the_commands() {
         assert!(out.contains(c), "`{c}` missing from --help:\n{out}");
     }
 }
+
+fn temp_dir(name: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("irad-cli-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+#[test]
+fn render_writes_exr_png_and_json() {
+    let dir = temp_dir("render");
+    let out = dir.join("spot");
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/spot-light/scene.toml");
+    let o = irad(
+        &["render", scene, "--spp", "2", "-o", out.to_str().unwrap()],
+        &[("IRAD_VALIDATE", "1")],
+    );
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}{text}", stderr(&o));
+    assert!(!stderr(&o).contains("validation"), "{}", stderr(&o));
+    for label in ["gbuffer", "reference paths", "samples/s", "wrote"] {
+        assert!(text.contains(label), "`{label}` missing:\n{text}");
+    }
+    let image = irad::image::exr::read(&out.with_extension("exr")).unwrap();
+    assert!(image.pixels.iter().flatten().all(|v| v.is_finite()));
+    assert!(image.mean()[0] > 0.0, "the spot light scene rendered black");
+    assert!(out.with_extension("png").exists());
+    let record = irad::image::RenderRecord::read(&out.with_extension("json")).unwrap();
+    assert_eq!(record.method, "reference");
+    assert_eq!(record.samples, 2);
+    assert_eq!(record.scene_hash.len(), 16);
+
+    // Against itself as the reference: every metric is zero.
+    let o = irad(
+        &[
+            "render",
+            scene,
+            "--spp",
+            "2",
+            "-o",
+            dir.join("again").to_str().unwrap(),
+            "--reference",
+            out.with_extension("exr").to_str().unwrap(),
+        ],
+        &[],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let record = irad::image::RenderRecord::read(&dir.join("again.json")).unwrap();
+    let m = record.metrics.expect("metrics with --reference");
+    assert_eq!((m.rel_mse, m.bias, m.nan_inf), (0.0, 0.0, 0));
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn render_errors_name_the_file() {
+    let o = irad(&["render", "no/such/scene.toml"], &[]);
+    assert_clean_error(&o, &["no/such/scene.toml"]);
+
+    let dir = temp_dir("bad-reference");
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/spot-light/scene.toml");
+    let missing = dir.join("missing.exr");
+    let o = irad(
+        &[
+            "render",
+            scene,
+            "--spp",
+            "1",
+            "-o",
+            dir.join("x").to_str().unwrap(),
+            "--reference",
+            missing.to_str().unwrap(),
+        ],
+        &[],
+    );
+    assert_clean_error(&o, &["missing.exr"]);
+    std::fs::remove_dir_all(&dir).ok();
+}
