@@ -5,8 +5,9 @@
 // the power heuristic (Veach 1997 Section 9.2), Russian roulette from bounce 3 on. Delta
 // lights are reached by next-event estimation only, with weight 1.
 //
-// Random dimensions per (seed, pixel, frame): 0-1 subpixel (write_gbuffer.comp), then 8 per
-// bounce from 2: light selection and position (3), BSDF lobe and direction (3), roulette (1).
+// Random dimensions per (seed, pixel, frame), 8 per bounce from 2: light selection (+0), light
+// position (+1, +2), environment texel (+7), BSDF lobe and direction (+3..+5), roulette (+6).
+// (The subpixel shift is dimensions 0-1 at sample index 0xffffffff: camera.glsl.)
 
 #extension GL_GOOGLE_include_directive : require
 
@@ -76,10 +77,11 @@ void main() {
         uint dim = 2u + depth * DIMENSIONS_PER_BOUNCE;
 
         LightSample ls;
-        vec3 u_light = vec3(random(params.seed, index, params.frame, dim),
-                            random(params.seed, index, params.frame, dim + 1u),
+        uint r_select = random_u31(params.seed, index, params.frame, dim);
+        uint r_texel = random_u31(params.seed, index, params.frame, dim + 7u);
+        vec2 u_light = vec2(random(params.seed, index, params.frame, dim + 1u),
                             random(params.seed, index, params.frame, dim + 2u));
-        if (sample_light(p, u_light, ls)) {
+        if (sample_light(p, r_select, r_texel, u_light, ls)) {
             float cos_i = dot(ls.direction, n);
             if (cos_i > 0.0 && dot(ls.direction, side) > 0.0) {
                 vec3 f = bsdf_eval(m, n, wo, ls.direction);

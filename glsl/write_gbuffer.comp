@@ -1,6 +1,6 @@
 #version 450
-// The G-buffer pass shared by every method: one jittered camera ray per pixel (Keller 97
-// Section 4.1, camera.glsl), traced to its closest hit.
+// The G-buffer pass shared by every method: one camera ray per pixel at a low-discrepancy
+// subpixel position (Keller 97 Section 4.1, camera.glsl), traced to its closest hit.
 
 #extension GL_GOOGLE_include_directive : require
 
@@ -13,17 +13,17 @@ layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 #include "gbuffer.glsl"
 
 layout(push_constant) uniform FrameParams {
-    uint frame;        // frame index, < frame_count
-    uint frame_count;  // frames in the whole render (sets the jitter grid)
+    uint frame;
     uint seed;
-    uint _pad;
+    uint _pad0;
+    uint _pad1;
 } params;
 
 void main() {
     uvec2 pixel = gl_GlobalInvocationID.xy;
     if (pixel.x >= scene.size.x || pixel.y >= scene.size.y) return;
     uint index = pixel.y * scene.size.x + pixel.x;
-    vec2 subpixel = subpixel_position(params.seed, index, params.frame, params.frame_count);
+    vec2 subpixel = subpixel_position(params.seed, index, params.frame);
     vec3 direction = camera_direction(pixel, subpixel);
     vec3 origin = scene.camera_position.xyz;
 

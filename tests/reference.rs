@@ -253,6 +253,17 @@ fn sun_environment_over_diffuse_plane_matches_numerical_integral() {
         let image = render(ctx, &scene, 256, 4);
         let (ratio, stderr) = mean_and_stderr(&image, |_| expected);
         assert_within_one_percent("sun environment", ratio, stderr);
+
+        // A bright point light under the plane adds nothing to its top but takes most of the
+        // light-selection probability: the environment's samples must stay independent of the
+        // number that chose it.
+        scene.lights.push(Light::Point {
+            position: Vec3::new(0.0, -1.0, 0.0),
+            intensity: Vec3::splat(1e4),
+        });
+        let image = render(ctx, &scene, 512, 4);
+        let (ratio, stderr) = mean_and_stderr(&image, |_| expected);
+        assert_within_one_percent("sun environment beside a hidden point light", ratio, stderr);
     });
 }
 

@@ -1,18 +1,19 @@
 // Camera rays (src/scene/mod.rs `Camera` documents the mapping) with Keller 97 Section 4.1
-// jittered low-discrepancy pixel sampling: frame f of F uses Halton point f in bases 2 and 3,
-// jittered within its cell per pixel, so each pixel's F subpixel positions are stratified.
+// low-discrepancy pixel sampling: frame f uses Halton point f in bases 2 and 3, shifted per
+// pixel (Cranley-Patterson, sampling.glsl), so each pixel's subpixel positions are stratified
+// over the whole pixel for any frame count and differ between pixels.
 #ifndef CAMERA_GLSL
 #define CAMERA_GLSL
 
 #include "sampling.glsl"
 #include "scene.glsl"
 
-// Dimensions 0 and 1 of the (seed, pixel, frame) stream are the subpixel jitter.
-vec2 subpixel_position(uint seed, uint pixel, uint frame, uint frame_count) {
-    float xi0 = random(seed, pixel, frame, 0u);
-    float xi1 = random(seed, pixel, frame, 1u);
-    return vec2(jittered_halton(2u, frame, frame_count, xi0),
-                jittered_halton(3u, frame, frame_count, xi1));
+// The shift is dimensions 0 and 1 of the pixel's stream at sample index 0xffffffff, the same
+// for every frame.
+vec2 subpixel_position(uint seed, uint pixel, uint frame) {
+    float xi0 = random(seed, pixel, 0xffffffffu, 0u);
+    float xi1 = random(seed, pixel, 0xffffffffu, 1u);
+    return vec2(shifted_halton(2u, frame, xi0), shifted_halton(3u, frame, xi1));
 }
 
 vec3 camera_direction(uvec2 pixel, vec2 subpixel) {

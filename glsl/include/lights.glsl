@@ -18,12 +18,12 @@ struct LightSample {
     bool delta;
 };
 
-uint select_light(float u) {
+uint select_light(uint r) {
     uint lo = 0u;
     uint hi = scene.size.z - 1u;
     while (lo < hi) {
         uint mid = (lo + hi) / 2u;
-        if (u < light_entries[mid].cdf) hi = mid; else lo = mid + 1u;
+        if (r < light_entries[mid].upper) hi = mid; else lo = mid + 1u;
     }
     return lo;
 }
@@ -38,18 +38,19 @@ float spot_falloff(Light l, vec3 from_light) {
 }
 
 // Samples a light for shading point p; false when the sample carries nothing (a triangle seen
-// from behind, zero pdf). u.x selects the light, u.yz sample it.
-bool sample_light(vec3 p, vec3 u, out LightSample s) {
+// from behind, zero pdf). The 31-bit integer r_select picks the light, r_texel the
+// environment's texel, u places the point on the chosen light; all independent.
+bool sample_light(vec3 p, uint r_select, uint r_texel, vec2 u, out LightSample s) {
     s.delta = false;
     s.radiance = vec3(0.0);
     s.pdf = 0.0;
     s.distance = 0.0;
     s.direction = vec3(0.0, 1.0, 0.0);
     if (scene.size.z == 0u) return false;
-    LightEntry e = light_entries[select_light(u.x)];
+    LightEntry e = light_entries[select_light(r_select)];
     if (e.kind == 0u) {
         EmitterTriangle t = emitter_triangles[e.index];
-        vec2 b = sample_uniform_triangle(u.yz);
+        vec2 b = sample_uniform_triangle(u);
         vec3 q = t.p0.xyz + b.x * t.e1.xyz + b.y * t.e2.xyz;
         vec3 d = q - p;
         float dist2 = dot(d, d);
@@ -65,7 +66,7 @@ bool sample_light(vec3 p, vec3 u, out LightSample s) {
         return s.pdf > 0.0;
     }
     if (e.kind == 3u) {
-        s.direction = env_sample(u.yzx, s.radiance, s.pdf);
+        s.direction = env_sample(r_texel, u, s.radiance, s.pdf);
         s.pdf *= e.probability;
         s.distance = infinity();
         return s.pdf > 0.0;

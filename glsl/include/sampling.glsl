@@ -32,6 +32,11 @@ float random(uint seed, uint pixel, uint sample_index, uint dimension) {
     return unit_float(hash4(seed, pixel, sample_index, dimension));
 }
 
+// A 31-bit random integer: what discrete distributions (integer CDFs) are searched with.
+uint random_u31(uint seed, uint pixel, uint sample_index, uint dimension) {
+    return hash4(seed, pixel, sample_index, dimension) >> 1u;
+}
+
 float radical_inverse(uint base, uint i) {
     float inv_base = 1.0 / float(base);
     float scale = inv_base;
@@ -44,17 +49,13 @@ float radical_inverse(uint base, uint i) {
     return result;
 }
 
-// Keller 97 Section 4.1: point `index` of the Halton sequence in `base`, jittered inside its
-// cell of the b^n grid, where b^n >= count: Phi_b(i) + xi / b^n. For count <= b^n the points
-// 0..count-1 fall in distinct cells, so the set stays stratified.
-float jittered_halton(uint base, uint index, uint count, float xi) {
-    float cell = 1.0;
-    uint reach = 1u;
-    while (reach < count) {
-        reach *= base;
-        cell /= float(base);
-    }
-    return min(radical_inverse(base, index) + xi * cell, 0.99999994);
+// Keller 97 Section 4.1's jittered low-discrepancy sampling, randomized by a Cranley-Patterson
+// shift: point `index` of the Halton sequence in `base`, shifted by xi modulo 1. Each point is
+// uniform (so any number of points is unbiased) and the set keeps the sequence's low
+// discrepancy. (Jittering inside the cells of a b^n grid, as Keller does, covers the whole
+// interval only when the point count is exactly b^n.)
+float shifted_halton(uint base, uint index, float xi) {
+    return min(fract(radical_inverse(base, index) + xi), 0.99999994);
 }
 
 // Orthonormal basis around a unit vector (Duff et al. 2017).
@@ -97,10 +98,13 @@ float luminance(vec3 c) {
 }
 
 // Veach's power heuristic (beta = 2) for one sample of each of two strategies.
+// Written as 1 / (1 + (b/a)^2) so huge pdfs (grazing samples of tiny triangles) cannot make
+// inf / inf.
 float power_heuristic(float pdf_a, float pdf_b) {
-    float a = pdf_a * pdf_a;
-    float b = pdf_b * pdf_b;
-    return a + b > 0.0 ? a / (a + b) : 0.0;
+    if (!(pdf_a > 0.0)) return 0.0;
+    if (isinf(pdf_a)) return isinf(pdf_b) ? 0.5 : 1.0;
+    float r = pdf_b / pdf_a;
+    return 1.0 / (1.0 + r * r);
 }
 
 float infinity() {

@@ -19,12 +19,13 @@ struct Material {
 };
 
 // kind: 0 emissive triangle (index: EmitterTriangles entry), 1 point, 2 spot (index: Lights entry),
-// 3 environment. cdf: inclusive running sum of probabilities, the last exactly 1.
+// 3 environment. upper: exclusive upper bound of the entry's range of 31-bit random integers
+// (src/sampling/distribution.rs); probability: the realised (upper - previous upper) / 2^31.
 struct LightEntry {
     uint kind;
     uint index;
     float probability;
-    float cdf;
+    uint upper;
 };
 
 struct Light {
@@ -48,7 +49,7 @@ struct SceneConstants {
     vec4 camera_up;
     uvec4 size;           // image width, height, light entry count, triangle count
     uvec4 env_size;       // environment width, height, 1 when present
-    vec4 env;             // x: probability of selecting the environment, y: sum over texels of luminance * solid angle
+    vec4 env;             // x: probability of selecting the environment
     vec4 bounds;          // xyz: scene centre, w: scene radius
 };
 
@@ -57,8 +58,11 @@ layout(set = 0, binding = 3, std430) readonly buffer Materials { Material materi
 layout(set = 0, binding = 4, std430) readonly buffer Lights { Light lights[]; };
 layout(set = 0, binding = 5, std430) readonly buffer LightEntries { LightEntry light_entries[]; };
 layout(set = 0, binding = 6, std430) readonly buffer EmitterTriangles { EmitterTriangle emitter_triangles[]; };
+// rgb: radiance; w: solid-angle pdf of env_sample in this texel (realised texel probability
+// over the texel's solid angle).
 layout(set = 0, binding = 7, std430) readonly buffer EnvTexels { vec4 env_texels[]; };
-layout(set = 0, binding = 8, std430) readonly buffer EnvCdf { float env_cdf[]; };
+// Exclusive upper bounds of each texel's range of 31-bit random integers.
+layout(set = 0, binding = 8, std430) readonly buffer EnvCdf { uint env_cdf[]; };
 layout(set = 0, binding = 9, std430) readonly buffer SceneParams { SceneConstants scene; };
 
 uint triangle_material(uint triangle) {
@@ -72,10 +76,11 @@ vec3 shading_normal(uint triangle, vec2 uv) {
     return len2 > 1e-20 ? n * inversesqrt(len2) : t.geometric_normal.xyz;
 }
 
-// Offsets a ray origin off the surface on the side of `side_normal`: scaled to the scene so
-// large coordinates do not self-intersect through float rounding.
+// Offsets a ray origin off the surface on the side of `side_normal`, in proportion to the
+// point's coordinates (float rounding of a hit grows with them), with a floor of 1e-6 of the
+// scene radius near the origin.
 vec3 offset_origin(vec3 p, vec3 side_normal) {
-    float scale = max(max(abs(p.x), abs(p.y)), max(abs(p.z), scene.bounds.w));
+    float scale = max(max(abs(p.x), abs(p.y)), max(abs(p.z), 0.01 * scene.bounds.w));
     return p + side_normal * (1e-4 * scale);
 }
 

@@ -1,5 +1,5 @@
 //! glsl/write_gbuffer.comp: the first hit of one jittered camera ray per pixel (Keller 97
-//! Section 4.1 jittered Halton subpixel positions), shared by every method.
+//! Section 4.1 low-discrepancy subpixel positions: per-pixel shifted Halton), shared by every method.
 
 use bytemuck::{Pod, Zeroable};
 use glam::Vec4;
@@ -23,9 +23,8 @@ pub struct GBufferTexel {
 #[derive(Clone, Copy, Pod, Zeroable)]
 struct FrameParams {
     frame: u32,
-    frame_count: u32,
     seed: u32,
-    _pad: u32,
+    _pad: [u32; 2],
 }
 
 pub struct GBuffer {
@@ -47,23 +46,21 @@ impl WriteGBuffer {
         Ok(WriteGBuffer(Kernel::new(ctx, "write_gbuffer")?))
     }
 
-    /// Frame `frame` of `frame_count` (the count sets the jitter grid).
+    /// Frame `frame`: Halton point `frame` of the pixel's shifted sequence.
     pub fn record<'a>(
         &'a self,
         cmd: &mut Commands<'a>,
         scene: &'a GpuScene,
         gbuffer: &'a GBuffer,
         frame: u32,
-        frame_count: u32,
         seed: u32,
     ) -> GpuResult<()> {
         let mut bindings = scene.bindings();
         bindings.push(bind("GBuffer", &gbuffer.texels));
         let params = FrameParams {
             frame,
-            frame_count,
             seed,
-            _pad: 0,
+            _pad: [0; 2],
         };
         self.0.dispatch(
             cmd,

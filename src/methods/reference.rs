@@ -120,7 +120,7 @@ impl Reference {
     ) -> GpuResult<()> {
         cmd.pass("gbuffer", |cmd| {
             self.gbuffer
-                .record(cmd, scene, gbuffer, frame, settings.spp, settings.seed)
+                .record(cmd, scene, gbuffer, frame, settings.seed)
         })?;
         cmd.pass("reference paths", |cmd| {
             let mut bindings = scene.bindings();

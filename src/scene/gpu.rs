@@ -12,7 +12,7 @@ use glam::{Vec3, Vec4};
 use crate::bvh::{Bvh, GpuBvh};
 use crate::gpu::{bind, Binding, Buffer, Context, GpuResult};
 use crate::sampling::distribution::Distribution1D;
-use crate::sampling::environment::{luminance, sampling_weights};
+use crate::sampling::environment::{luminance, sampling_weights, texel_solid_angle};
 
 use super::{Light, Scene};
 
@@ -38,8 +38,10 @@ pub struct GpuMaterial {
 pub struct LightEntry {
     pub kind: u32,
     pub index: u32,
+    /// Realised selection probability (src/sampling/distribution.rs).
     pub probability: f32,
-    pub cdf: f32,
+    /// Exclusive upper bound of the entry's range of 31-bit random integers.
+    pub upper: u32,
 }
 
 pub const LIGHT_TRIANGLE: u32 = 0;
@@ -94,7 +96,7 @@ pub struct GpuScene {
     pub light_entries: Buffer<LightEntry>,
     pub emitter_triangles: Buffer<EmitterTriangle>,
     pub env_texels: Buffer<Vec4>,
-    pub env_cdf: Buffer<f32>,
+    pub env_cdf: Buffer<u32>,
     pub constants: Buffer<SceneConstants>,
     pub light_table: LightTable,
     pub width: u32,
@@ -225,16 +227,20 @@ impl GpuScene {
         }
 
         // The environment: texels, their CDF, and its power for light selection.
+        // Texel .w is the solid-angle pdf of env_sample there: realised probability / solid angle.
         let mut env_texels = vec![Vec4::ZERO];
-        let mut env_cdf = vec![1.0f32];
+        let mut env_cdf = vec![1u32 << 31];
         let mut env_size = [0u32; 4];
-        let mut env_total = 0.0f64;
         if let Some(env) = &scene.environment {
             env_texels = env.texels.iter().map(|t| t.extend(0.0)).collect();
             env_size = [env.width, env.height, 1, 0];
             if let Some(d) = Distribution1D::new(&sampling_weights(env)) {
-                env_total = d.total;
-                env_cdf = d.cdf;
+                for (i, texel) in env_texels.iter_mut().enumerate() {
+                    let row = i as u32 / env.width;
+                    texel.w =
+                        (d.probabilities[i] / texel_solid_angle(row, env.width, env.height)) as f32;
+                }
+                env_cdf = d.upper.clone();
                 let power = PI * (radius as f64).powi(2) * d.total;
                 powers.push((LIGHT_ENVIRONMENT, 0, power));
             }
@@ -250,7 +256,7 @@ impl GpuScene {
                     kind,
                     index,
                     probability: probability as f32,
-                    cdf: d.cdf[i],
+                    upper: d.upper[i],
                 });
                 match kind {
                     LIGHT_TRIANGLE => {
@@ -292,7 +298,7 @@ impl GpuScene {
                 shading.len() as u32,
             ],
             env_size,
-            env: Vec4::new(environment_probability as f32, env_total as f32, 0.0, 0.0),
+            env: Vec4::new(environment_probability as f32, 0.0, 0.0, 0.0),
             bounds: centre.extend(radius),
         };
 
