@@ -243,9 +243,7 @@ impl<T: Pod> Buffer<T> {
     }
 
     fn uninit(ctx: &Context, name: &str, len: usize) -> GpuResult<Self> {
-        let bytes = (len as u64)
-            .checked_mul(std::mem::size_of::<T>() as u64)
-            .unwrap_or(u64::MAX);
+        let bytes = (len as u64).saturating_mul(std::mem::size_of::<T>() as u64);
         Ok(Buffer {
             raw: RawBuffer::new(ctx, name, bytes, Placement::Device)?,
             len,
