@@ -9,3 +9,4 @@ pub mod sampling;
 pub mod scene;
 pub mod selfcheck;
 pub mod shaders;
+pub mod trace;
