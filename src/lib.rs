@@ -11,3 +11,4 @@ pub mod sampling;
 pub mod scene;
 pub mod selfcheck;
 pub mod shaders;
+pub mod trace;

@@ -107,6 +107,18 @@ enum Bench {
         #[arg(long, value_delimiter = ',', value_parser = parse_case)]
         sizes: Vec<scan_bench::ScanCase>,
     },
+    /// Rays/s of the GPU BVH traversal (closest and any hit; camera and random rays) next to
+    /// obvhs's CWBVH on the CPU using every core, and the ratio GPU/CPU.
+    Rays {
+        /// Scene file (default: a procedural displaced sphere of ~200k triangles).
+        scene: Option<std::path::PathBuf>,
+        /// Timed repetitions per case (the median is reported), after 1 warm-up run.
+        #[arg(long, default_value_t = 5)]
+        repeats: usize,
+        /// Number of random (incoherent) rays; camera rays are one per pixel of 1024x768.
+        #[arg(long, default_value_t = 1 << 20)]
+        rays: usize,
+    },
 }
 
 fn parse_case(s: &str) -> Result<scan_bench::ScanCase, String> {
@@ -176,6 +188,26 @@ fn run(cli: Cli) -> Result<()> {
             }
             bar.finish_and_clear();
             scan_bench::print_table(&device_line(ctx.info()), &results);
+            Ok(())
+        }
+        Command::Bench(Bench::Rays {
+            scene,
+            repeats,
+            rays,
+        }) => {
+            use irad::bvh::procedural;
+            if let Some(path) = scene {
+                bail!("{}: scene loading not wired yet", path.display());
+            }
+            let ctx = Context::new(&options)?;
+            let triangles = procedural::noisy_sphere(1, 128, 4096);
+            let bounds = procedural::bounds(&triangles);
+            let camera = procedural::camera_for_bounds(bounds, 1024, 768);
+            let camera_rays = procedural::camera_rays(&camera);
+            let random_rays = procedural::random_rays(2, bounds, rays);
+            let report =
+                irad::bench::rays::run(&ctx, &triangles, &camera_rays, &random_rays, repeats)?;
+            irad::bench::rays::print_table(&device_line(ctx.info()), &report);
             Ok(())
         }
     }

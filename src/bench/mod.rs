@@ -1,5 +1,6 @@
 //! Benchmarks: they measure and print; they assert nothing (tests do).
 
+pub mod rays;
 pub mod scan;
 
 /// Median of a non-empty list.
