@@ -110,7 +110,8 @@ enum Bench {
     /// Rays/s of the GPU BVH traversal (closest and any hit; camera and random rays) next to
     /// obvhs's CWBVH on the CPU using every core, and the ratio GPU/CPU.
     Rays {
-        /// Scene file (default: a procedural displaced sphere of ~200k triangles).
+        /// Scene file: its triangles, its camera at 1024x768 (default: a procedural displaced
+        /// sphere of ~200k triangles).
         scene: Option<std::path::PathBuf>,
         /// Timed repetitions per case (the median is reported), after 1 warm-up run.
         #[arg(long, default_value_t = 5)]
@@ -196,13 +197,27 @@ fn run(cli: Cli) -> Result<()> {
             rays,
         }) => {
             use irad::bvh::procedural;
-            if let Some(path) = scene {
-                bail!("{}: scene loading not wired yet", path.display());
-            }
-            let ctx = Context::new(&options)?;
-            let triangles = procedural::noisy_sphere(1, 128, 4096);
+            // A scene's own camera at 1024x768, or a camera framing the procedural mesh.
+            let (triangles, camera) = match scene {
+                Some(path) => {
+                    let scene = scene::load(&path)?;
+                    let triangles: Vec<_> = scene.triangles.iter().map(|t| t.positions).collect();
+                    let camera = irad::scene::Camera {
+                        width: 1024,
+                        height: 768,
+                        ..scene.camera
+                    };
+                    (triangles, camera)
+                }
+                None => {
+                    let triangles = procedural::noisy_sphere(1, 128, 4096);
+                    let camera =
+                        procedural::camera_for_bounds(procedural::bounds(&triangles), 1024, 768);
+                    (triangles, camera)
+                }
+            };
             let bounds = procedural::bounds(&triangles);
-            let camera = procedural::camera_for_bounds(bounds, 1024, 768);
+            let ctx = Context::new(&options)?;
             let camera_rays = procedural::camera_rays(&camera);
             let random_rays = procedural::random_rays(2, bounds, rays);
             let report =
