@@ -79,7 +79,7 @@ impl Reference {
     ) -> GpuResult<RenderOutput> {
         let start = Instant::now();
         let gbuffer = GBuffer::new(ctx, scene)?;
-        let accumulation = Accumulation::new(ctx, scene.width, scene.height)?;
+        let mut accumulation = Accumulation::new(ctx, scene.width, scene.height)?;
         let mut passes = PassTotals::default();
         let spp = settings.spp.max(1);
         let mut done = 0u32;
@@ -87,14 +87,12 @@ impl Reference {
         while done < spp {
             let frames = batch.min(spp - done).min(200);
             let mut cmd = Commands::new(ctx)?;
-            if done == 0 {
-                cmd.fill_zero(&accumulation.radiance);
-                cmd.fill_zero(&accumulation.diagnostics);
-            }
+            accumulation.begin_submission(&mut cmd);
             for frame in done..done + frames {
                 self.record_frame(&mut cmd, scene, &gbuffer, &accumulation, frame, settings)?;
             }
             let timings = cmd.submit_and_wait()?;
+            accumulation.collect()?;
             passes.add(&timings);
             done += frames;
             progress(done, spp);
@@ -102,7 +100,7 @@ impl Reference {
             batch = ((250.0 / per_frame_ms.max(1e-3)) as u32).clamp(1, 200);
         }
         Ok(RenderOutput {
-            image: accumulation.resolve(spp)?,
+            image: accumulation.resolve(spp),
             passes,
             wall_ms: start.elapsed().as_secs_f64() * 1e3,
             nonfinite_estimates: accumulation.nonfinite_estimates()?,
