@@ -81,11 +81,6 @@ fn point_light_expected(
     intensity: impl Fn(Vec3) -> f64,
 ) -> Vec<f64> {
     let cam = &scene.camera;
-    let forward = (cam.look_at - cam.position).normalize();
-    let right = forward.cross(cam.up).normalize();
-    let up = right.cross(forward);
-    let t = (cam.fov_y.to_radians() * 0.5).tan();
-    let aspect = cam.width as f32 / cam.height as f32;
     let mut out = Vec::new();
     for y in 0..cam.height {
         for x in 0..cam.width {
@@ -93,9 +88,7 @@ fn point_light_expected(
             for sy in 0..16 {
                 for sx in 0..16 {
                     let (fx, fy) = ((sx as f32 + 0.5) / 16.0, (sy as f32 + 0.5) / 16.0);
-                    let a = (2.0 * (x as f32 + fx) / cam.width as f32 - 1.0) * t * aspect;
-                    let b = (1.0 - 2.0 * (y as f32 + fy) / cam.height as f32) * t;
-                    let d = (forward + a * right + b * up).normalize();
+                    let d = cam.direction(x as f32 + fx, y as f32 + fy);
                     let hit = cam.position + d * (-cam.position.y / d.y);
                     let to_light = light - hit;
                     let r2 = to_light.length_squared() as f64;
@@ -306,16 +299,10 @@ fn phong_plate_under_uniform_environment_gives_its_albedo() {
         // The view angle of the plate changes across the image: expected value per pixel at
         // its centre ray (the albedo is smooth in the angle).
         let cam = scene.camera.clone();
-        let forward = (cam.look_at - cam.position).normalize();
-        let right = forward.cross(cam.up).normalize();
-        let up = right.cross(forward);
-        let t = (cam.fov_y.to_radians() * 0.5).tan();
         let expected: Vec<f64> = (0..cam.height * cam.width)
             .map(|i| {
                 let (x, y) = (i % cam.width, i / cam.width);
-                let a = (2.0 * (x as f32 + 0.5) / cam.width as f32 - 1.0) * t;
-                let b = (1.0 - 2.0 * (y as f32 + 0.5) / cam.height as f32) * t;
-                let d = (forward + a * right + b * up).normalize();
+                let d = cam.direction(x as f32 + 0.5, y as f32 + 0.5);
                 let cos_o = -d.y as f64;
                 (kd as f64 + phong_albedo(ks as f64, n as f64, cos_o)) * l as f64
             })

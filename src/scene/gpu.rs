@@ -283,9 +283,7 @@ impl GpuScene {
             .collect();
 
         let cam = &scene.camera;
-        let forward = (cam.look_at - cam.position).normalize();
-        let right = forward.cross(cam.up).normalize();
-        let up = right.cross(forward);
+        let (forward, right, up) = cam.basis();
         let constants = SceneConstants {
             camera_position: cam.position.extend((cam.fov_y.to_radians() * 0.5).tan()),
             camera_forward: forward.extend(cam.width as f32 / cam.height as f32),
