@@ -51,6 +51,11 @@ bool bvh_intersect_triangle(vec3 origin, vec3 direction, uint index, float t_max
     return det != 0.0 && u >= 0.0 && v >= 0.0 && u + v <= 1.0 && t > 0.0 && t < t_max;
 }
 
+// Plain compare-and-select: one instruction on x86, where GLSL min/max become NaN-aware
+// sequences on lavapipe (operands here are never NaN).
+float bvh_max(float a, float b) { return a > b ? a : b; }
+float bvh_min(float a, float b) { return a < b ? a : b; }
+
 uint bvh_byte(uint word, uint i) {
     return bitfieldExtract(word, int(8u * i), 8);
 }
@@ -89,8 +94,8 @@ uint bvh_intersect_node(BvhNode node, vec3 origin, vec3 inv_dir, uint oct_inv4, 
                                      bvh_byte(near4.z, j))) * scale + offset;
             vec3 far_t = vec3(uvec3(bvh_byte(far4.x, j), bvh_byte(far4.y, j),
                                     bvh_byte(far4.z, j))) * scale + offset;
-            float t_enter = max(max(near_t.x, near_t.y), max(near_t.z, 0.0));
-            float t_exit = min(min(far_t.x, far_t.y), min(far_t.z, t_max));
+            float t_enter = bvh_max(bvh_max(near_t.x, near_t.y), bvh_max(near_t.z, 0.0));
+            float t_exit = bvh_min(bvh_min(far_t.x, far_t.y), bvh_min(far_t.z, t_max));
             if (t_enter <= t_exit) {
                 hit_mask |= bvh_byte(child_bits4, j) << bvh_byte(bit_index4, j);
             }
