@@ -6,13 +6,14 @@
 //! parallel reinsertion, then collapsed into a compressed wide BVH8 (Ylitie, Karras and
 //! Laine 2017, "Efficient Incoherent Ray Traversal on GPUs Through Compressed Wide BVHs").
 //! Why this one:
-//! - CWBVH is the structure whose traversal won on lavapipe (measured, see bvh.glsl): an
-//!   80-byte node tests 8 children, so a ray fetches ~3x fewer bytes than through a BVH2, and
-//!   on lavapipe every storage-buffer load is a per-lane scalar loop, so bytes fetched are
-//!   what traversal time is made of. It is also obvhs's fastest CPU structure, the one the
-//!   benchmark compares against, and the one tray_racing runs in compute shaders.
-//! - `medium_build` traced as fast as `slow_build` here (within noise) at a fraction of the
-//!   build time; `fast_build` traced slower.
+//! - CWBVH is the layout whose traversal won on lavapipe, by 1.7x over a BVH2 with both
+//!   children's boxes in the parent (glsl/include/bvh.glsl lists what was measured). On
+//!   lavapipe every storage-buffer load is a scalar loop over the active lanes, so traversal
+//!   time is mostly loads per ray: an 80-byte CWBVH node (5 loads) tests 8 children, a 64-byte
+//!   BVH2 node (4 loads) tests 2. It is also obvhs's fastest CPU structure, the one `irad bench
+//!   rays` compares against, and the one tray_racing traverses in compute shaders.
+//! - The presets from `very_fast_build` to `very_slow_build` traced within noise of each other
+//!   on the benchmark's 200k-triangle sphere (GPU and CPU); `medium_build` builds it in ~0.2 s.
 //! - No spatial pre-splits, so every input triangle sits in exactly one leaf and
 //!   `triangle_order` is a permutation (other code indexes per-triangle data through it).
 //!
@@ -32,7 +33,10 @@ use crate::gpu::{bind, Binding, Buffer, Context, GpuResult};
 pub mod procedural;
 
 /// Entries of the per-invocation traversal stack in bvh.glsl (BVH_STACK_SIZE). A CWBVH
-/// traversal holds at most one entry per tree level.
+/// traversal holds at most one entry per tree level below the root, so trees up to this depth
+/// are traversed exactly (`Bvh::depth`; a 200k-triangle mesh gives 10). A deeper tree, which
+/// only a degenerate input could produce, loses the pushes past it: rays may miss, the traversal
+/// still terminates.
 pub const GPU_STACK_SIZE: usize = 32;
 
 /// A triangle as the traversal intersects it: `v0` and the edges `e1 = v1 - v0`,
