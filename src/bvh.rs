@@ -35,8 +35,8 @@ pub mod procedural;
 /// Entries of the per-invocation traversal stack in bvh.glsl (BVH_STACK_SIZE). A CWBVH
 /// traversal holds at most one entry per tree level below the root, so trees up to this depth
 /// are traversed exactly (`Bvh::depth`; a 200k-triangle mesh gives 10). A deeper tree, which
-/// only a degenerate input could produce, loses the pushes past it: rays may miss, the traversal
-/// still terminates.
+/// only a degenerate input could produce, would lose pushes (rays missing silently), so
+/// `GpuBvh::upload` refuses it.
 pub const GPU_STACK_SIZE: usize = 32;
 
 /// A triangle as the traversal intersects it: `v0` and the edges `e1 = v1 - v0`,
@@ -180,6 +180,13 @@ pub struct GpuBvh {
 
 impl GpuBvh {
     pub fn upload(ctx: &Context, bvh: &Bvh) -> GpuResult<GpuBvh> {
+        let depth = bvh.depth();
+        if depth > GPU_STACK_SIZE {
+            return Err(crate::gpu::GpuError::BvhTooDeep {
+                depth,
+                limit: GPU_STACK_SIZE,
+            });
+        }
         Ok(GpuBvh {
             nodes: Buffer::from_slice(ctx, "BvhNodes", &bvh.nodes)?,
             triangles: Buffer::from_slice(ctx, "BvhTriangles", &bvh.triangles)?,

@@ -73,6 +73,11 @@ pub enum GpuError {
         index: u32,
     },
 
+    #[error(
+        "the BVH is {depth} levels deep, over the {limit} the GPU traversal stack holds (degenerate geometry: many coincident or nested triangles?)"
+    )]
+    BvhTooDeep { depth: usize, limit: usize },
+
     #[error("kernel `{kernel}`: binding `{binding}` bound twice")]
     DuplicateBinding { kernel: String, binding: String },
 
