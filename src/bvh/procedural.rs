@@ -133,17 +133,10 @@ pub fn bounds(triangles: &[[Vec3; 3]]) -> (Vec3, Vec3) {
 
 /// One ray per pixel through the pixel centre, per the `Camera` convention, unbounded.
 pub fn camera_rays(camera: &Camera) -> Vec<TraceRay> {
-    let forward = (camera.look_at - camera.position).normalize();
-    let right = forward.cross(camera.up).normalize();
-    let true_up = right.cross(forward);
-    let t = (camera.fov_y.to_radians() * 0.5).tan();
-    let (w, h) = (camera.width as f32, camera.height as f32);
     let mut rays = Vec::with_capacity(camera.width as usize * camera.height as usize);
     for y in 0..camera.height {
         for x in 0..camera.width {
-            let a = (2.0 * (x as f32 + 0.5) / w - 1.0) * t * w / h;
-            let b = (1.0 - 2.0 * (y as f32 + 0.5) / h) * t;
-            let direction = (forward + a * right + b * true_up).normalize();
+            let direction = camera.direction(x as f32 + 0.5, y as f32 + 0.5);
             rays.push(TraceRay::new(camera.position, direction, f32::INFINITY));
         }
     }
