@@ -3,6 +3,8 @@
 //! (so a 100k-sample render does not lose small samples to f32 rounding), and the count of
 //! non-finite estimates the kernels dropped.
 
+use std::cell::RefCell;
+
 use glam::Vec4;
 
 use crate::gpu::{bind, Binding, Buffer, Commands, Context, GpuResult};
@@ -13,7 +15,7 @@ pub struct Accumulation {
     pub diagnostics: Buffer<u32>,
     pub width: u32,
     pub height: u32,
-    sums: Vec<[f64; 3]>,
+    sums: RefCell<Vec<[f64; 3]>>,
 }
 
 impl Accumulation {
@@ -24,7 +26,7 @@ impl Accumulation {
             diagnostics: Buffer::zeroed(ctx, "Diagnostics", 1)?,
             width,
             height,
-            sums: vec![[0.0; 3]; pixels],
+            sums: RefCell::new(vec![[0.0; 3]; pixels]),
         })
     }
 
@@ -41,8 +43,9 @@ impl Accumulation {
     }
 
     /// Adds the finished submission's sums into the host's f64 sums.
-    pub fn collect(&mut self) -> GpuResult<()> {
-        for (sum, s) in self.sums.iter_mut().zip(self.radiance.read()?) {
+    pub fn collect(&self) -> GpuResult<()> {
+        let mut sums = self.sums.borrow_mut();
+        for (sum, s) in sums.iter_mut().zip(self.radiance.read()?) {
             sum[0] += s.x as f64;
             sum[1] += s.y as f64;
             sum[2] += s.z as f64;
@@ -58,6 +61,7 @@ impl Accumulation {
             height: self.height,
             pixels: self
                 .sums
+                .borrow()
                 .iter()
                 .map(|s| s.map(|v| (v * scale) as f32))
                 .collect(),

@@ -3,4 +3,6 @@
 
 pub mod accumulation;
 pub mod gbuffer;
+pub mod paths;
+pub mod progressive;
 pub mod reference;
