@@ -10,6 +10,8 @@ use serde_json::json;
 
 use crate::gpu::{Context, PassTotals};
 use crate::image::{self, exr, Image, Metrics, PassRecord, RenderRecord};
+use crate::methods::ir::schedule::Absorption;
+use crate::methods::ir::{DirectLight, InstantRadiosity, IrSettings};
 use crate::methods::reference::{Reference, ReferenceSettings};
 use crate::scene::gpu::GpuScene;
 use crate::scene::Scene;
@@ -17,18 +19,21 @@ use crate::scene::Scene;
 #[derive(Clone, Debug)]
 pub enum Method {
     Reference(ReferenceSettings),
+    Ir(IrSettings),
 }
 
 impl Method {
     pub fn name(&self) -> &'static str {
         match self {
             Method::Reference(_) => "reference",
+            Method::Ir(_) => "ir",
         }
     }
 
     pub fn seed(&self) -> u32 {
         match self {
             Method::Reference(s) => s.seed,
+            Method::Ir(s) => s.seed,
         }
     }
 
@@ -40,6 +45,29 @@ impl Method {
                 p.insert("max_depth".into(), json!(s.max_depth));
                 p.insert("roulette_depth".into(), json!(s.roulette_depth));
             }
+            Method::Ir(s) => {
+                p.insert("vpl_paths".into(), json!(s.paths));
+                p.insert("frames".into(), json!(s.frames));
+                p.insert(
+                    "absorption".into(),
+                    json!(match s.absorption {
+                        Absorption::Fractional => "fractional",
+                        Absorption::Roulette => "roulette",
+                    }),
+                );
+                // The clamp is recorded only when on: it is a named, measured bias.
+                if s.g_clamp > 0.0 {
+                    p.insert("geometry_clamp".into(), json!(s.g_clamp));
+                }
+                p.insert("interleave".into(), json!(s.interleave));
+                p.insert(
+                    "direct".into(),
+                    json!(match s.direct {
+                        DirectLight::NextEvent => "nee",
+                        DirectLight::Vpl => "vpl",
+                    }),
+                );
+            }
         }
         p
     }
@@ -47,6 +75,7 @@ impl Method {
     fn samples(&self) -> u64 {
         match self {
             Method::Reference(s) => s.spp as u64,
+            Method::Ir(s) => s.frames as u64,
         }
     }
 }
@@ -115,6 +144,9 @@ pub fn render(
     let output = match &job.method {
         Method::Reference(settings) => {
             Reference::new(ctx)?.render(ctx, &gpu_scene, settings, progress)?
+        }
+        Method::Ir(settings) => {
+            InstantRadiosity::new(ctx)?.render(ctx, job.scene, &gpu_scene, settings, progress)?
         }
     };
     if output.nonfinite_estimates > 0 {

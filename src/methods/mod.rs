@@ -3,6 +3,7 @@
 
 pub mod accumulation;
 pub mod gbuffer;
+pub mod ir;
 pub mod paths;
 pub mod progressive;
 pub mod reference;

@@ -1,0 +1,61 @@
+//! glsl/accumulate_vpls_tiled.comp: every (pixel, VPL) pair of a frame, tile by tile, with
+//! VPLs streamed through shared memory, added into the accumulation.
+
+use std::ops::Range;
+
+use bytemuck::{Pod, Zeroable};
+
+use crate::gpu::{bind, Commands, Context, GpuResult, Kernel};
+use crate::methods::accumulation::Accumulation;
+use crate::methods::gbuffer::GBuffer;
+use crate::scene::gpu::GpuScene;
+
+use super::walk::VplBuffers;
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct GatherParams {
+    vpl_begin: u32,
+    vpl_end: u32,
+    g_clamp: f32,
+    interleave: u32,
+}
+
+pub struct AccumulateVpls(Kernel);
+
+impl AccumulateVpls {
+    pub fn new(ctx: &Context) -> GpuResult<Self> {
+        Ok(AccumulateVpls(Kernel::new(ctx, "accumulate_vpls_tiled")?))
+    }
+
+    /// Shades the VPL slots `slots`; `g_clamp` 0 leaves the geometry term unclamped.
+    #[allow(clippy::too_many_arguments)]
+    pub fn record<'a>(
+        &'a self,
+        cmd: &mut Commands<'a>,
+        scene: &'a GpuScene,
+        gbuffer: &'a GBuffer,
+        vpls: &'a VplBuffers,
+        accumulation: &'a Accumulation,
+        slots: Range<u32>,
+        g_clamp: f32,
+        interleave: u32,
+    ) -> GpuResult<()> {
+        let mut bindings = scene.bindings();
+        bindings.push(bind("GBuffer", &gbuffer.texels));
+        bindings.extend(accumulation.bindings());
+        bindings.push(bind("Vpls", &vpls.vpls));
+        let params = GatherParams {
+            vpl_begin: slots.start,
+            vpl_end: slots.end,
+            g_clamp,
+            interleave: interleave.max(1),
+        };
+        self.0.dispatch(
+            cmd,
+            &bindings,
+            &params,
+            [scene.width.div_ceil(8), scene.height.div_ceil(8), 1],
+        )
+    }
+}

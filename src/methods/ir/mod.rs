@@ -1,0 +1,165 @@
+//! Instant radiosity (Keller 97), method `ir`: per frame, the G-buffer, direct light by the
+//! reference's next-event estimation (or Keller's original with the light vertices as VPLs,
+//! `--direct vpl`), a fresh set of VPLs from the quasi-random walk, and the tiled gathering of
+//! every (pixel, VPL) pair. Frames accumulate with fresh subpixel positions and VPL sets.
+
+pub mod gather;
+pub mod schedule;
+pub mod walk;
+
+use std::time::Instant;
+
+use thiserror::Error;
+
+use crate::gpu::{Context, GpuError};
+use crate::methods::accumulation::Accumulation;
+use crate::methods::gbuffer::{GBuffer, WriteGBuffer};
+use crate::methods::paths::TracePaths;
+use crate::methods::progressive;
+use crate::methods::reference::RenderOutput;
+use crate::sampling::pcg;
+use crate::scene::gpu::GpuScene;
+use crate::scene::Scene;
+
+use gather::AccumulateVpls;
+use schedule::{mean_albedo, Absorption, Schedule};
+use walk::{TraceVpls, VplBuffers};
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DirectLight {
+    /// The reference's next-event estimation (MIS with BSDF sampling); VPLs carry indirect
+    /// light only.
+    NextEvent,
+    /// Keller's original: each path's light vertex is a VPL too.
+    Vpl,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct IrSettings {
+    /// N: paths started on the lights per frame.
+    pub paths: u32,
+    pub frames: u32,
+    pub seed: u32,
+    pub absorption: Absorption,
+    /// The geometry-term clamp; 0 leaves it unclamped (unbiased).
+    pub g_clamp: f32,
+    pub interleave: u32,
+    pub direct: DirectLight,
+}
+
+impl Default for IrSettings {
+    fn default() -> Self {
+        IrSettings {
+            paths: 256,
+            frames: 16,
+            seed: 0,
+            absorption: Absorption::Fractional,
+            g_clamp: 0.0,
+            interleave: 1,
+            direct: DirectLight::NextEvent,
+        }
+    }
+}
+
+#[derive(Debug, Error)]
+pub enum IrError {
+    #[error("ir does not support environment lights: the quasi-random walk starts on emissive triangles, point and spot lights (use --method reference)")]
+    Environment,
+    #[error(transparent)]
+    Gpu(#[from] GpuError),
+}
+
+pub struct InstantRadiosity {
+    gbuffer: WriteGBuffer,
+    paths: TracePaths,
+    walk: TraceVpls,
+    gather: AccumulateVpls,
+}
+
+impl InstantRadiosity {
+    pub fn new(ctx: &Context) -> Result<Self, GpuError> {
+        Ok(InstantRadiosity {
+            gbuffer: WriteGBuffer::new(ctx)?,
+            paths: TracePaths::new(ctx)?,
+            walk: TraceVpls::new(ctx)?,
+            gather: AccumulateVpls::new(ctx)?,
+        })
+    }
+
+    /// The per-frame VPL layout this scene and these settings give.
+    pub fn schedule(scene: &Scene, settings: &IrSettings) -> Schedule {
+        Schedule::new(settings.paths, mean_albedo(scene), settings.absorption)
+    }
+
+    pub fn render(
+        &self,
+        ctx: &Context,
+        scene: &Scene,
+        gpu_scene: &GpuScene,
+        settings: &IrSettings,
+        progress: impl FnMut(u32, u32),
+    ) -> Result<RenderOutput, IrError> {
+        if scene.environment.is_some() {
+            return Err(IrError::Environment);
+        }
+        let start = Instant::now();
+        let gbuffer = GBuffer::new(ctx, gpu_scene)?;
+        let accumulation = Accumulation::new(ctx, gpu_scene.width, gpu_scene.height)?;
+        let vpls = VplBuffers::new(ctx, Self::schedule(scene, settings))?;
+        let slots = match settings.direct {
+            DirectLight::NextEvent => vpls.layout.surface_slots(),
+            DirectLight::Vpl => 0..vpls.layout.slot_count,
+        };
+        let direct_depth = match settings.direct {
+            DirectLight::NextEvent => 1,
+            DirectLight::Vpl => 0,
+        };
+        let frames = settings.frames.max(1);
+        let passes = progressive::run(
+            ctx,
+            frames,
+            &accumulation,
+            |cmd, frame| {
+                cmd.pass("gbuffer", |cmd| {
+                    self.gbuffer
+                        .record(cmd, gpu_scene, &gbuffer, frame, settings.seed)
+                })?;
+                cmd.pass("direct light", |cmd| {
+                    self.paths.record(
+                        cmd,
+                        gpu_scene,
+                        &gbuffer,
+                        &accumulation,
+                        frame,
+                        settings.seed,
+                        direct_depth,
+                        u32::MAX,
+                    )
+                })?;
+                let walk_seed = pcg::hash(&[settings.seed, frame, 0x76706c73]);
+                cmd.pass("vpl walk", |cmd| {
+                    self.walk.record(cmd, gpu_scene, &vpls, walk_seed)
+                })?;
+                cmd.pass("vpl accumulation", |cmd| {
+                    self.gather.record(
+                        cmd,
+                        gpu_scene,
+                        &gbuffer,
+                        &vpls,
+                        &accumulation,
+                        slots.clone(),
+                        settings.g_clamp,
+                        settings.interleave,
+                    )
+                })
+            },
+            progress,
+        )?;
+        Ok(RenderOutput {
+            image: accumulation.resolve(frames),
+            passes,
+            wall_ms: start.elapsed().as_secs_f64() * 1e3,
+            nonfinite_estimates: accumulation.nonfinite_estimates()?,
+        })
+    }
+}

@@ -1,0 +1,101 @@
+//! The absorption schedule of Keller 97's quasi-random walk (Section 3.2): how many of the N
+//! paths reach each vertex and where each vertex's VPL slots start. Fractional absorption
+//! (stills): N_j = floor(rho^j N) paths reach vertex j, rho the scene's mean reflectivity, and
+//! a vertex-j VPL carries 1 / N_j of its path's throughput. Russian roulette (animation): every
+//! path keeps a slot at every vertex and survives each with probability rho.
+
+use crate::sampling::environment::luminance;
+use crate::scene::Scene;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Absorption {
+    Fractional,
+    Roulette,
+}
+
+/// Most vertices per path (light vertex included): a cap for rho close to 1, where
+/// floor(rho^j N) stays positive for very long.
+pub const MAX_VERTICES: usize = 128;
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Schedule {
+    pub path_count: u32,
+    /// Per vertex: paths that reach it, first slot, 1 under roulette, 0.
+    pub levels: Vec<[u32; 4]>,
+    pub slot_count: u32,
+    pub mean_albedo: f64,
+}
+
+impl Schedule {
+    pub fn new(path_count: u32, mean_albedo: f64, absorption: Absorption) -> Schedule {
+        let n = path_count.max(1);
+        let mut levels = Vec::new();
+        let mut offset = 0u32;
+        for j in 0..MAX_VERTICES {
+            let count = match absorption {
+                Absorption::Fractional => (mean_albedo.powi(j as i32) * n as f64).floor() as u32,
+                Absorption::Roulette => n,
+            };
+            if count == 0 || (absorption == Absorption::Roulette && j > 0 && mean_albedo <= 0.0) {
+                break;
+            }
+            let roulette = u32::from(absorption == Absorption::Roulette);
+            levels.push([count.min(n), offset, roulette, 0]);
+            offset += count.min(n);
+            if absorption == Absorption::Roulette && mean_albedo.powi(j as i32 + 1) < 1e-4 {
+                break;
+            }
+        }
+        Schedule {
+            path_count: n,
+            levels,
+            slot_count: offset,
+            mean_albedo,
+        }
+    }
+
+    /// The slots of the vertices past the light vertex (indirect light only).
+    pub fn surface_slots(&self) -> std::ops::Range<u32> {
+        self.levels.first().map_or(0, |l| l[0])..self.slot_count
+    }
+}
+
+/// Keller's mean reflectivity: the area-weighted mean over all triangles of the luminance of
+/// their albedo, Kd + Ks (the normalized Phong lobe's albedo at normal incidence).
+pub fn mean_albedo(scene: &Scene) -> f64 {
+    let (mut weighted, mut area) = (0.0, 0.0);
+    for t in &scene.triangles {
+        let [p0, p1, p2] = t.positions;
+        let a = 0.5 * (p1 - p0).cross(p2 - p0).length() as f64;
+        let m = &scene.materials[t.material as usize];
+        weighted += a * luminance(m.kd + m.ks);
+        area += a;
+    }
+    if area > 0.0 {
+        (weighted / area).clamp(0.0, 1.0)
+    } else {
+        0.0
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fractional_counts_are_floor_rho_j_n() {
+        let s = Schedule::new(1000, 0.5, Absorption::Fractional);
+        let counts: Vec<u32> = s.levels.iter().map(|l| l[0]).collect();
+        assert_eq!(counts, vec![1000, 500, 250, 125, 62, 31, 15, 7, 3, 1]);
+        assert_eq!(s.levels[2][1], 1500);
+        assert_eq!(s.slot_count, counts.iter().sum::<u32>());
+        assert_eq!(s.surface_slots(), 1000..s.slot_count);
+    }
+
+    #[test]
+    fn roulette_keeps_every_path_at_every_vertex() {
+        let s = Schedule::new(64, 0.5, Absorption::Roulette);
+        assert!(s.levels.iter().all(|l| l[0] == 64 && l[2] == 1));
+        assert!(s.levels.len() > 10 && s.levels.len() < MAX_VERTICES);
+    }
+}

@@ -1,0 +1,90 @@
+//! glsl/trace_vpls.comp: the quasi-random walk from the lights that writes one frame's VPLs
+//! (Keller 97 Section 3.2), and the VPL buffer it writes.
+
+use bytemuck::{Pod, Zeroable};
+use glam::Vec4;
+
+use crate::gpu::{bind, Buffer, Commands, Context, GpuResult, Kernel};
+use crate::scene::gpu::GpuScene;
+
+use super::schedule::Schedule;
+
+/// One VPL as glsl/include/vpl.glsl lays it out.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct Vpl {
+    /// w: kind (u32 bits): 0 none, 1 surface, 2 area-light point, 3 point light, 4 spot light.
+    pub position: Vec4,
+    pub normal: Vec4,
+    pub power: Vec4,
+    pub incident: Vec4,
+}
+
+pub const VPL_NONE: u32 = 0;
+pub const VPL_SURFACE: u32 = 1;
+
+impl Vpl {
+    pub fn kind(&self) -> u32 {
+        self.position.w.to_bits()
+    }
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct WalkParams {
+    path_count: u32,
+    vertex_count: u32,
+    seed: u32,
+    survival: f32,
+}
+
+/// The VPL slots of one frame and the schedule that lays them out.
+pub struct VplBuffers {
+    pub vpls: Buffer<Vpl>,
+    pub schedule: Buffer<[u32; 4]>,
+    pub layout: Schedule,
+}
+
+impl VplBuffers {
+    pub fn new(ctx: &Context, layout: Schedule) -> GpuResult<VplBuffers> {
+        Ok(VplBuffers {
+            vpls: Buffer::zeroed(ctx, "Vpls", layout.slot_count.max(1) as usize)?,
+            schedule: Buffer::from_slice(ctx, "VplSchedule", &layout.levels)?,
+            layout,
+        })
+    }
+}
+
+pub struct TraceVpls(Kernel);
+
+impl TraceVpls {
+    pub fn new(ctx: &Context) -> GpuResult<Self> {
+        Ok(TraceVpls(Kernel::new(ctx, "trace_vpls")?))
+    }
+
+    /// Clears the slots (a path that ends early leaves its later slots empty) and walks.
+    pub fn record<'a>(
+        &'a self,
+        cmd: &mut Commands<'a>,
+        scene: &'a GpuScene,
+        buffers: &'a VplBuffers,
+        seed: u32,
+    ) -> GpuResult<()> {
+        cmd.fill_zero(&buffers.vpls);
+        let mut bindings = scene.bindings();
+        bindings.push(bind("Vpls", &buffers.vpls));
+        bindings.push(bind("VplSchedule", &buffers.schedule));
+        let params = WalkParams {
+            path_count: buffers.layout.path_count,
+            vertex_count: buffers.layout.levels.len() as u32,
+            seed,
+            survival: buffers.layout.mean_albedo as f32,
+        };
+        self.0.dispatch(
+            cmd,
+            &bindings,
+            &params,
+            [buffers.layout.path_count.div_ceil(64), 1, 1],
+        )
+    }
+}
