@@ -70,6 +70,26 @@ pub fn build(file: &str, c: &CameraFile) -> Result<Camera, SceneError> {
     })
 }
 
+impl Camera {
+    /// (forward, right, true_up), unit vectors, as the `Camera` doc defines them.
+    pub fn basis(&self) -> (Vec3, Vec3, Vec3) {
+        let forward = (self.look_at - self.position).normalize();
+        let right = forward.cross(self.up).normalize();
+        (forward, right, right.cross(forward))
+    }
+
+    /// The unit direction through image point (x, y) in pixels (pixel (i, j) covers
+    /// [i, i + 1) x [j, j + 1), y down), as write_gbuffer.comp computes it.
+    pub fn direction(&self, x: f32, y: f32) -> Vec3 {
+        let (forward, right, up) = self.basis();
+        let t = (self.fov_y.to_radians() * 0.5).tan();
+        let (w, h) = (self.width as f32, self.height as f32);
+        let a = (2.0 * x / w - 1.0) * t * w / h;
+        let b = (1.0 - 2.0 * y / h) * t;
+        (forward + a * right + b * up).normalize()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -130,25 +150,5 @@ mod tests {
             ..camera()
         });
         assert!(m.contains("camera.position = [NaN, 0, 0]"), "{m}");
-    }
-}
-
-impl Camera {
-    /// (forward, right, true_up), unit vectors, as the `Camera` doc defines them.
-    pub fn basis(&self) -> (Vec3, Vec3, Vec3) {
-        let forward = (self.look_at - self.position).normalize();
-        let right = forward.cross(self.up).normalize();
-        (forward, right, right.cross(forward))
-    }
-
-    /// The unit direction through image point (x, y) in pixels (pixel (i, j) covers
-    /// [i, i + 1) x [j, j + 1), y down), as write_gbuffer.comp computes it.
-    pub fn direction(&self, x: f32, y: f32) -> Vec3 {
-        let (forward, right, up) = self.basis();
-        let t = (self.fov_y.to_radians() * 0.5).tan();
-        let (w, h) = (self.width as f32, self.height as f32);
-        let a = (2.0 * x / w - 1.0) * t * w / h;
-        let b = (1.0 - 2.0 * y / h) * t;
-        (forward + a * right + b * up).normalize()
     }
 }
