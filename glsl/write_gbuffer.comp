@@ -15,15 +15,16 @@ layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 layout(push_constant) uniform FrameParams {
     uint frame;
     uint seed;
-    uint _pad0;
-    uint _pad1;
+    uint centred;  // 1: every frame samples pixel centres (no antialiasing)
+    uint _pad;
 } params;
 
 void main() {
     uvec2 pixel = gl_GlobalInvocationID.xy;
     if (pixel.x >= scene.size.x || pixel.y >= scene.size.y) return;
     uint index = pixel.y * scene.size.x + pixel.x;
-    vec2 subpixel = subpixel_position(params.seed, index, params.frame);
+    vec2 subpixel = params.centred != 0u ? vec2(0.5)
+                                         : subpixel_position(params.seed, index, params.frame);
     vec3 direction = camera_direction(pixel, subpixel);
     vec3 origin = scene.camera_position.xyz;
 

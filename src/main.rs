@@ -9,6 +9,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 
 use irad::bench::scan as scan_bench;
 use irad::gpu::{self, Context, ContextOptions, DeviceInfo, DeviceSelector, Validation};
+use irad::methods::gbuffer::PixelSampling;
 use irad::methods::ir::schedule::Absorption;
 use irad::methods::ir::{DirectLight, IrSettings};
 use irad::methods::reference::ReferenceSettings;
@@ -104,6 +105,10 @@ struct RenderArgs {
     /// Output stem: writes OUT.exr, OUT.png and OUT.json [default: out/<scene name>].
     #[arg(short, long, value_name = "OUT")]
     out: Option<PathBuf>,
+    /// Sample every pixel at its centre instead of over its area (no antialiasing): for
+    /// comparing methods without pixel-footprint noise (use it for the reference too).
+    #[arg(long)]
+    pixel_centres: bool,
     /// Exposure of the PNG in stops (the EXR is never tone mapped).
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
     exposure: f32,
@@ -275,12 +280,18 @@ fn render(options: &ContextOptions, args: RenderArgs) -> Result<()> {
         eprintln!("warning: {w}");
     }
     let ctx = Context::new(options)?;
+    let pixels = if args.pixel_centres {
+        PixelSampling::Centres
+    } else {
+        PixelSampling::Jittered
+    };
     let method = match args.method {
         MethodArg::Reference => Method::Reference(ReferenceSettings {
             spp: args.spp,
             seed: args.seed,
             max_depth: args.max_depth,
             roulette_depth: args.roulette_depth,
+            pixels,
         }),
         MethodArg::Ir => Method::Ir(IrSettings {
             paths: args.vpls,
@@ -296,6 +307,7 @@ fn render(options: &ContextOptions, args: RenderArgs) -> Result<()> {
                 DirectArg::Nee => DirectLight::NextEvent,
                 DirectArg::Vpl => DirectLight::Vpl,
             },
+            pixels,
         }),
     };
     let out = args

@@ -10,6 +10,7 @@ use serde_json::json;
 
 use crate::gpu::{Context, PassTotals};
 use crate::image::{self, exr, Image, Metrics, PassRecord, RenderRecord};
+use crate::methods::gbuffer::PixelSampling;
 use crate::methods::ir::schedule::Absorption;
 use crate::methods::ir::{DirectLight, InstantRadiosity, IrSettings};
 use crate::methods::reference::{Reference, ReferenceSettings};
@@ -44,6 +45,10 @@ impl Method {
                 p.insert("spp".into(), json!(s.spp));
                 p.insert("max_depth".into(), json!(s.max_depth));
                 p.insert("roulette_depth".into(), json!(s.roulette_depth));
+                p.insert(
+                    "pixel_centres".into(),
+                    json!(s.pixels == PixelSampling::Centres),
+                );
             }
             Method::Ir(s) => {
                 p.insert("vpl_paths".into(), json!(s.paths));
@@ -60,6 +65,10 @@ impl Method {
                     p.insert("geometry_clamp".into(), json!(s.g_clamp));
                 }
                 p.insert("interleave".into(), json!(s.interleave));
+                p.insert(
+                    "pixel_centres".into(),
+                    json!(s.pixels == PixelSampling::Centres),
+                );
                 p.insert(
                     "direct".into(),
                     json!(match s.direct {

@@ -24,7 +24,20 @@ pub struct GBufferTexel {
 struct FrameParams {
     frame: u32,
     seed: u32,
-    _pad: [u32; 2],
+    centred: u32,
+    _pad: u32,
+}
+
+/// Where in each pixel the camera rays go.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum PixelSampling {
+    /// Low-discrepancy positions over the pixel, a new one each frame: the box-filtered
+    /// pixel average (DESIGN.md "Pixels").
+    #[default]
+    Jittered,
+    /// The pixel centre every frame: no antialiasing, so two methods compared at the same
+    /// setting differ only by their light transport, not by pixel-footprint noise.
+    Centres,
 }
 
 pub struct GBuffer {
@@ -54,13 +67,15 @@ impl WriteGBuffer {
         gbuffer: &'a GBuffer,
         frame: u32,
         seed: u32,
+        sampling: PixelSampling,
     ) -> GpuResult<()> {
         let mut bindings = scene.bindings();
         bindings.push(bind("GBuffer", &gbuffer.texels));
         let params = FrameParams {
             frame,
             seed,
-            _pad: [0; 2],
+            centred: u32::from(sampling == PixelSampling::Centres),
+            _pad: 0,
         };
         self.0.dispatch(
             cmd,

@@ -11,7 +11,7 @@ use crate::image::Image;
 use crate::scene::gpu::GpuScene;
 
 use super::accumulation::Accumulation;
-use super::gbuffer::{GBuffer, WriteGBuffer};
+use super::gbuffer::{GBuffer, PixelSampling, WriteGBuffer};
 use super::paths::TracePaths;
 use super::progressive;
 
@@ -24,6 +24,7 @@ pub struct ReferenceSettings {
     pub max_depth: u32,
     /// First bounce at which Russian roulette may end a path.
     pub roulette_depth: u32,
+    pub pixels: PixelSampling,
 }
 
 impl Default for ReferenceSettings {
@@ -33,6 +34,7 @@ impl Default for ReferenceSettings {
             seed: 0,
             max_depth: 1024,
             roulette_depth: 3,
+            pixels: PixelSampling::Jittered,
         }
     }
 }
@@ -79,7 +81,7 @@ impl Reference {
             |cmd, frame| {
                 cmd.pass("gbuffer", |cmd| {
                     self.gbuffer
-                        .record(cmd, scene, &gbuffer, frame, settings.seed)
+                        .record(cmd, scene, &gbuffer, frame, settings.seed, settings.pixels)
                 })?;
                 cmd.pass("reference paths", |cmd| {
                     self.paths.record(

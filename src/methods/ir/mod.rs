@@ -13,7 +13,7 @@ use thiserror::Error;
 
 use crate::gpu::{Context, GpuError};
 use crate::methods::accumulation::Accumulation;
-use crate::methods::gbuffer::{GBuffer, WriteGBuffer};
+use crate::methods::gbuffer::{GBuffer, PixelSampling, WriteGBuffer};
 use crate::methods::paths::TracePaths;
 use crate::methods::progressive;
 use crate::methods::reference::RenderOutput;
@@ -45,6 +45,7 @@ pub struct IrSettings {
     pub g_clamp: f32,
     pub interleave: u32,
     pub direct: DirectLight,
+    pub pixels: PixelSampling,
 }
 
 impl Default for IrSettings {
@@ -57,6 +58,7 @@ impl Default for IrSettings {
             g_clamp: 0.0,
             interleave: 1,
             direct: DirectLight::NextEvent,
+            pixels: PixelSampling::Jittered,
         }
     }
 }
@@ -121,8 +123,14 @@ impl InstantRadiosity {
             &accumulation,
             |cmd, frame| {
                 cmd.pass("gbuffer", |cmd| {
-                    self.gbuffer
-                        .record(cmd, gpu_scene, &gbuffer, frame, settings.seed)
+                    self.gbuffer.record(
+                        cmd,
+                        gpu_scene,
+                        &gbuffer,
+                        frame,
+                        settings.seed,
+                        settings.pixels,
+                    )
                 })?;
                 cmd.pass("direct light", |cmd| {
                     self.paths.record(
