@@ -5,7 +5,8 @@
 // any-hit shadow ray. Optional clamp of the geometry term (Keller's weak singularity; biased,
 // off unless g_clamp > 0). Interleaved sampling (Keller and Heidrich 2001): with k > 1, pixel
 // (x, y) shades only the VPLs of subset (x mod k) + k (y mod k), VPL v being in subset
-// v mod k^2, weighted by k^2; filter_interleaved.comp restores a full estimate.
+// v mod k^2, weighted by k^2, and writes VplRadiance instead of accumulating:
+// filter_interleaved.comp restores a full estimate per pixel and accumulates it.
 
 #extension GL_GOOGLE_include_directive : require
 
@@ -26,6 +27,9 @@ layout(push_constant) uniform GatherParams {
     float g_clamp;    // 0: no clamp; else the geometry term is min(G, g_clamp)
     uint interleave;  // k (1: every pixel shades every VPL)
 } params;
+
+// Each pixel's interleaved estimate of this frame (k > 1 only).
+layout(set = 0, binding = 15, std430) writeonly buffer VplRadiance { vec4 vpl_radiance[]; };
 
 #define CHUNK 64u
 shared Vpl chunk[CHUNK];
@@ -109,5 +113,10 @@ void main() {
         }
         barrier();
     }
-    if (inside) accumulate_radiance(index, sum * float(subsets));
+    if (!inside) return;
+    if (k == 1u) {
+        accumulate_radiance(index, sum);
+    } else {
+        vpl_radiance[index] = vec4(sum * float(subsets), 0.0);
+    }
 }

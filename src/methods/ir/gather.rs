@@ -5,7 +5,9 @@ use std::ops::Range;
 
 use bytemuck::{Pod, Zeroable};
 
-use crate::gpu::{bind, Commands, Context, GpuResult, Kernel};
+use glam::Vec4;
+
+use crate::gpu::{bind, Buffer, Commands, Context, GpuResult, Kernel};
 use crate::methods::accumulation::Accumulation;
 use crate::methods::gbuffer::GBuffer;
 use crate::scene::gpu::GpuScene;
@@ -28,7 +30,9 @@ impl AccumulateVpls {
         Ok(AccumulateVpls(Kernel::new(ctx, "accumulate_vpls_tiled")?))
     }
 
-    /// Shades the VPL slots `slots`; `g_clamp` 0 leaves the geometry term unclamped.
+    /// Shades the VPL slots `slots`; `g_clamp` 0 leaves the geometry term unclamped. With
+    /// `interleave` 1 it adds into `accumulation`; above, it writes `vpl_radiance` for the
+    /// filter.
     #[allow(clippy::too_many_arguments)]
     pub fn record<'a>(
         &'a self,
@@ -37,6 +41,7 @@ impl AccumulateVpls {
         gbuffer: &'a GBuffer,
         vpls: &'a VplBuffers,
         accumulation: &'a Accumulation,
+        vpl_radiance: &'a Buffer<Vec4>,
         slots: Range<u32>,
         g_clamp: f32,
         interleave: u32,
@@ -45,6 +50,7 @@ impl AccumulateVpls {
         bindings.push(bind("GBuffer", &gbuffer.texels));
         bindings.extend(accumulation.bindings());
         bindings.push(bind("Vpls", &vpls.vpls));
+        bindings.push(bind("VplRadiance", vpl_radiance));
         let params = GatherParams {
             vpl_begin: slots.start,
             vpl_end: slots.end,

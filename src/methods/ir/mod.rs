@@ -3,6 +3,7 @@
 //! `--direct vpl`), a fresh set of VPLs from the quasi-random walk, and the tiled gathering of
 //! every (pixel, VPL) pair. Frames accumulate with fresh subpixel positions and VPL sets.
 
+pub mod filter;
 pub mod gather;
 pub mod schedule;
 pub mod walk;
@@ -11,7 +12,7 @@ use std::time::Instant;
 
 use thiserror::Error;
 
-use crate::gpu::{Context, GpuError};
+use crate::gpu::{Buffer, Context, GpuError};
 use crate::methods::accumulation::Accumulation;
 use crate::methods::gbuffer::{GBuffer, PixelSampling, WriteGBuffer};
 use crate::methods::paths::TracePaths;
@@ -21,6 +22,7 @@ use crate::sampling::pcg;
 use crate::scene::gpu::GpuScene;
 use crate::scene::Scene;
 
+use filter::FilterInterleaved;
 use gather::AccumulateVpls;
 use schedule::{mean_albedo, Absorption, Schedule};
 use walk::{TraceVpls, VplBuffers};
@@ -76,6 +78,7 @@ pub struct InstantRadiosity {
     paths: TracePaths,
     walk: TraceVpls,
     gather: AccumulateVpls,
+    filter: FilterInterleaved,
 }
 
 impl InstantRadiosity {
@@ -85,6 +88,7 @@ impl InstantRadiosity {
             paths: TracePaths::new(ctx)?,
             walk: TraceVpls::new(ctx)?,
             gather: AccumulateVpls::new(ctx)?,
+            filter: FilterInterleaved::new(ctx)?,
         })
     }
 
@@ -108,6 +112,16 @@ impl InstantRadiosity {
         let gbuffer = GBuffer::new(ctx, gpu_scene)?;
         let accumulation = Accumulation::new(ctx, gpu_scene.width, gpu_scene.height)?;
         let vpls = VplBuffers::new(ctx, Self::schedule(scene, settings))?;
+        let interleave = settings.interleave.max(1);
+        let vpl_radiance = Buffer::zeroed(
+            ctx,
+            "VplRadiance",
+            if interleave > 1 {
+                gpu_scene.pixel_count()
+            } else {
+                1
+            },
+        )?;
         let slots = match settings.direct {
             DirectLight::NextEvent => vpls.layout.surface_slots(),
             DirectLight::Vpl => 0..vpls.layout.slot_count,
@@ -155,11 +169,25 @@ impl InstantRadiosity {
                         &gbuffer,
                         &vpls,
                         &accumulation,
+                        &vpl_radiance,
                         slots.clone(),
                         settings.g_clamp,
-                        settings.interleave,
+                        interleave,
                     )
-                })
+                })?;
+                if interleave > 1 {
+                    cmd.pass("interleave filter", |cmd| {
+                        self.filter.record(
+                            cmd,
+                            gpu_scene,
+                            &gbuffer,
+                            &vpl_radiance,
+                            &accumulation,
+                            interleave,
+                        )
+                    })?;
+                }
+                Ok(())
             },
             progress,
         )?;
