@@ -150,6 +150,24 @@ enum Bench {
         #[arg(long, value_delimiter = ',', value_parser = parse_case)]
         sizes: Vec<scan_bench::ScanCase>,
     },
+    /// Instant radiosity's per-pass GPU times for a range of VPL budgets, and its gathering
+    /// throughput in (pixel, VPL) pairs/s next to the scene's incoherent any-hit ray rate.
+    Ir {
+        /// Scene file (default: the embedded Cornell box).
+        scene: Option<PathBuf>,
+        /// Paths per frame (Keller's N), comma separated.
+        #[arg(long, value_delimiter = ',', default_values_t = [64u32, 256, 1024, 4096])]
+        vpls: Vec<u32>,
+        /// Frames rendered per budget (the mean per frame is reported), after a warm-up.
+        #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..))]
+        frames: u32,
+        /// Interleaved sampling k.
+        #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=16))]
+        interleave: u32,
+        /// Random rays for the any-hit ray rate.
+        #[arg(long, default_value_t = 1 << 18)]
+        rays: usize,
+    },
     /// Rays/s of the GPU BVH traversal (closest and any hit; camera and random rays) next to
     /// obvhs's CWBVH on the CPU using every core, and the ratio GPU/CPU.
     Rays {
@@ -232,6 +250,34 @@ fn run(cli: Cli) -> Result<()> {
             }
             bar.finish_and_clear();
             scan_bench::print_table(&device_line(ctx.info()), &results);
+            Ok(())
+        }
+        Command::Bench(Bench::Ir {
+            scene,
+            vpls,
+            frames,
+            interleave,
+            rays,
+        }) => {
+            let scene = match scene {
+                Some(path) => scene::load(&path)?,
+                None => scene::default_scene(),
+            };
+            let ctx = Context::new(&options)?;
+            let bar = progress(vpls.len() as u64 + 2, "bench ir");
+            let report =
+                irad::bench::ir::run(&ctx, &scene, &vpls, frames, interleave, rays, |what| {
+                    bar.set_message(what.to_string());
+                    bar.inc(1);
+                })?;
+            bar.finish_and_clear();
+            irad::bench::ir::print_table(
+                &device_line(ctx.info()),
+                &render::scene_label(&scene),
+                scene.camera.width,
+                scene.camera.height,
+                &report,
+            );
             Ok(())
         }
         Command::Bench(Bench::Rays {
