@@ -22,11 +22,14 @@ pub struct IrRow {
     pub passes: Vec<(String, f64)>,
     pub accumulation_ms: f64,
     pub pixels: u64,
+    /// k: each pixel shades 1 / k^2 of the slots.
+    pub interleave: u32,
 }
 
 impl IrRow {
     pub fn pairs_per_s(&self) -> f64 {
-        self.pixels as f64 * self.slots as f64 / (self.accumulation_ms * 1e-3)
+        let shaded = self.slots as f64 / (self.interleave * self.interleave) as f64;
+        self.pixels as f64 * shaded / (self.accumulation_ms * 1e-3)
     }
 }
 
@@ -80,6 +83,7 @@ pub fn run(
             passes,
             accumulation_ms,
             pixels: gpu_scene.pixel_count() as u64,
+            interleave: interleave.max(1),
         });
     }
     progress("rays");
