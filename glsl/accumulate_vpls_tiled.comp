@@ -5,7 +5,7 @@
 // any-hit shadow ray. Optional clamp of the geometry term (Keller's weak singularity; biased,
 // off unless g_clamp > 0). Interleaved sampling (Keller and Heidrich 2001): with k > 1, pixel
 // (x, y) shades only the VPLs of subset (x mod k) + k (y mod k), VPL v being in subset
-// v mod k^2, weighted by k^2, and writes VplRadiance instead of accumulating:
+// v mod k^2, weighted by k^2, and adds into VplRadiance (cleared per frame) instead:
 // filter_interleaved.comp restores a full estimate per pixel and accumulates it.
 
 #extension GL_GOOGLE_include_directive : require
@@ -29,7 +29,7 @@ layout(push_constant) uniform GatherParams {
 } params;
 
 // Each pixel's interleaved estimate of this frame (k > 1 only).
-layout(set = 0, binding = 15, std430) writeonly buffer VplRadiance { vec4 vpl_radiance[]; };
+layout(set = 0, binding = 15, std430) buffer VplRadiance { vec4 vpl_radiance[]; };
 
 #define CHUNK 64u
 shared Vpl chunk[CHUNK];
@@ -103,6 +103,7 @@ void main() {
         } else {
             chunk[gl_LocalInvocationIndex].position = vec4(0.0, 0.0, 0.0, uintBitsToFloat(VPL_NONE));
         }
+        memoryBarrierShared();
         barrier();
         if (shading) {
             // The first slot of this chunk in my subset, then every subsets-th.
@@ -117,6 +118,6 @@ void main() {
     if (k == 1u) {
         accumulate_radiance(index, sum);
     } else {
-        vpl_radiance[index] = vec4(sum * float(subsets), 0.0);
+        vpl_radiance[index] += vec4(sum * float(subsets), 0.0);
     }
 }

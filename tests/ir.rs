@@ -254,3 +254,48 @@ fn error_falls_with_vpls_and_clamping_darkens_corners() {
         );
     });
 }
+
+/// Both absorption schemes are unbiased: inside a closed diffuse sphere lit by a point
+/// light (every path bounces until absorbed), the ir mean over 8 seeds is within 1% of the
+/// reference, with fractional absorption and with Russian roulette.
+#[test]
+fn fractional_and_roulette_absorption_match_the_reference() {
+    with_gpu(|ctx| {
+        let mut scene = scene(
+            "closed sphere",
+            camera(Vec3::ZERO, Vec3::new(0.3, -0.2, -1.0), Vec3::Y, 70.0, 24),
+            sphere(1.0, 12, 24, true, 0),
+            vec![material("wall", 0.6, 0.0, 1.0, 0.0)],
+        );
+        scene.lights.push(Light::Point {
+            position: Vec3::new(0.2, 0.3, 0.1),
+            intensity: Vec3::ONE,
+        });
+        let r = luminance_mean(&reference(ctx, &scene, 1024, PixelSampling::Jittered));
+        for absorption in [Absorption::Fractional, Absorption::Roulette] {
+            let means: Vec<f64> = (0..8)
+                .map(|seed| {
+                    let settings = IrSettings {
+                        paths: 1024,
+                        frames: 4,
+                        seed,
+                        absorption,
+                        ..Default::default()
+                    };
+                    luminance_mean(&ir(ctx, &scene, &settings))
+                })
+                .collect();
+            let (mean, stderr) = mean_and_stderr(&means);
+            eprintln!(
+                "{absorption:?}: ir mean / reference mean = {:.5} (standard error {:.5})",
+                mean / r,
+                stderr / r
+            );
+            assert!(stderr / r < 0.004, "too noisy to test at 1%");
+            assert!(
+                (mean / r - 1.0).abs() < 0.01,
+                "{absorption:?}: {mean} vs {r}"
+            );
+        }
+    });
+}
