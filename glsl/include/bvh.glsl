@@ -23,7 +23,7 @@
 //   compare-and-select slab min/max instead of GLSL min/max: kept (3% fewer instructions)
 //   subgroup-cooperative, one ray per subgroup, child j per lane (as obvhs's CPU SIMD):
 //     0.3-0.45x (loads at subgroup-uniform addresses still loop over the lanes on lavapipe,
-//     and a shared step costs over half a full 8-ray step; branch bvh2 kept the code)
+//     and a shared step costs over half a full 8-ray step; not kept)
 #ifndef BVH_GLSL
 #define BVH_GLSL
 
