@@ -77,11 +77,7 @@ impl WriteGBuffer {
             centred: u32::from(sampling == PixelSampling::Centres),
             _pad: 0,
         };
-        self.0.dispatch(
-            cmd,
-            &bindings,
-            &params,
-            [scene.width.div_ceil(8), scene.height.div_ceil(8), 1],
-        )
+        self.0
+            .dispatch(cmd, &bindings, &params, scene.image_workgroups())
     }
 }

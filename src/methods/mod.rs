@@ -7,3 +7,16 @@ pub mod ir;
 pub mod paths;
 pub mod progressive;
 pub mod reference;
+
+use crate::gpu::PassTotals;
+use crate::image::Image;
+
+/// What every method returns.
+pub struct RenderOutput {
+    pub image: Image,
+    pub passes: PassTotals,
+    /// Wall clock of the whole render on the host, submissions and waits included.
+    pub wall_ms: f64,
+    /// Per-pixel estimates that were NaN or Inf and were dropped (0 in a correct run).
+    pub nonfinite_estimates: u32,
+}

@@ -49,11 +49,7 @@ impl TracePaths {
             max_depth,
             roulette_depth,
         };
-        self.0.dispatch(
-            cmd,
-            &bindings,
-            &params,
-            [scene.width.div_ceil(8), scene.height.div_ceil(8), 1],
-        )
+        self.0
+            .dispatch(cmd, &bindings, &params, scene.image_workgroups())
     }
 }

@@ -6,14 +6,14 @@
 
 use std::time::Instant;
 
-use crate::gpu::{Context, GpuResult, PassTotals};
-use crate::image::Image;
+use crate::gpu::{Context, GpuResult};
 use crate::scene::gpu::GpuScene;
 
 use super::accumulation::Accumulation;
 use super::gbuffer::{GBuffer, PixelSampling, WriteGBuffer};
 use super::paths::TracePaths;
 use super::progressive;
+use super::RenderOutput;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ReferenceSettings {
@@ -37,15 +37,6 @@ impl Default for ReferenceSettings {
             pixels: PixelSampling::Jittered,
         }
     }
-}
-
-pub struct RenderOutput {
-    pub image: Image,
-    pub passes: PassTotals,
-    /// Wall clock of the whole render on the host, submissions and waits included.
-    pub wall_ms: f64,
-    /// Per-pixel estimates that were NaN or Inf and were dropped (0 in a correct run).
-    pub nonfinite_estimates: u32,
 }
 
 pub struct Reference {

@@ -344,6 +344,11 @@ impl GpuScene {
         b
     }
 
+    /// Workgroups of an 8 x 8 image kernel over the frame.
+    pub fn image_workgroups(&self) -> [u32; 3] {
+        [self.width.div_ceil(8), self.height.div_ceil(8), 1]
+    }
+
     pub fn pixel_count(&self) -> usize {
         self.width as usize * self.height as usize
     }

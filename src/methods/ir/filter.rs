@@ -50,11 +50,7 @@ impl FilterInterleaved {
             normal_tolerance: NORMAL_TOLERANCE,
             _pad: 0,
         };
-        self.0.dispatch(
-            cmd,
-            &bindings,
-            &params,
-            [scene.width.div_ceil(8), scene.height.div_ceil(8), 1],
-        )
+        self.0
+            .dispatch(cmd, &bindings, &params, scene.image_workgroups())
     }
 }

@@ -71,12 +71,8 @@ impl AccumulateVpls {
                 g_clamp,
                 interleave: interleave.max(1),
             };
-            self.0.dispatch(
-                cmd,
-                &bindings,
-                &params,
-                [scene.width.div_ceil(8), scene.height.div_ceil(8), 1],
-            )?;
+            self.0
+                .dispatch(cmd, &bindings, &params, scene.image_workgroups())?;
             begin = end;
         }
         Ok(())

@@ -17,7 +17,7 @@ use crate::methods::accumulation::Accumulation;
 use crate::methods::gbuffer::{GBuffer, PixelSampling, WriteGBuffer};
 use crate::methods::paths::TracePaths;
 use crate::methods::progressive;
-use crate::methods::reference::RenderOutput;
+use crate::methods::RenderOutput;
 use crate::sampling::pcg;
 use crate::scene::gpu::GpuScene;
 use crate::scene::Scene;
