@@ -2,92 +2,15 @@
 //! run the chosen method, write `<out>.exr`, `<out>.png` and `<out>.json`, and score the image
 //! against a reference when one is given. `irad render` is a thin shell over this.
 
-use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context as _, Result};
-use serde_json::json;
 
 use crate::gpu::{Context, PassTotals};
 use crate::image::{self, exr, Image, Metrics, PassRecord, RenderRecord};
-use crate::methods::gbuffer::PixelSampling;
-use crate::methods::ir::schedule::Absorption;
-use crate::methods::ir::{DirectLight, InstantRadiosity, IrSettings};
-use crate::methods::reference::{Reference, ReferenceSettings};
+use crate::methods::{Method, Renderers};
 use crate::scene::gpu::GpuScene;
 use crate::scene::Scene;
-
-#[derive(Clone, Debug)]
-pub enum Method {
-    Reference(ReferenceSettings),
-    Ir(IrSettings),
-}
-
-impl Method {
-    pub fn name(&self) -> &'static str {
-        match self {
-            Method::Reference(_) => "reference",
-            Method::Ir(_) => "ir",
-        }
-    }
-
-    pub fn seed(&self) -> u32 {
-        match self {
-            Method::Reference(s) => s.seed,
-            Method::Ir(s) => s.seed,
-        }
-    }
-
-    fn parameters(&self) -> BTreeMap<String, serde_json::Value> {
-        let mut p = BTreeMap::new();
-        match self {
-            Method::Reference(s) => {
-                p.insert("spp".into(), json!(s.spp));
-                p.insert("max_depth".into(), json!(s.max_depth));
-                p.insert("roulette_depth".into(), json!(s.roulette_depth));
-                p.insert(
-                    "pixel_centres".into(),
-                    json!(s.pixels == PixelSampling::Centres),
-                );
-            }
-            Method::Ir(s) => {
-                p.insert("vpl_paths".into(), json!(s.paths));
-                p.insert("frames".into(), json!(s.frames));
-                p.insert(
-                    "absorption".into(),
-                    json!(match s.absorption {
-                        Absorption::Fractional => "fractional",
-                        Absorption::Roulette => "roulette",
-                    }),
-                );
-                // The clamp is recorded only when on: it is a named, measured bias.
-                if s.g_clamp > 0.0 {
-                    p.insert("geometry_clamp".into(), json!(s.g_clamp));
-                }
-                p.insert("interleave".into(), json!(s.interleave));
-                p.insert(
-                    "pixel_centres".into(),
-                    json!(s.pixels == PixelSampling::Centres),
-                );
-                p.insert(
-                    "direct".into(),
-                    json!(match s.direct {
-                        DirectLight::NextEvent => "nee",
-                        DirectLight::Vpl => "vpl",
-                    }),
-                );
-            }
-        }
-        p
-    }
-
-    fn samples(&self) -> u64 {
-        match self {
-            Method::Reference(s) => s.spp as u64,
-            Method::Ir(s) => s.frames as u64,
-        }
-    }
-}
 
 pub struct RenderJob<'a> {
     pub scene: &'a Scene,
@@ -150,14 +73,7 @@ pub fn render(
         .transpose()?;
     let gpu_scene = GpuScene::upload(ctx, job.scene).context("uploading the scene")?;
     let mut warnings = job.scene.warnings.clone();
-    let output = match &job.method {
-        Method::Reference(settings) => {
-            Reference::new(ctx)?.render(ctx, &gpu_scene, settings, progress)?
-        }
-        Method::Ir(settings) => {
-            InstantRadiosity::new(ctx)?.render(ctx, job.scene, &gpu_scene, settings, progress)?
-        }
-    };
+    let output = Renderers::default().run(ctx, &job.method, job.scene, &gpu_scene, progress)?;
     if output.nonfinite_estimates > 0 {
         warnings.push(format!(
             "{} per-pixel estimates were NaN or Inf and were dropped (counted as black)",

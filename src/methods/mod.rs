@@ -4,9 +4,12 @@
 pub mod accumulation;
 pub mod gbuffer;
 pub mod ir;
+pub mod method;
 pub mod paths;
 pub mod progressive;
 pub mod reference;
+
+pub use method::{Method, Renderers, RunError, METHOD_NAMES};
 
 use crate::gpu::PassTotals;
 use crate::image::Image;

@@ -1,0 +1,398 @@
+//! The methods by name: one `Method` value holds a method and all its settings, reads them
+//! from named parameters (the vocabulary of `irad render`'s flags, used by suite files), lists
+//! them for records, says when a method declines a scene, and runs it. `Renderers` keeps each
+//! method's kernels, built on first use, so a benchmark that renders many times compiles its
+//! pipelines once.
+
+use std::cell::OnceCell;
+use std::collections::BTreeMap;
+
+use serde_json::json;
+use thiserror::Error;
+
+use crate::gpu::{Context, GpuError};
+use crate::methods::gbuffer::PixelSampling;
+use crate::methods::ir::schedule::Absorption;
+use crate::methods::ir::{DirectLight, InstantRadiosity, IrError, IrSettings};
+use crate::methods::reference::{Reference, ReferenceSettings};
+use crate::methods::RenderOutput;
+use crate::scene::gpu::GpuScene;
+use crate::scene::Scene;
+
+/// Every method irad has, by the name `--method` and suite files use.
+pub const METHOD_NAMES: &[&str] = &["reference", "ir"];
+
+#[derive(Clone, Debug, PartialEq)]
+pub enum Method {
+    Reference(ReferenceSettings),
+    Ir(IrSettings),
+}
+
+/// A parameter a method cannot take: `method: key = value: problem`.
+#[derive(Debug, Error, PartialEq)]
+pub enum ParamError {
+    #[error("unknown method `{0}` (irad has: {names})", names = METHOD_NAMES.join(", "))]
+    UnknownMethod(String),
+    #[error("{method}: {key} = {value}: {problem}")]
+    Value {
+        method: String,
+        key: String,
+        value: String,
+        problem: String,
+    },
+}
+
+impl Method {
+    pub fn name(&self) -> &'static str {
+        match self {
+            Method::Reference(_) => "reference",
+            Method::Ir(_) => "ir",
+        }
+    }
+
+    pub fn seed(&self) -> u32 {
+        match self {
+            Method::Reference(s) => s.seed,
+            Method::Ir(s) => s.seed,
+        }
+    }
+
+    /// The same method and settings with another seed.
+    pub fn with_seed(&self, seed: u32) -> Method {
+        let mut m = self.clone();
+        match &mut m {
+            Method::Reference(s) => s.seed = seed,
+            Method::Ir(s) => s.seed = seed,
+        }
+        m
+    }
+
+    /// Samples as the method counts them, for progress: samples per pixel, or frames.
+    pub fn samples(&self) -> u64 {
+        match self {
+            Method::Reference(s) => s.spp as u64,
+            Method::Ir(s) => s.frames as u64,
+        }
+    }
+
+    /// The method's settings by the names `from_params` reads (the seed apart), sorted, so a
+    /// record's parameters can be fed back. A bias that is off is not listed.
+    pub fn parameters(&self) -> BTreeMap<String, serde_json::Value> {
+        let mut p = BTreeMap::new();
+        match self {
+            Method::Reference(s) => {
+                p.insert("spp".into(), json!(s.spp));
+                p.insert("max_depth".into(), json!(s.max_depth));
+                p.insert("roulette_depth".into(), json!(s.roulette_depth));
+                p.insert(
+                    "pixel_centres".into(),
+                    json!(s.pixels == PixelSampling::Centres),
+                );
+            }
+            Method::Ir(s) => {
+                p.insert("vpls".into(), json!(s.paths));
+                p.insert("frames".into(), json!(s.frames));
+                p.insert(
+                    "absorption".into(),
+                    json!(match s.absorption {
+                        Absorption::Fractional => "fractional",
+                        Absorption::Roulette => "roulette",
+                    }),
+                );
+                // The clamp is recorded only when on: it is a named, measured bias.
+                if s.g_clamp > 0.0 {
+                    p.insert("clamp".into(), json!(s.g_clamp));
+                }
+                p.insert("interleave".into(), json!(s.interleave));
+                p.insert(
+                    "pixel_centres".into(),
+                    json!(s.pixels == PixelSampling::Centres),
+                );
+                p.insert(
+                    "direct".into(),
+                    json!(match s.direct {
+                        DirectLight::NextEvent => "nee",
+                        DirectLight::Vpl => "vpl",
+                    }),
+                );
+            }
+        }
+        p
+    }
+
+    /// `name` with `params` over its defaults (those of `irad render`). Keys are the flags of
+    /// `irad render` with `-` written `_`: reference takes spp, max_depth, roulette_depth,
+    /// pixel_centres, seed; ir takes vpls, frames, absorption, clamp, interleave, direct,
+    /// pixel_centres, seed.
+    pub fn from_params(name: &str, params: &toml::Table) -> Result<Method, ParamError> {
+        let mut reader = Params {
+            method: name,
+            params,
+        };
+        let method = match name {
+            "reference" => {
+                let d = ReferenceSettings::default();
+                Method::Reference(ReferenceSettings {
+                    spp: reader.uint("spp", d.spp, 1, u32::MAX)?,
+                    seed: reader.uint("seed", d.seed, 0, u32::MAX)?,
+                    max_depth: reader.uint("max_depth", d.max_depth, 1, u32::MAX)?,
+                    roulette_depth: reader.uint("roulette_depth", d.roulette_depth, 0, u32::MAX)?,
+                    pixels: reader.pixels()?,
+                })
+            }
+            "ir" => {
+                let d = IrSettings::default();
+                Method::Ir(IrSettings {
+                    paths: reader.uint("vpls", d.paths, 1, 1 << 20)?,
+                    frames: reader.uint("frames", d.frames, 1, u32::MAX)?,
+                    seed: reader.uint("seed", d.seed, 0, u32::MAX)?,
+                    absorption: match reader.choice("absorption", &["fractional", "roulette"])? {
+                        Some("roulette") => Absorption::Roulette,
+                        Some(_) => Absorption::Fractional,
+                        None => d.absorption,
+                    },
+                    g_clamp: reader.non_negative("clamp", d.g_clamp)?,
+                    interleave: reader.uint("interleave", d.interleave, 1, 16)?,
+                    direct: match reader.choice("direct", &["nee", "vpl"])? {
+                        Some("vpl") => DirectLight::Vpl,
+                        Some(_) => DirectLight::NextEvent,
+                        None => d.direct,
+                    },
+                    pixels: reader.pixels()?,
+                })
+            }
+            _ => return Err(ParamError::UnknownMethod(name.to_string())),
+        };
+        reader.refuse_unknown()?;
+        Ok(method)
+    }
+
+    /// Why this method cannot render `scene`, in one line, or None when it can.
+    pub fn declines(&self, scene: &Scene) -> Option<String> {
+        match self {
+            Method::Reference(_) => None,
+            Method::Ir(_) => scene
+                .environment
+                .is_some()
+                .then(|| IrError::Environment.to_string()),
+        }
+    }
+}
+
+/// Reads typed values out of a parameter table, for `Method::from_params`.
+struct Params<'a> {
+    method: &'a str,
+    params: &'a toml::Table,
+}
+
+impl<'a> Params<'a> {
+    fn error(&self, key: &str, value: &toml::Value, problem: impl Into<String>) -> ParamError {
+        ParamError::Value {
+            method: self.method.to_string(),
+            key: key.to_string(),
+            value: value.to_string(),
+            problem: problem.into(),
+        }
+    }
+
+    fn uint(&mut self, key: &str, default: u32, min: u32, max: u32) -> Result<u32, ParamError> {
+        let Some(v) = self.params.get(key) else {
+            return Ok(default);
+        };
+        match v.as_integer() {
+            Some(i) if i >= min as i64 && i <= max as i64 => Ok(i as u32),
+            Some(_) => Err(self.error(key, v, format!("must be in {min}..={max}"))),
+            None => Err(self.error(key, v, "expected an integer")),
+        }
+    }
+
+    fn non_negative(&mut self, key: &str, default: f32) -> Result<f32, ParamError> {
+        let Some(v) = self.params.get(key) else {
+            return Ok(default);
+        };
+        let x = match v {
+            toml::Value::Float(f) => *f,
+            toml::Value::Integer(i) => *i as f64,
+            _ => return Err(self.error(key, v, "expected a number")),
+        };
+        if !(x.is_finite() && x >= 0.0) {
+            return Err(self.error(key, v, "must be a finite number >= 0"));
+        }
+        Ok(x as f32)
+    }
+
+    fn choice(&mut self, key: &str, choices: &[&'a str]) -> Result<Option<&'a str>, ParamError> {
+        let Some(v) = self.params.get(key) else {
+            return Ok(None);
+        };
+        let expected = || {
+            let quoted: Vec<String> = choices.iter().map(|c| format!("\"{c}\"")).collect();
+            format!("expected one of {}", quoted.join(", "))
+        };
+        match v.as_str() {
+            Some(s) => match choices.iter().find(|c| **c == s) {
+                Some(c) => Ok(Some(*c)),
+                None => Err(self.error(key, v, expected())),
+            },
+            None => Err(self.error(key, v, expected())),
+        }
+    }
+
+    fn pixels(&mut self) -> Result<PixelSampling, ParamError> {
+        let Some(v) = self.params.get("pixel_centres") else {
+            return Ok(PixelSampling::Jittered);
+        };
+        match v.as_bool() {
+            Some(true) => Ok(PixelSampling::Centres),
+            Some(false) => Ok(PixelSampling::Jittered),
+            None => Err(self.error("pixel_centres", v, "expected true or false")),
+        }
+    }
+
+    fn refuse_unknown(&self) -> Result<(), ParamError> {
+        let known: &[&str] = match self.method {
+            "reference" => &[
+                "spp",
+                "seed",
+                "max_depth",
+                "roulette_depth",
+                "pixel_centres",
+            ],
+            _ => &[
+                "vpls",
+                "frames",
+                "seed",
+                "absorption",
+                "clamp",
+                "interleave",
+                "direct",
+                "pixel_centres",
+            ],
+        };
+        match self
+            .params
+            .iter()
+            .find(|(k, _)| !known.contains(&k.as_str()))
+        {
+            Some((k, v)) => Err(self.error(
+                k,
+                v,
+                format!("unknown parameter (known: {})", known.join(", ")),
+            )),
+            None => Ok(()),
+        }
+    }
+}
+
+/// Each method's kernels, built the first time the method runs.
+#[derive(Default)]
+pub struct Renderers {
+    reference: OnceCell<Reference>,
+    ir: OnceCell<InstantRadiosity>,
+}
+
+#[derive(Debug, Error)]
+pub enum RunError {
+    #[error("{0}")]
+    Declined(String),
+    #[error(transparent)]
+    Gpu(#[from] GpuError),
+}
+
+impl Renderers {
+    /// Renders `scene` (uploaded as `gpu_scene`) with `method`, calling `progress(done, total)`
+    /// as samples complete.
+    pub fn run(
+        &self,
+        ctx: &Context,
+        method: &Method,
+        scene: &Scene,
+        gpu_scene: &GpuScene,
+        progress: impl FnMut(u32, u32),
+    ) -> Result<RenderOutput, RunError> {
+        if let Some(why) = method.declines(scene) {
+            return Err(RunError::Declined(why));
+        }
+        match method {
+            Method::Reference(settings) => {
+                let r = get_or_try_init(&self.reference, || Reference::new(ctx))?;
+                Ok(r.render(ctx, gpu_scene, settings, progress)?)
+            }
+            Method::Ir(settings) => {
+                let ir = get_or_try_init(&self.ir, || InstantRadiosity::new(ctx))?;
+                ir.render(ctx, scene, gpu_scene, settings, progress)
+                    .map_err(|e| match e {
+                        IrError::Environment => RunError::Declined(e.to_string()),
+                        IrError::Gpu(g) => RunError::Gpu(g),
+                    })
+            }
+        }
+    }
+}
+
+/// `OnceCell::get_or_try_init` is not stable yet.
+fn get_or_try_init<T>(
+    cell: &OnceCell<T>,
+    init: impl FnOnce() -> Result<T, GpuError>,
+) -> Result<&T, GpuError> {
+    if let Some(v) = cell.get() {
+        return Ok(v);
+    }
+    let v = init()?;
+    Ok(cell.get_or_init(|| v))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn table(text: &str) -> toml::Table {
+        toml::from_str(text).unwrap()
+    }
+
+    #[test]
+    fn parameters_read_back_to_the_same_method() {
+        let ir = Method::from_params(
+            "ir",
+            &table("vpls = 64\nframes = 3\nabsorption = \"roulette\"\nclamp = 2.5\ninterleave = 4\ndirect = \"vpl\"\npixel_centres = true"),
+        )
+        .unwrap();
+        let back: toml::Table = ir
+            .parameters()
+            .into_iter()
+            .map(|(k, v)| (k, toml::Value::try_from(v).unwrap()))
+            .collect();
+        assert_eq!(Method::from_params("ir", &back).unwrap(), ir);
+        let reference =
+            Method::from_params("reference", &table("spp = 7\nroulette_depth = 5")).unwrap();
+        assert_eq!(
+            reference,
+            Method::Reference(ReferenceSettings {
+                spp: 7,
+                roulette_depth: 5,
+                ..Default::default()
+            })
+        );
+    }
+
+    #[test]
+    fn bad_parameters_name_method_key_and_value() {
+        let e = Method::from_params("ir", &table("vpls = 0")).unwrap_err();
+        assert_eq!(e.to_string(), "ir: vpls = 0: must be in 1..=1048576");
+        let e = Method::from_params("ir", &table("absorption = \"sometimes\"")).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "ir: absorption = \"sometimes\": expected one of \"fractional\", \"roulette\""
+        );
+        let e = Method::from_params("reference", &table("vpls = 4")).unwrap_err();
+        assert!(
+            e.to_string()
+                .starts_with("reference: vpls = 4: unknown parameter"),
+            "{e}"
+        );
+        let e = Method::from_params("ir", &table("clamp = -1.0")).unwrap_err();
+        assert!(e.to_string().contains("clamp = -1.0"), "{e}");
+        let e = Method::from_params("bidir", &table("")).unwrap_err();
+        assert!(e.to_string().contains("unknown method `bidir`"), "{e}");
+    }
+}
