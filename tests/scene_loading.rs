@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use glam::Vec3;
 use irad::image::{exr, Image};
-use irad::scene::{self, hash::fnv1a64, Scene};
+use irad::scene::{self, hash::fnv1a64, FailureNote, Scene};
 
 fn scenes_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes")
@@ -365,6 +365,48 @@ fn luminaire_is_not_supported_yet() {
     ]);
 }
 
+const FAILURE: &str = "[failure]\nmethods = [\"ir\"]\nwhy = \"light-side VPLs starve.\"\n\
+                       source = \"Segovia 06, Fig. 4\"\n";
+
+#[test]
+fn failure_with_no_methods() {
+    let toml = format!("{}{}", good_toml(), FAILURE.replace("[\"ir\"]", "[]"));
+    let s = scratch("failure-no-methods", &toml, OBJ, MTL);
+    s.error(&["scene.toml: failure.methods = []: must name at least one method"]);
+}
+
+#[test]
+fn failure_with_an_empty_method_or_text() {
+    for (from, to, expected) in [
+        (
+            "[\"ir\"]",
+            "[\"ir\", \"\"]",
+            "scene.toml: failure.methods[1] = \"\": ",
+        ),
+        (
+            "why = \"light-side VPLs starve.\"",
+            "why = \"\"",
+            "scene.toml: failure.why = \"\": ",
+        ),
+        (
+            "source = \"Segovia 06, Fig. 4\"",
+            "source = \" \"",
+            "scene.toml: failure.source = \" \": ",
+        ),
+    ] {
+        let toml = format!("{}{}", good_toml(), FAILURE.replace(from, to));
+        let s = scratch("failure-empty", &toml, OBJ, MTL);
+        s.error(&[expected]);
+    }
+}
+
+#[test]
+fn unknown_field_in_failure() {
+    let toml = format!("{}{FAILURE}expected_relmse = 0.5\n", good_toml());
+    let s = scratch("failure-unknown-field", &toml, OBJ, MTL);
+    s.error(&["scene.toml: ", "unknown field `expected_relmse`", "line 17"]);
+}
+
 #[test]
 fn bad_obj_face_index() {
     let obj = OBJ.replace("f 1 4 3 2", "f 1 4 3 9");
@@ -430,6 +472,30 @@ fn content_hash_covers_every_file_in_order() {
 }
 
 #[test]
+fn failure_table_is_kept_and_method_names_are_not_checked() {
+    let toml = format!(
+        "{}{}",
+        good_toml(),
+        FAILURE.replace("\"ir\"", "\"ir\", \"no-such-method\"")
+    );
+    let scene = scratch("failure-kept", &toml, OBJ, MTL).load().unwrap();
+    assert_eq!(
+        scene.failure,
+        Some(FailureNote {
+            methods: vec!["ir".into(), "no-such-method".into()],
+            why: "light-side VPLs starve.".into(),
+            source: "Segovia 06, Fig. 4".into(),
+        })
+    );
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    let plain = scratch("failure-none", &good_toml(), OBJ, MTL)
+        .load()
+        .unwrap();
+    assert_eq!(plain.failure, None);
+    assert_eq!(scene::default_scene().failure, None);
+}
+
+#[test]
 fn load_str_reads_files_relative_to_base_dir() {
     let s = scratch("load-str", "", OBJ, MTL);
     let scene = scene::load_str(&good_toml(), &s.0, "inline").unwrap();
@@ -471,19 +537,25 @@ fn committed(name: &str) -> Scene {
         .unwrap_or_else(|e| panic!("scenes/{name}: {e}"))
 }
 
-#[test]
-fn every_committed_scene_loads() {
-    let mut count = 0;
-    for entry in std::fs::read_dir(scenes_dir()).unwrap() {
+/// Every `*/scene.toml` directly under `dir`, loaded and checked.
+fn load_every_scene_in(dir: &Path) -> Vec<Scene> {
+    let mut scenes = Vec::new();
+    for entry in std::fs::read_dir(dir).unwrap() {
         let dir = entry.unwrap().path();
         if dir.join("scene.toml").is_file() {
             let scene = scene::load(&dir.join("scene.toml"))
                 .unwrap_or_else(|e| panic!("{}: {e}", dir.display()));
             assert_eq!(scene.name, dir.file_name().unwrap().to_string_lossy());
             check_scene(&scene);
-            count += 1;
+            scenes.push(scene);
         }
     }
+    scenes
+}
+
+#[test]
+fn every_committed_scene_loads() {
+    let count = load_every_scene_in(&scenes_dir()).len();
     assert!(count >= 4, "only {count} scenes under scenes/");
 }
 

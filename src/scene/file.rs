@@ -18,6 +18,7 @@ pub struct SceneFile {
     /// their issue defines the format.
     #[serde(default)]
     pub luminaire: Vec<toml::Table>,
+    pub failure: Option<FailureFile>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -65,6 +66,15 @@ fn default_scale() -> f32 {
     1.0
 }
 
+/// `[failure]`: the methods a stability-suite scene is expected to defeat, and why.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FailureFile {
+    pub methods: Vec<String>,
+    pub why: String,
+    pub source: String,
+}
+
 /// Parses the scene file's text; `file` names it in messages.
 pub fn parse(file: &str, text: &str) -> Result<SceneFile, SceneError> {
     toml::from_str(text).map_err(|e| SceneError::Toml {
@@ -91,6 +101,7 @@ mod tests {
         assert_eq!(f.camera.position, [0.0, 1.0, 3.0]);
         assert_eq!(f.camera.up, [0.0, 1.0, 0.0]);
         assert!(f.mesh.is_empty() && f.light.is_empty() && f.environment.is_none());
+        assert!(f.failure.is_none());
     }
 
     #[test]
@@ -108,5 +119,39 @@ mod tests {
             parse("s.toml", &text).unwrap().environment.unwrap().scale,
             1.0
         );
+    }
+
+    #[test]
+    fn failure_table_is_parsed() {
+        let text = format!(
+            "{MINIMAL}[failure]\nmethods = [\"ir\", \"bir\"]\nwhy = \"VPLs starve.\"\n\
+             source = \"Segovia 06, Fig. 4\"\n"
+        );
+        let f = parse("s.toml", &text).unwrap().failure.unwrap();
+        assert_eq!(f.methods, ["ir", "bir"]);
+        assert_eq!(
+            (f.why.as_str(), f.source.as_str()),
+            ("VPLs starve.", "Segovia 06, Fig. 4")
+        );
+    }
+
+    #[test]
+    fn unknown_field_in_failure_is_refused() {
+        let text = format!(
+            "{MINIMAL}[failure]\nmethods = [\"ir\"]\nwhy = \"w\"\nsource = \"s\"\nseverity = 2\n"
+        );
+        let e = parse("s.toml", &text).unwrap_err().to_string();
+        assert!(e.starts_with("s.toml: "), "{e}");
+        assert!(
+            e.contains("unknown field `severity`") && e.contains("line 10"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn failure_fields_are_required() {
+        let text = format!("{MINIMAL}[failure]\nmethods = [\"ir\"]\nwhy = \"w\"\n");
+        let e = parse("s.toml", &text).unwrap_err().to_string();
+        assert!(e.contains("missing field `source`"), "{e}");
     }
 }

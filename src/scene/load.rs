@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use glam::Vec3;
 
 use super::hash::Fnv1a64;
-use super::{camera, environment, file, lights, obj};
+use super::{camera, environment, failure, file, lights, obj};
 use super::{Material, Scene, SceneError, Triangle};
 
 /// A triangle whose area is at most this times the squared diagonal of the scene's bounding
@@ -162,6 +162,11 @@ fn build(file: &str, toml_text: &str, files: &Files) -> Result<Scene, SceneError
     if let Some(env) = &f.environment {
         environment::check(file, env)?;
     }
+    let failure = f
+        .failure
+        .as_ref()
+        .map(|x| failure::build(file, x))
+        .transpose()?;
 
     let mut warnings = Vec::new();
     let mut materials: Vec<Material> = Vec::new();
@@ -267,6 +272,7 @@ fn build(file: &str, toml_text: &str, files: &Files) -> Result<Scene, SceneError
         materials,
         lights,
         environment,
+        failure,
         warnings,
     })
 }

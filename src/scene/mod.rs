@@ -81,6 +81,16 @@ pub struct Environment {
     pub source: PathBuf,
 }
 
+/// A stability-suite scene's `[failure]` table: the methods expected to fail on it (names as
+/// `irad render --method` spells them; the scene loader does not check them), why, and the
+/// paper figure the scene reproduces. Every field is non-empty.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FailureNote {
+    pub methods: Vec<String>,
+    pub why: String,
+    pub source: String,
+}
+
 #[derive(Clone, Debug)]
 pub struct Scene {
     /// The scene file, or None for a scene built in code or the embedded default.
@@ -95,6 +105,8 @@ pub struct Scene {
     pub materials: Vec<Material>,
     pub lights: Vec<Light>,
     pub environment: Option<Environment>,
+    /// The scene's `[failure]` table, for scenes under scenes/failure/; None elsewhere.
+    pub failure: Option<FailureNote>,
     /// Things the loader fixed and reports (for example "dropped 2 degenerate triangles").
     pub warnings: Vec<String>,
 }
@@ -102,6 +114,7 @@ pub struct Scene {
 mod camera;
 mod environment;
 mod error;
+mod failure;
 mod file;
 pub mod gpu;
 pub mod hash;

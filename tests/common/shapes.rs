@@ -112,6 +112,7 @@ pub fn scene(
         materials,
         lights: Vec::new(),
         environment: None,
+        failure: None,
         warnings: Vec::new(),
     }
 }
