@@ -1,5 +1,6 @@
 //! Benchmarks: they measure and print; they assert nothing (tests do).
 
+pub mod chart;
 pub mod ir;
 pub mod rays;
 pub mod scan;
