@@ -169,6 +169,40 @@ enum Bench {
         #[arg(long, default_value_t = 1 << 18)]
         rays: usize,
     },
+    /// Run a benchmark suite: every method at every budget on every scene, timed (median of
+    /// repeats after a warm-up) and scored against each scene's cached reference. Writes
+    /// results.csv, results.json, charts/<scene>.svg (relMSE against GPU time, log-log) and
+    /// report.md (tables, Pareto-optimal runs, thumbnails and error maps) into the output
+    /// folder, rewritten after every run, so an interrupted suite leaves readable results.
+    Suite {
+        /// Suite TOML file (format in README, "Benchmark suites"); scenes/failure/suite.toml
+        /// is the stability suite.
+        #[arg(required_unless_present = "quick", conflicts_with = "quick")]
+        suite: Option<PathBuf>,
+        /// Run the built-in quick suite (scenes/suites/quick.toml of the source tree: 64x64,
+        /// a few budgets; about 3 minutes on lavapipe).
+        #[arg(long)]
+        quick: bool,
+        /// Output folder [default: out/bench/<suite name>, with -shard-I-of-N for a shard].
+        #[arg(short, long, value_name = "DIR")]
+        out: Option<PathBuf>,
+        /// Reference cache folder, shared by suites and shards.
+        #[arg(long, value_name = "DIR", default_value = "out/references")]
+        cache: PathBuf,
+        /// Run only part I of N (0-based) of the suite: run k belongs to part k mod N. Merge
+        /// the parts with `irad bench merge`.
+        #[arg(long, value_name = "I/N")]
+        shard: Option<irad::bench::suite::Shard>,
+    },
+    /// Merge the output folders of a suite's shards into one set of results, charts and report.
+    Merge {
+        /// Output folders of `irad bench suite --shard`.
+        #[arg(required = true)]
+        parts: Vec<PathBuf>,
+        /// Merged output folder.
+        #[arg(short, long, value_name = "DIR")]
+        out: PathBuf,
+    },
     /// Rays/s of the GPU BVH traversal (closest and any hit; camera and random rays) next to
     /// obvhs's CWBVH on the CPU using every core, and the ratio GPU/CPU.
     Rays {
@@ -279,6 +313,30 @@ fn run(cli: Cli) -> Result<()> {
                 scene.camera.height,
                 &report,
             );
+            Ok(())
+        }
+        Command::Bench(Bench::Suite {
+            suite,
+            quick,
+            out,
+            cache,
+            shard,
+        }) => bench_suite(&options, suite, quick, out, cache, shard),
+        Command::Bench(Bench::Merge { parts, out }) => {
+            let merged = irad::bench::suite::merge::merge(&parts, &out)?;
+            println!(
+                "merged {} parts: {} of {} runs of suite {}{}",
+                parts.len(),
+                merged.runs.len(),
+                merged.runs_in_suite,
+                merged.suite,
+                if merged.complete {
+                    ""
+                } else {
+                    " (incomplete: some runs are missing)"
+                }
+            );
+            println!("wrote {}", out.join("report.md").display());
             Ok(())
         }
         Command::Bench(Bench::Rays {
@@ -413,6 +471,126 @@ fn render(options: &ContextOptions, args: RenderArgs) -> Result<()> {
         png.display(),
         json.display()
     );
+    Ok(())
+}
+
+fn bench_suite(
+    options: &ContextOptions,
+    suite: Option<PathBuf>,
+    quick: bool,
+    out: Option<PathBuf>,
+    cache: PathBuf,
+    shard: Option<irad::bench::suite::Shard>,
+) -> Result<()> {
+    use irad::bench::suite::{self, Event, Shard, Status, Suite, SuiteOptions};
+    let path = match suite {
+        Some(p) => p,
+        None if quick => suite::file::quick_suite_path(),
+        None => bail!("name a suite file or pass --quick"),
+    };
+    let suite = Suite::load(&path)?;
+    let shard = shard.unwrap_or(Shard::WHOLE);
+    let out = out.unwrap_or_else(|| suite::default_out(&suite, shard));
+    let ctx = Context::new(options)?;
+    let planned = suite.shard(shard).len();
+    println!(
+        "suite {} ({}): {} of {} runs on {} scenes{}, {} warm-up + {} timed renders each, on {}",
+        suite.name,
+        path.display(),
+        planned,
+        suite.runs.len(),
+        suite.scenes.len(),
+        if shard == Shard::WHOLE {
+            String::new()
+        } else {
+            format!(" (shard {shard})")
+        },
+        suite.warmup,
+        suite.repeats,
+        device_line(ctx.info())
+    );
+    let bars = indicatif::MultiProgress::new();
+    let overall = bars.add(ProgressBar::new(planned as u64));
+    overall.set_style(
+        ProgressStyle::with_template(
+            "suite [{bar:30}] {pos}/{len} runs, {elapsed} elapsed, about {eta} left",
+        )
+        .expect("static template")
+        .progress_chars("=> "),
+    );
+    let current = bars.add(ProgressBar::new(1));
+    current.set_style(
+        ProgressStyle::with_template("  {msg} [{bar:20}] {pos}/{len}")
+            .expect("static template")
+            .progress_chars("=> "),
+    );
+    let options = SuiteOptions {
+        out: out.clone(),
+        cache,
+        shard,
+    };
+    let results =
+        suite::run(&ctx, &suite, &options, |event| match event {
+            Event::Reference {
+                scene,
+                done,
+                total,
+                cached,
+            } => {
+                current.set_length(total as u64);
+                current.set_position(done as u64);
+                current.set_message(format!(
+                    "{scene}: reference{}",
+                    if cached { " (cached)" } else { "" }
+                ));
+            }
+            Event::Render {
+                id,
+                render,
+                renders,
+                done,
+                total,
+                ..
+            } => {
+                current.set_length(total as u64);
+                current.set_position(done as u64);
+                current.set_message(format!("{id}: render {}/{renders}", render + 1));
+            }
+            Event::Finished { run, record, .. } => {
+                overall.set_position(run as u64);
+                let line =
+                    match record.status {
+                        Status::Ok => {
+                            let m = record.metrics.expect("ok runs are scored");
+                            format!(
+                        "{:<48} GPU {:>9} ms  relMSE {:.3e}  bias {:>6.2}%  outliers {:.3}%{}",
+                        record.id,
+                        record.gpu_ms.map(|t| format!("{t:.2}")).unwrap_or("-".into()),
+                        m.rel_mse,
+                        100.0 * m.bias,
+                        100.0 * m.outliers,
+                        if record.pareto { "  *" } else { "" }
+                    )
+                        }
+                        s => format!("{:<48} {}: {}", record.id, s.as_str(), record.note),
+                    };
+                bars.suspend(|| println!("{line}"));
+            }
+        })?;
+    overall.finish_and_clear();
+    current.finish_and_clear();
+    let errors = results
+        .runs
+        .iter()
+        .filter(|r| r.status == Status::Error)
+        .count();
+    println!(
+        "wrote {} (results.csv, results.json, charts/, images/)",
+        out.join("report.md").display()
+    );
+    if errors > 0 {
+        bail!("{errors} run(s) failed; their errors are in the report");
+    }
     Ok(())
 }
 

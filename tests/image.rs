@@ -364,6 +364,42 @@ fn variance_across_seeds_by_hand() {
     );
 }
 
+#[test]
+fn flicker_by_hand() {
+    // One pixel; channel 0 takes 1, 2, 3 (standard deviation 1) over a reference of 2:
+    // 1 / sqrt(4 + 0.01); the constant channels add 0. Averaged over 3 channels.
+    let frames: Vec<Image> = [1.0, 2.0, 3.0]
+        .iter()
+        .map(|&v| image(1, 1, &[[v, 5.0, 5.0]]))
+        .collect();
+    let reference = image(1, 1, &[[2.0, 5.0, 5.0]]);
+    assert_close(
+        metrics::flicker(&frames, &reference).unwrap(),
+        1.0 / (4.01f64).sqrt() / 3.0,
+        1e-12,
+        "1 pixel",
+    );
+    // A black reference pixel is normalized by sqrt(0.01): std 0.5 gives 5.
+    let frames = [
+        image(1, 1, &[gray(0.0)]),
+        image(1, 1, &[[0.0, 0.0, 0.5f32.sqrt() * 1.0]]),
+    ];
+    let want = ((0.5f64.sqrt() - 0.0).powi(2) / 2.0 / 0.01).sqrt() / 3.0;
+    assert_close(
+        metrics::flicker(&frames, &image(1, 1, &[gray(0.0)])).unwrap(),
+        want,
+        1e-6,
+        "black reference",
+    );
+    // Identical frames do not flicker; one frame cannot.
+    let a = image(1, 1, &[gray(0.3)]);
+    assert_eq!(metrics::flicker(&[a.clone(), a.clone()], &a).unwrap(), 0.0);
+    assert_eq!(
+        metrics::flicker(std::slice::from_ref(&a), &a).unwrap_err(),
+        MetricsError::TooFewImages { count: 1 }
+    );
+}
+
 // --- files ------------------------------------------------------------------------------------
 
 #[test]

@@ -4,6 +4,7 @@ pub mod chart;
 pub mod ir;
 pub mod rays;
 pub mod scan;
+pub mod suite;
 
 /// Median of a non-empty list.
 pub fn median(values: &mut [f64]) -> f64 {

@@ -8,7 +8,9 @@
 //!   decoded to linear, to XYZ with the IEC 61966-2-1 matrix, to L*a*b* with the D65 white;
 //! - bias = |mean(x) - mean(r)| / mean(r), means over all pixels and channels together;
 //! - outliers = fraction of pixels with Y(x) > 10 Y(r) + 0.1, Y = 0.2126 R + 0.7152 G + 0.0722 B;
-//! - nan_inf = number of non-finite values (channels) in x.
+//! - nan_inf = number of non-finite values (channels) in x;
+//! - flicker = temporal standard deviation across renders with successive seeds relative to
+//!   the reference, averaged (see `flicker`).
 //!
 //! Everything accumulates in f64. Non-finite values of x are counted in `nan_inf` and left
 //! out of every other figure (a pixel with any non-finite channel is left out of the per-pixel
@@ -183,6 +185,44 @@ pub fn variance_across_seeds(images: &[Image]) -> Result<f64, MetricsError> {
         }
     }
     Ok(total / (3 * first.pixels.len()) as f64)
+}
+
+/// Flicker (temporal stability): `frames` are renders of one static view with successive
+/// seeds, as an animation would show them. Per pixel and channel the temporal standard
+/// deviation (unbiased, divided by F - 1) relative to the reference, sqrt(var / (r^2 + 0.01))
+/// (the relMSE's normalization, so flicker^2 is the variance part of relMSE), averaged over
+/// pixels and channels. Non-finite values make it NaN.
+pub fn flicker(frames: &[Image], reference: &Image) -> Result<f64, MetricsError> {
+    if frames.len() < 2 {
+        return Err(MetricsError::TooFewImages {
+            count: frames.len(),
+        });
+    }
+    check(reference, "reference")?;
+    for (index, image) in frames.iter().enumerate() {
+        check(image, "image")?;
+        if (image.width, image.height) != (reference.width, reference.height) {
+            return Err(MetricsError::SeedSizeMismatch {
+                index,
+                size: (image.width, image.height),
+                first: (reference.width, reference.height),
+            });
+        }
+    }
+    let k = frames.len() as f64;
+    let mut total = 0.0f64;
+    for (i, r) in reference.pixels.iter().enumerate() {
+        for c in 0..3 {
+            let mean = frames.iter().map(|im| im.pixels[i][c] as f64).sum::<f64>() / k;
+            let ss: f64 = frames
+                .iter()
+                .map(|im| (im.pixels[i][c] as f64 - mean).powi(2))
+                .sum();
+            let rc = r[c] as f64;
+            total += (ss / (k - 1.0) / (rc * rc + REL_MSE_EPSILON)).sqrt();
+        }
+    }
+    Ok(total / (3 * reference.pixels.len()) as f64)
 }
 
 /// Y = 0.2126 R + 0.7152 G + 0.0722 B of linear RGB.

@@ -4,6 +4,7 @@
 pub mod exr;
 pub mod metrics;
 pub mod png;
+pub mod preview;
 pub mod sidecar;
 pub mod tonemap;
 

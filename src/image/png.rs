@@ -32,9 +32,24 @@ pub fn write(path: &Path, image: &Image, exposure: f32) -> Result<()> {
         image.width as usize * image.height as usize,
         image.pixels.len()
     );
-    let data = tonemap::tonemap_rgb8(image, exposure);
+    write_rgb8(
+        path,
+        image.width,
+        image.height,
+        &tonemap::tonemap_rgb8(image, exposure),
+    )
+}
+
+/// Writes 8-bit sRGB RGB `data` (row 0 at the top, 3 bytes per pixel) as a PNG.
+pub fn write_rgb8(path: &Path, width: u32, height: u32, data: &[u8]) -> Result<()> {
+    ensure!(
+        data.len() == 3 * width as usize * height as usize && width > 0 && height > 0,
+        "writing {}: {} bytes are not a {width}x{height} RGB image",
+        path.display(),
+        data.len()
+    );
     let file = File::create(path).with_context(|| format!("creating {}", path.display()))?;
-    let mut encoder = ::png::Encoder::new(BufWriter::new(file), image.width, image.height);
+    let mut encoder = ::png::Encoder::new(BufWriter::new(file), width, height);
     encoder.set_color(::png::ColorType::Rgb);
     encoder.set_depth(::png::BitDepth::Eight);
     encoder.set_source_srgb(::png::SrgbRenderingIntent::Perceptual);
@@ -42,7 +57,7 @@ pub fn write(path: &Path, image: &Image, exposure: f32) -> Result<()> {
         .write_header()
         .with_context(|| format!("writing {}", path.display()))?;
     writer
-        .write_image_data(&data)
+        .write_image_data(data)
         .with_context(|| format!("writing {}", path.display()))?;
     writer
         .finish()

@@ -9,7 +9,7 @@ pub mod paths;
 pub mod progressive;
 pub mod reference;
 
-pub use method::{Method, Renderers, RunError, METHOD_NAMES};
+pub use method::{Method, ParamError, Renderers, RunError, METHOD_NAMES};
 
 use crate::gpu::PassTotals;
 use crate::image::Image;

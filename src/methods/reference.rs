@@ -97,3 +97,19 @@ impl Reference {
         })
     }
 }
+
+/// The kernels a reference image depends on: a change to any of them makes cached references
+/// stale (the benchmark harness keys its reference cache on `kernel_hash`).
+pub const KERNELS: &[&str] = &["write_gbuffer", "trace_reference_paths"];
+
+/// FNV-1a 64 of the embedded SPIR-V of `KERNELS`, in order.
+pub fn kernel_hash() -> u64 {
+    let mut h = crate::scene::hash::Fnv1a64::default();
+    for name in KERNELS {
+        let code = crate::gpu::spirv::embedded(name).unwrap_or_default();
+        h.write(name.as_bytes());
+        h.write(&(code.len() as u64).to_le_bytes());
+        h.write(code);
+    }
+    h.finish()
+}

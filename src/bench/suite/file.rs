@@ -1,0 +1,469 @@
+//! The suite file (`irad bench suite <suite.toml>`): scenes, methods with fixed parameters and
+//! budgets, the reference settings, and how each run is timed. Parsed with unknown fields
+//! refused, every method setting checked by `Method::from_params` before anything renders,
+//! then expanded into a deterministic list of runs (scene, then method entry, then budget), the
+//! order `--shard` splits. Format in README ("Benchmark suites").
+
+use std::collections::BTreeSet;
+use std::path::{Path, PathBuf};
+
+use serde::Deserialize;
+use thiserror::Error;
+
+use crate::methods::{Method, ParamError, METHOD_NAMES};
+use crate::scene::hash::Fnv1a64;
+use crate::scene::{self, Scene, SceneError};
+
+/// Seed of cached references unless the suite names one: far from the small seeds runs use,
+/// so a run never shares its random numbers with its reference.
+pub const REFERENCE_SEED: u32 = 0x9e37_79b9;
+
+#[derive(Debug, Error)]
+pub enum SuiteError {
+    #[error("{file}: {message}")]
+    File { file: String, message: String },
+    #[error("{file}: {field} = {value}: {problem}")]
+    Field {
+        file: String,
+        field: String,
+        value: String,
+        problem: String,
+    },
+    #[error("{file}: {field}: {source}")]
+    Param {
+        file: String,
+        field: String,
+        source: ParamError,
+    },
+    #[error("{file}: {field}: {source}")]
+    Scene {
+        file: String,
+        field: String,
+        source: SceneError,
+    },
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SuiteFile {
+    name: String,
+    #[serde(default)]
+    description: String,
+    resolution: Option<[i64; 2]>,
+    #[serde(default = "one")]
+    seed: i64,
+    #[serde(default = "one")]
+    warmup: i64,
+    #[serde(default = "three")]
+    repeats: i64,
+    reference: toml::Table,
+    #[serde(default)]
+    scene: Vec<SceneEntry>,
+    #[serde(default)]
+    method: Vec<MethodEntry>,
+}
+
+fn one() -> i64 {
+    1
+}
+fn three() -> i64 {
+    3
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SceneEntry {
+    path: String,
+    reference_spp: Option<i64>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct MethodEntry {
+    method: String,
+    label: Option<String>,
+    scenes: Option<Vec<String>>,
+    #[serde(default)]
+    params: toml::Table,
+    budgets: Vec<toml::Table>,
+}
+
+/// A loaded, checked suite.
+#[derive(Debug)]
+pub struct Suite {
+    pub name: String,
+    pub description: String,
+    /// The suite file, for messages and records.
+    pub file: String,
+    /// FNV-1a 64 of the suite text and every scene's content hash: parts of one suite merge.
+    pub hash: u64,
+    pub seed: u32,
+    pub warmup: u32,
+    pub repeats: u32,
+    pub scenes: Vec<SuiteScene>,
+    pub entries: Vec<SuiteMethod>,
+    /// Every run in suite order; `index` is the position here.
+    pub runs: Vec<RunSpec>,
+}
+
+#[derive(Debug)]
+pub struct SuiteScene {
+    /// The scene with the suite's resolution applied.
+    pub scene: Scene,
+    /// The reference method (seed included) for this scene.
+    pub reference: Method,
+}
+
+#[derive(Debug)]
+pub struct SuiteMethod {
+    pub method: String,
+    /// The series name in charts and tables (unique in the suite).
+    pub label: String,
+}
+
+/// One run: a method at one budget on one scene.
+#[derive(Clone, Debug)]
+pub struct RunSpec {
+    pub index: usize,
+    pub scene: usize,
+    pub entry: usize,
+    /// The method and settings; its seed is the suite's base seed (repeat r adds r).
+    pub method: Method,
+    /// The budget's keys as written, `vpls=64 frames=4`.
+    pub budget: String,
+    /// `<scene>/<label>/<budget>`, unique, stable across shards.
+    pub id: String,
+}
+
+impl RunSpec {
+    /// A file name for the run's images: the id with every character that is not
+    /// `[A-Za-z0-9._=-]` replaced by `_`.
+    pub fn file_stem(&self) -> String {
+        file_safe(&self.id)
+    }
+}
+
+pub fn file_safe(s: &str) -> String {
+    s.chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || "._=-".contains(c) {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect()
+}
+
+impl Suite {
+    /// Loads the suite file at `path` and every scene it names.
+    pub fn load(path: &Path) -> Result<Suite, SuiteError> {
+        let file = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|e| SuiteError::File {
+            file: file.clone(),
+            message: format!("cannot read it: {e}"),
+        })?;
+        Suite::parse(&file, &text, path.parent().unwrap_or(Path::new("")))
+    }
+
+    /// Parses suite text; scene paths are relative to `base`; `file` names it in messages.
+    pub fn parse(file: &str, text: &str, base: &Path) -> Result<Suite, SuiteError> {
+        let f: SuiteFile = toml::from_str(text).map_err(|e| SuiteError::File {
+            file: file.into(),
+            message: e.to_string().trim_end().to_string(),
+        })?;
+        let field = |field: &str, value: String, problem: &str| SuiteError::Field {
+            file: file.into(),
+            field: field.into(),
+            value,
+            problem: problem.into(),
+        };
+        if f.name.trim().is_empty() || file_safe(&f.name) != f.name {
+            return Err(field(
+                "name",
+                format!("{:?}", f.name),
+                "must be non-empty and use only letters, digits, '.', '_', '=' and '-'",
+            ));
+        }
+        let count = |name: &str, v: i64, min: i64| {
+            if v < min || v > u32::MAX as i64 {
+                Err(field(
+                    name,
+                    v.to_string(),
+                    &format!("must be an integer >= {min}"),
+                ))
+            } else {
+                Ok(v as u32)
+            }
+        };
+        let seed = count("seed", f.seed, 0)?;
+        let warmup = count("warmup", f.warmup, 0)?;
+        let repeats = count("repeats", f.repeats, 1)?;
+        let resolution = match f.resolution {
+            None => None,
+            Some([w, h]) if (1..=16384).contains(&w) && (1..=16384).contains(&h) => {
+                Some((w as u32, h as u32))
+            }
+            Some([w, h]) => {
+                return Err(field(
+                    "resolution",
+                    format!("[{w}, {h}]"),
+                    "width and height must be in 1..=16384",
+                ))
+            }
+        };
+        // A suite may pin its references' seed; otherwise REFERENCE_SEED.
+        let mut reference_params = f.reference.clone();
+        reference_params
+            .entry("seed")
+            .or_insert(toml::Value::Integer(REFERENCE_SEED as i64));
+        let param_error = |field: String, source: ParamError| SuiteError::Param {
+            file: file.into(),
+            field,
+            source,
+        };
+        let reference = Method::from_params("reference", &reference_params)
+            .map_err(|e| param_error("reference".into(), e))?;
+
+        if f.scene.is_empty() {
+            return Err(SuiteError::File {
+                file: file.into(),
+                message: "no [[scene]]: a suite needs at least one".into(),
+            });
+        }
+        if f.method.is_empty() {
+            return Err(SuiteError::File {
+                file: file.into(),
+                message: "no [[method]]: a suite needs at least one".into(),
+            });
+        }
+
+        let mut hash = Fnv1a64::default();
+        hash.write(text.as_bytes());
+        let mut scenes: Vec<SuiteScene> = Vec::new();
+        for (i, entry) in f.scene.iter().enumerate() {
+            let mut scene = if let Some(name) = entry.path.strip_prefix("embedded:") {
+                if name != "cornell-box" {
+                    return Err(field(
+                        &format!("scene[{i}].path"),
+                        format!("{:?}", entry.path),
+                        "the only embedded scene is embedded:cornell-box",
+                    ));
+                }
+                scene::default_scene()
+            } else {
+                scene::load(&base.join(&entry.path)).map_err(|source| SuiteError::Scene {
+                    file: file.into(),
+                    field: format!("scene[{i}].path = {:?}", entry.path),
+                    source,
+                })?
+            };
+            if let Some((w, h)) = resolution {
+                scene.camera.width = w;
+                scene.camera.height = h;
+            }
+            if let Some(prev) = scenes.iter().find(|s| s.scene.name == scene.name) {
+                return Err(field(
+                    &format!("scene[{i}].path"),
+                    format!("{:?}", entry.path),
+                    &format!(
+                        "a second scene named {:?} (scene names key charts and files)",
+                        prev.scene.name
+                    ),
+                ));
+            }
+            if let Some(note) = &scene.failure {
+                if let Some(unknown) = note
+                    .methods
+                    .iter()
+                    .find(|m| !METHOD_NAMES.contains(&m.as_str()))
+                {
+                    return Err(field(
+                        &format!("scene[{i}] ({}) failure.methods", entry.path),
+                        format!("{unknown:?}"),
+                        &format!("not a method irad has ({})", METHOD_NAMES.join(", ")),
+                    ));
+                }
+            }
+            let mut reference = reference.clone();
+            if let Some(spp) = entry.reference_spp {
+                let mut p = reference_params.clone();
+                p.insert("spp".into(), toml::Value::Integer(spp));
+                reference = Method::from_params("reference", &p)
+                    .map_err(|e| param_error(format!("scene[{i}].reference_spp"), e))?;
+            }
+            hash.write(&scene.content_hash.to_le_bytes());
+            scenes.push(SuiteScene { scene, reference });
+        }
+
+        let scene_names: BTreeSet<&str> = scenes.iter().map(|s| s.scene.name.as_str()).collect();
+        let mut entries = Vec::new();
+        let mut labels = BTreeSet::new();
+        for (i, m) in f.method.iter().enumerate() {
+            let label = m.label.clone().unwrap_or_else(|| m.method.clone());
+            if label.is_empty() || file_safe(&label) != label {
+                return Err(field(
+                    &format!("method[{i}].label"),
+                    format!("{label:?}"),
+                    "must be non-empty and use only letters, digits, '.', '_', '=' and '-'",
+                ));
+            }
+            if !labels.insert(label.clone()) {
+                return Err(field(
+                    &format!("method[{i}].label"),
+                    format!("{label:?}"),
+                    "used by an earlier [[method]]: give each a distinct label",
+                ));
+            }
+            if let Some(names) = &m.scenes {
+                if let Some(unknown) = names.iter().find(|n| !scene_names.contains(n.as_str())) {
+                    return Err(field(
+                        &format!("method[{i}].scenes"),
+                        format!("{unknown:?}"),
+                        "not the name of a [[scene]] in this suite",
+                    ));
+                }
+            }
+            if m.params.contains_key("seed") {
+                return Err(field(
+                    &format!("method[{i}].params.seed"),
+                    m.params["seed"].to_string(),
+                    "the suite sets seeds (its `seed`, plus one per repeat)",
+                ));
+            }
+            if m.budgets.is_empty() {
+                return Err(field(
+                    &format!("method[{i}].budgets"),
+                    "[]".into(),
+                    "needs at least one budget ({} for the defaults)",
+                ));
+            }
+            entries.push(SuiteMethod {
+                method: m.method.clone(),
+                label,
+            });
+        }
+
+        let mut runs = Vec::new();
+        for (s, suite_scene) in scenes.iter().enumerate() {
+            for (e, m) in f.method.iter().enumerate() {
+                let applies = m
+                    .scenes
+                    .as_ref()
+                    .is_none_or(|names| names.contains(&suite_scene.scene.name));
+                if !applies {
+                    continue;
+                }
+                for (b, budget) in m.budgets.iter().enumerate() {
+                    let mut params = m.params.clone();
+                    for (k, v) in budget {
+                        if k == "seed" || params.contains_key(k) {
+                            return Err(field(
+                                &format!("method[{e}].budgets[{b}].{k}"),
+                                v.to_string(),
+                                "also set in params (or a seed): a budget adds keys, it does not override",
+                            ));
+                        }
+                        params.insert(k.clone(), v.clone());
+                    }
+                    params.insert("seed".into(), toml::Value::Integer(seed as i64));
+                    let method = Method::from_params(&m.method, &params)
+                        .map_err(|e2| param_error(format!("method[{e}].budgets[{b}]"), e2))?;
+                    let budget = budget
+                        .iter()
+                        .map(|(k, v)| format!("{k}={}", plain(v)))
+                        .collect::<Vec<_>>()
+                        .join(" ");
+                    let budget = if budget.is_empty() {
+                        "defaults".into()
+                    } else {
+                        budget
+                    };
+                    let id = format!("{}/{}/{}", suite_scene.scene.name, entries[e].label, budget);
+                    if runs.iter().any(|r: &RunSpec| r.id == id) {
+                        return Err(field(
+                            &format!("method[{e}].budgets[{b}]"),
+                            budget,
+                            "the same budget twice",
+                        ));
+                    }
+                    runs.push(RunSpec {
+                        index: runs.len(),
+                        scene: s,
+                        entry: e,
+                        method,
+                        budget,
+                        id,
+                    });
+                }
+            }
+        }
+
+        Ok(Suite {
+            name: f.name,
+            description: f.description,
+            file: file.into(),
+            hash: hash.finish(),
+            seed,
+            warmup,
+            repeats,
+            scenes,
+            entries,
+            runs,
+        })
+    }
+
+    /// The runs of shard `index` of `count`: run i belongs to shard i mod count (round robin,
+    /// so every shard gets a share of each scene and budget).
+    pub fn shard(&self, shard: Shard) -> Vec<&RunSpec> {
+        self.runs
+            .iter()
+            .filter(|r| r.index % shard.count == shard.index)
+            .collect()
+    }
+}
+
+/// `--shard i/n`: part i (0-based) of n.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct Shard {
+    pub index: usize,
+    pub count: usize,
+}
+
+impl Shard {
+    pub const WHOLE: Shard = Shard { index: 0, count: 1 };
+}
+
+impl std::str::FromStr for Shard {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Shard, String> {
+        let bad = || format!("`{s}`: expected I/N with 0 <= I < N (0-based, e.g. 0/4 .. 3/4)");
+        let (i, n) = s.split_once('/').ok_or_else(bad)?;
+        let index: usize = i.trim().parse().map_err(|_| bad())?;
+        let count: usize = n.trim().parse().map_err(|_| bad())?;
+        if count == 0 || index >= count {
+            return Err(bad());
+        }
+        Ok(Shard { index, count })
+    }
+}
+
+impl std::fmt::Display for Shard {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}/{}", self.index, self.count)
+    }
+}
+
+/// A TOML value as a budget label shows it: strings unquoted.
+fn plain(v: &toml::Value) -> String {
+    match v {
+        toml::Value::String(s) => s.clone(),
+        other => other.to_string(),
+    }
+}
+
+/// The built-in quick suite (`--quick`): scenes/suites/quick.toml of the source tree irad was
+/// built from, since it names scenes on disk.
+pub fn quick_suite_path() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/suites/quick.toml")
+}

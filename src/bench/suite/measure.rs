@@ -1,0 +1,107 @@
+//! One run of a suite, measured: `warmup` untimed renders, then `repeats` timed renders with
+//! successive seeds (seed, seed + 1, ...). Reported: the median over the repeats of each
+//! pass's GPU time, of the total GPU time and of the wall time; the first repeat's image
+//! scored against the reference; and the flicker across the repeats' images (a static view
+//! rendered frame after frame with fresh random numbers, as an animation shows it).
+
+use std::collections::BTreeMap;
+
+use crate::bench::median;
+use crate::gpu::Context;
+use crate::image::{self, metrics, Image, Metrics};
+use crate::methods::{Method, Renderers, RunError};
+use crate::scene::gpu::GpuScene;
+use crate::scene::Scene;
+
+/// Why a run has no figures.
+#[derive(Debug)]
+pub enum MeasureError {
+    /// The method does not handle something in the scene.
+    Declined(String),
+    Failed(String),
+}
+
+impl From<RunError> for MeasureError {
+    fn from(e: RunError) -> Self {
+        match e {
+            RunError::Declined(why) => MeasureError::Declined(why),
+            RunError::Gpu(g) => MeasureError::Failed(g.to_string()),
+        }
+    }
+}
+
+pub struct Measured {
+    /// The first timed repeat's image (seed = the method's seed).
+    pub image: Image,
+    pub metrics: Metrics,
+    pub flicker: Option<f64>,
+    pub gpu_ms: Option<f64>,
+    pub pass_gpu_ms: BTreeMap<String, Option<f64>>,
+    pub wall_ms: f64,
+    pub nonfinite_estimates: u64,
+}
+
+/// Renders `method` `warmup + repeats` times; `progress(render, renders, done, total)` reports
+/// the render under way and its samples.
+#[allow(clippy::too_many_arguments)]
+pub fn measure(
+    ctx: &Context,
+    renderers: &Renderers,
+    method: &Method,
+    scene: &Scene,
+    gpu_scene: &GpuScene,
+    reference: &Image,
+    warmup: u32,
+    repeats: u32,
+    mut progress: impl FnMut(u32, u32, u32, u32),
+) -> Result<Measured, MeasureError> {
+    let repeats = repeats.max(1);
+    let renders = warmup + repeats;
+    let seed = method.seed();
+    for w in 0..warmup {
+        // Warm-up seeds follow the timed ones, so no timed image repeats one.
+        let m = method.with_seed(seed.wrapping_add(repeats + w));
+        renderers.run(ctx, &m, scene, gpu_scene, |d, t| progress(w, renders, d, t))?;
+    }
+    let mut images = Vec::with_capacity(repeats as usize);
+    let mut gpu = Vec::new();
+    let mut wall = Vec::new();
+    let mut passes: BTreeMap<String, Vec<Option<f64>>> = BTreeMap::new();
+    let mut nonfinite = 0u64;
+    for r in 0..repeats {
+        let m = method.with_seed(seed.wrapping_add(r));
+        let out = renderers.run(ctx, &m, scene, gpu_scene, |d, t| {
+            progress(warmup + r, renders, d, t)
+        })?;
+        gpu.push(out.passes.total_gpu_ms());
+        wall.push(out.wall_ms);
+        for (name, ms, _) in &out.passes.passes {
+            passes.entry(name.clone()).or_default().push(*ms);
+        }
+        nonfinite += out.nonfinite_estimates as u64;
+        images.push(out.image);
+    }
+    let median_of = |values: &[Option<f64>]| -> Option<f64> {
+        let mut v: Vec<f64> = values.iter().copied().collect::<Option<Vec<f64>>>()?;
+        Some(median(&mut v))
+    };
+    let metrics = image::compare(&images[0], reference)
+        .map_err(|e| MeasureError::Failed(format!("scoring against the reference: {e}")))?;
+    let flicker = if images.len() >= 2 {
+        metrics::flicker(&images, reference).ok()
+    } else {
+        None
+    };
+    Ok(Measured {
+        metrics,
+        flicker,
+        gpu_ms: median_of(&gpu),
+        pass_gpu_ms: passes
+            .iter()
+            .map(|(k, v)| (k.clone(), median_of(v)))
+            .collect(),
+        wall_ms: median(&mut wall),
+        nonfinite_estimates: nonfinite,
+        image: images.swap_remove(0),
+    })
+}

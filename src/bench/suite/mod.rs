@@ -1,0 +1,327 @@
+//! `irad bench suite`: runs every method of a suite file at every budget on every scene,
+//! times each run (median of repeats after a warm-up), scores it against the scene's cached
+//! reference, measures its flicker, and writes results.json, results.csv, one SVG chart per
+//! scene (relMSE against GPU time, log-log) and report.md with thumbnails and error maps.
+//! Everything is rewritten after each run (write then rename), so an interrupted suite leaves
+//! readable results of the runs it finished. `--shard i/n` runs part of a suite; `merge`
+//! combines parts.
+
+pub mod file;
+pub mod measure;
+pub mod merge;
+pub mod output;
+pub mod references;
+pub mod report;
+pub mod results;
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use anyhow::Result;
+
+use crate::gpu::Context;
+use crate::image::{self, preview, sidecar::IRAD_VERSION, Image};
+use crate::methods::{Method, Renderers};
+use crate::scene::gpu::GpuScene;
+
+pub use file::{Shard, Suite};
+use measure::{measure, MeasureError};
+pub use results::{ReferenceSummary, RunRecord, Status, SuiteResults};
+
+/// Thumbnails in the report are at most this wide (block averages of the render).
+pub const THUMBNAIL_WIDTH: u32 = 256;
+
+pub struct SuiteOptions {
+    /// The output folder.
+    pub out: PathBuf,
+    /// Root of the reference cache.
+    pub cache: PathBuf,
+    pub shard: Shard,
+}
+
+/// What the suite is doing, for progress bars.
+pub enum Event<'a> {
+    /// The reference of `scene`: `done` of `total` samples; `cached` when it was reused.
+    Reference {
+        scene: &'a str,
+        done: u32,
+        total: u32,
+        cached: bool,
+    },
+    /// Run `run` of `of` (this shard's count): render `render` of `renders` (warm-up and
+    /// repeats), `done` of `total` samples.
+    Render {
+        run: usize,
+        of: usize,
+        id: &'a str,
+        render: u32,
+        renders: u32,
+        done: u32,
+        total: u32,
+    },
+    /// Run `run` of `of` is recorded and the outputs rewritten.
+    Finished {
+        run: usize,
+        of: usize,
+        record: &'a RunRecord,
+    },
+}
+
+/// Runs this shard of `suite` into `options.out` and returns the results (also on disk).
+pub fn run(
+    ctx: &Context,
+    suite: &Suite,
+    options: &SuiteOptions,
+    mut on: impl FnMut(Event),
+) -> Result<SuiteResults> {
+    let planned = suite.shard(options.shard);
+    output::prepare(&options.out)?;
+    let info = ctx.info();
+    let mut results = SuiteResults {
+        suite: suite.name.clone(),
+        suite_file: suite.file.clone(),
+        suite_hash: format!("{:016x}", suite.hash),
+        description: suite.description.clone(),
+        shard: (options.shard != Shard::WHOLE).then_some(options.shard),
+        runs_in_suite: suite.runs.len(),
+        runs_planned: planned.len(),
+        complete: false,
+        device: info.name.clone(),
+        driver: info.driver.clone(),
+        irad_version: IRAD_VERSION.into(),
+        references: BTreeMap::new(),
+        runs: Vec::new(),
+    };
+    output::write(&options.out, &results)?;
+    let renderers = Renderers::default();
+    let mut done = 0usize;
+    for (s, suite_scene) in suite.scenes.iter().enumerate() {
+        let runs: Vec<_> = planned.iter().filter(|r| r.scene == s).collect();
+        if runs.is_empty() {
+            continue;
+        }
+        let scene = &suite_scene.scene;
+        // Upload and reference, once per scene; a failure is recorded on every run of it.
+        let needs_reference = runs.iter().any(|r| r.method.declines(scene).is_none());
+        let prepared = if needs_reference {
+            prepare_scene(ctx, &renderers, suite, s, options, &mut results, &mut on)
+        } else {
+            Err("every method declines this scene".to_string())
+        };
+        for spec in runs {
+            let record = run_one(
+                ctx,
+                &renderers,
+                suite,
+                spec,
+                &prepared,
+                options,
+                |r, rs, d, t| {
+                    on(Event::Render {
+                        run: done,
+                        of: planned.len(),
+                        id: &spec.id,
+                        render: r,
+                        renders: rs,
+                        done: d,
+                        total: t,
+                    })
+                },
+            )?;
+            results.runs.push(record);
+            results.mark_pareto();
+            output::write(&options.out, &results)?;
+            done += 1;
+            on(Event::Finished {
+                run: done,
+                of: planned.len(),
+                record: results.runs.last().expect("just pushed"),
+            });
+        }
+    }
+    results.complete = true;
+    output::write(&options.out, &results)?;
+    Ok(results)
+}
+
+/// A scene uploaded with its reference image, or why not.
+type Prepared = std::result::Result<(GpuScene, Image), String>;
+
+fn prepare_scene(
+    ctx: &Context,
+    renderers: &Renderers,
+    suite: &Suite,
+    s: usize,
+    options: &SuiteOptions,
+    results: &mut SuiteResults,
+    on: &mut impl FnMut(Event),
+) -> Prepared {
+    let suite_scene = &suite.scenes[s];
+    let scene = &suite_scene.scene;
+    let gpu_scene =
+        GpuScene::upload(ctx, scene).map_err(|e| format!("uploading the scene: {e}"))?;
+    let key = references::ReferenceKey::new(scene, &suite_scene.reference);
+    let cached = references::lookup(&options.cache, &key).is_some();
+    let reference = references::get_or_render(
+        ctx,
+        renderers,
+        &options.cache,
+        scene,
+        &gpu_scene,
+        &suite_scene.reference,
+        |done, total| {
+            on(Event::Reference {
+                scene: &scene.name,
+                done,
+                total,
+                cached,
+            })
+        },
+    )
+    .map_err(|e| format!("{e:#}"))?;
+    let image_name = format!("images/{}.reference.png", file::file_safe(&scene.name));
+    let thumb = preview::downscale(
+        &reference.image,
+        preview::factor_for(reference.image.width, THUMBNAIL_WIDTH),
+    );
+    image::png::write(&options.out.join(&image_name), &thumb, 0.0).map_err(|e| format!("{e:#}"))?;
+    let failure = scene.failure.as_ref();
+    results.references.insert(
+        scene.name.clone(),
+        ReferenceSummary {
+            spp: reference_spp(&suite_scene.reference),
+            image: image_name,
+            cache: reference.exr.display().to_string(),
+            gpu_ms: reference.record.gpu_ms,
+            expected_to_fail: failure.map(|f| f.methods.clone()).unwrap_or_default(),
+            why: failure.map(|f| f.why.clone()).unwrap_or_default(),
+            source: failure.map(|f| f.source.clone()).unwrap_or_default(),
+        },
+    );
+    Ok((gpu_scene, reference.image))
+}
+
+fn reference_spp(method: &Method) -> u32 {
+    match method {
+        Method::Reference(s) => s.spp,
+        _ => 0,
+    }
+}
+
+fn run_one(
+    ctx: &Context,
+    renderers: &Renderers,
+    suite: &Suite,
+    spec: &file::RunSpec,
+    prepared: &Prepared,
+    options: &SuiteOptions,
+    progress: impl FnMut(u32, u32, u32, u32),
+) -> Result<RunRecord> {
+    let suite_scene = &suite.scenes[spec.scene];
+    let scene = &suite_scene.scene;
+    let info = ctx.info();
+    let mut record = RunRecord {
+        index: spec.index,
+        id: spec.id.clone(),
+        scene: scene.name.clone(),
+        scene_hash: format!("{:016x}", scene.content_hash),
+        method: spec.method.name().into(),
+        label: suite.entries[spec.entry].label.clone(),
+        budget: spec.budget.clone(),
+        parameters: spec.method.parameters(),
+        status: Status::Ok,
+        note: String::new(),
+        expected_failure: scene
+            .failure
+            .as_ref()
+            .is_some_and(|f| f.methods.iter().any(|m| m == spec.method.name())),
+        resolution: [scene.camera.width, scene.camera.height],
+        seed: spec.method.seed(),
+        warmup: suite.warmup,
+        repeats: suite.repeats,
+        device: info.name.clone(),
+        driver: info.driver.clone(),
+        gpu_ms: None,
+        pass_gpu_ms: BTreeMap::new(),
+        wall_ms: None,
+        metrics: None,
+        flicker: None,
+        nonfinite_estimates: 0,
+        reference_spp: reference_spp(&suite_scene.reference),
+        image: None,
+        error_map: None,
+        pareto: false,
+    };
+    if let Some(why) = spec.method.declines(scene) {
+        record.status = Status::Declined;
+        record.note = why;
+        return Ok(record);
+    }
+    let (gpu_scene, reference) = match prepared {
+        Ok(p) => p,
+        Err(e) => {
+            record.status = Status::Error;
+            record.note = format!("no reference: {e}");
+            return Ok(record);
+        }
+    };
+    let measured = measure(
+        ctx,
+        renderers,
+        &spec.method,
+        scene,
+        gpu_scene,
+        reference,
+        suite.warmup,
+        suite.repeats,
+        progress,
+    );
+    let m = match measured {
+        Ok(m) => m,
+        Err(MeasureError::Declined(why)) => {
+            record.status = Status::Declined;
+            record.note = why;
+            return Ok(record);
+        }
+        Err(MeasureError::Failed(e)) => {
+            record.status = Status::Error;
+            record.note = e;
+            return Ok(record);
+        }
+    };
+    let factor = preview::factor_for(m.image.width, THUMBNAIL_WIDTH);
+    let stem = spec.file_stem();
+    let image_name = format!("images/{stem}.png");
+    let error_name = format!("images/{stem}-error.png");
+    image::png::write(
+        &options.out.join(&image_name),
+        &preview::downscale(&m.image, factor),
+        0.0,
+    )?;
+    let (w, h, data) = preview::error_map_rgb8(&m.image, reference, factor);
+    image::png::write_rgb8(&options.out.join(&error_name), w, h, &data)?;
+    record.gpu_ms = m.gpu_ms;
+    record.pass_gpu_ms = m.pass_gpu_ms;
+    record.wall_ms = Some(m.wall_ms);
+    record.metrics = Some(m.metrics);
+    record.flicker = m.flicker;
+    record.nonfinite_estimates = m.nonfinite_estimates;
+    record.image = Some(image_name);
+    record.error_map = Some(error_name);
+    Ok(record)
+}
+
+/// The default output folder of a suite: out/bench/<name>, or out/bench/<name>-shard-i-of-n.
+pub fn default_out(suite: &Suite, shard: Shard) -> PathBuf {
+    let name = if shard == Shard::WHOLE {
+        suite.name.clone()
+    } else {
+        format!("{}-shard-{}-of-{}", suite.name, shard.index, shard.count)
+    };
+    Path::new("out").join("bench").join(name)
+}
+
+/// The default reference cache: out/references.
+pub fn default_cache() -> PathBuf {
+    Path::new("out").join("references")
+}

@@ -1,0 +1,93 @@
+//! The suite's output folder: results.json, results.csv, charts/<scene>.svg, report.md and
+//! images/ (thumbnails and error maps, written by the runner). Every file is written under a
+//! temporary name and renamed, so a reader (or a Ctrl-C) never sees half a file.
+
+use std::fs;
+use std::path::Path;
+
+use anyhow::{Context as _, Result};
+
+use crate::bench::chart::{Chart, Point, Series};
+
+use super::file::file_safe;
+use super::report;
+use super::results::{Status, SuiteResults};
+
+/// Creates `out` with images/ and charts/. A folder that holds an earlier suite's results
+/// (a results.json) is emptied of what a suite writes first, so no stale chart or image
+/// survives; anything else in it is left alone.
+pub fn prepare(out: &Path) -> Result<()> {
+    if out.join("results.json").exists() {
+        for dir in ["images", "charts"] {
+            let d = out.join(dir);
+            if d.exists() {
+                fs::remove_dir_all(&d).with_context(|| format!("removing {}", d.display()))?;
+            }
+        }
+        for f in ["results.json", "results.csv", "report.md"] {
+            let _ = fs::remove_file(out.join(f));
+        }
+    }
+    for dir in ["images", "charts"] {
+        let d = out.join(dir);
+        fs::create_dir_all(&d).with_context(|| format!("creating {}", d.display()))?;
+    }
+    Ok(())
+}
+
+/// The chart file of `scene`, relative to the output folder.
+pub fn chart_path(scene: &str) -> String {
+    format!("charts/{}.svg", file_safe(scene))
+}
+
+/// relMSE against GPU time for one scene: a series per method label, a point per ok run.
+pub fn chart(results: &SuiteResults, scene: &str) -> Chart {
+    let mut series: Vec<Series> = Vec::new();
+    for r in results
+        .runs
+        .iter()
+        .filter(|r| r.scene == scene && r.status == Status::Ok)
+    {
+        let point = Point {
+            x: r.gpu_ms.unwrap_or(f64::NAN),
+            y: r.metrics.map(|m| m.rel_mse).unwrap_or(f64::NAN),
+            label: r.budget.clone(),
+            run_id: r.id.clone(),
+        };
+        match series.iter_mut().find(|s| s.name == r.label) {
+            Some(s) => s.points.push(point),
+            None => series.push(Series {
+                name: r.label.clone(),
+                points: vec![point],
+            }),
+        }
+    }
+    Chart {
+        title: format!("{scene}: relMSE against GPU time ({})", results.device),
+        x_label: "GPU time per image (ms, median of repeats)".into(),
+        y_label: "relMSE".into(),
+        series,
+    }
+}
+
+/// Writes results.json, results.csv, one chart per scene and report.md.
+pub fn write(out: &Path, results: &SuiteResults) -> Result<()> {
+    atomic_write(&out.join("results.json"), &results.json())?;
+    atomic_write(&out.join("results.csv"), &results.csv())?;
+    for scene in results.scenes() {
+        atomic_write(
+            &out.join(chart_path(&scene)),
+            &chart(results, &scene).to_svg(),
+        )?;
+    }
+    atomic_write(&out.join("report.md"), &report::markdown(results))
+}
+
+fn atomic_write(path: &Path, text: &str) -> Result<()> {
+    let mut tmp = path.as_os_str().to_owned();
+    tmp.push(format!(".{}.tmp", std::process::id()));
+    let tmp = std::path::PathBuf::from(tmp);
+    fs::write(&tmp, text).with_context(|| format!("writing {}", tmp.display()))?;
+    fs::rename(&tmp, path)
+        .with_context(|| format!("renaming {} to {}", tmp.display(), path.display()))
+}

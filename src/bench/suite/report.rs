@@ -1,0 +1,154 @@
+//! report.md: what ran on what, then per scene its expected failure (the scene's [failure]
+//! table), its chart, a table of every run with the Pareto-optimal ones marked, and the
+//! thumbnails beside their error maps.
+
+use std::fmt::Write as _;
+
+use crate::image::preview::{ERROR_MAP_MAX, ERROR_MAP_MIN};
+
+use super::output::chart_path;
+use super::results::{RunRecord, Status, SuiteResults};
+
+/// The mark of a Pareto-optimal run in the report's tables.
+pub const PARETO_MARK: &str = "★";
+
+pub fn markdown(results: &SuiteResults) -> String {
+    let mut md = String::new();
+    let _ = writeln!(md, "# Benchmark suite `{}`\n", results.suite);
+    if !results.description.is_empty() {
+        let _ = writeln!(md, "{}\n", results.description.trim());
+    }
+    let state = if results.complete {
+        "complete".to_string()
+    } else {
+        "**incomplete** (still running, or interrupted)".to_string()
+    };
+    let shard = match results.shard {
+        Some(s) => format!("shard {s} of the suite's {} runs", results.runs_in_suite),
+        None => format!("all {} runs of the suite", results.runs_in_suite),
+    };
+    let _ = writeln!(
+        md,
+        "- Suite file `{}` (hash {}), {shard}: {} of {} planned runs recorded, {state}.",
+        results.suite_file,
+        results.suite_hash,
+        results.runs.len(),
+        results.runs_planned
+    );
+    let _ = writeln!(
+        md,
+        "- Device: {} (driver {}), irad {}.",
+        results.device, results.driver, results.irad_version
+    );
+    let _ = writeln!(
+        md,
+        "- GPU and wall times are medians over each run's repeats (successive seeds) after its \
+         warm-up renders; the figures score the first repeat's image against the scene's \
+         reference (DESIGN.md \"Error metrics\"); flicker is the temporal standard deviation \
+         across the repeats relative to the reference. {PARETO_MARK} marks the runs no other \
+         run of the scene beats in both GPU time and relMSE."
+    );
+    let _ = writeln!(
+        md,
+        "- Error maps: per-pixel relMSE, log scale from {ERROR_MAP_MIN:e} (black) through red \
+         and yellow to {ERROR_MAP_MAX} (white); magenta marks NaN/Inf.\n"
+    );
+    md += "Data: [results.csv](results.csv), [results.json](results.json).\n\n";
+
+    for scene in results.scenes() {
+        let runs: Vec<&RunRecord> = results.runs.iter().filter(|r| r.scene == scene).collect();
+        let _ = writeln!(md, "## {scene}\n");
+        let reference = results.references.get(&scene);
+        if let Some(r) = reference {
+            if !r.expected_to_fail.is_empty() {
+                let _ = writeln!(
+                    md,
+                    "Stability scene: expected to fail here: **{}**. {} ({})\n",
+                    r.expected_to_fail.join(", "),
+                    r.why.trim(),
+                    r.source
+                );
+            }
+            let _ = writeln!(
+                md,
+                "Reference: {} samples per pixel, cached at `{}`.\n",
+                r.spp, r.cache
+            );
+        }
+        let _ = writeln!(md, "![relMSE against GPU time]({})\n", chart_path(&scene));
+        md += "| | method | budget | GPU ms | wall ms | relMSE | RMSE | Lab error | bias | outliers | NaN/Inf | flicker | status |\n";
+        md += "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|\n";
+        for r in &runs {
+            let m = r.metrics;
+            let mark = if r.pareto { PARETO_MARK } else { "" };
+            let status = match r.status {
+                Status::Ok if r.expected_failure => "ok (expected to fail)".to_string(),
+                Status::Ok => "ok".to_string(),
+                s => format!("{}: {}", s.as_str(), r.note),
+            };
+            let _ = writeln!(
+                md,
+                "| {mark} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
+                r.label,
+                r.budget,
+                fixed(r.gpu_ms, 2),
+                fixed(r.wall_ms, 1),
+                sci(m.map(|m| m.rel_mse)),
+                sci(m.map(|m| m.rmse)),
+                fixed(m.map(|m| m.lab_error), 2),
+                percent(m.map(|m| m.bias)),
+                percent(m.map(|m| m.outliers)),
+                m.map(|m| m.nan_inf.to_string())
+                    .unwrap_or_else(|| "-".into()),
+                fixed(r.flicker, 3),
+                escape(&status)
+            );
+        }
+        md += "\n";
+        md += "| run | image | error map |\n|---|---|---|\n";
+        if let Some(r) = reference {
+            let _ = writeln!(
+                md,
+                "| reference ({} spp) | ![reference]({}) | |",
+                r.spp, r.image
+            );
+        }
+        for r in &runs {
+            if let (Some(image), Some(error)) = (&r.image, &r.error_map) {
+                let _ = writeln!(
+                    md,
+                    "| {} {} | ![{}]({image}) | ![error]({error}) |",
+                    r.label, r.budget, r.label
+                );
+            }
+        }
+        md += "\n";
+    }
+    md
+}
+
+fn fixed(v: Option<f64>, digits: usize) -> String {
+    match v {
+        Some(x) if x.is_finite() => format!("{x:.digits$}"),
+        _ => "-".into(),
+    }
+}
+
+fn sci(v: Option<f64>) -> String {
+    match v {
+        Some(x) if x.is_finite() => format!("{x:.3e}"),
+        _ => "-".into(),
+    }
+}
+
+fn percent(v: Option<f64>) -> String {
+    match v {
+        Some(x) if x.is_finite() => format!("{:.2}%", 100.0 * x),
+        _ => "-".into(),
+    }
+}
+
+/// A table cell: no pipes or line breaks.
+fn escape(s: &str) -> String {
+    s.replace('|', "\\|").replace('\n', " ")
+}

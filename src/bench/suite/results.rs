@@ -1,0 +1,350 @@
+//! A suite's results: one `RunRecord` per run (every parameter and figure, device and driver),
+//! gathered in `SuiteResults`, written as results.json (the source every other output and
+//! `bench merge` read) and results.csv (one row per run, for spreadsheets and plotting
+//! scripts). The Pareto marks are computed here, per scene, over GPU time and relMSE.
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::fs;
+use std::path::Path;
+
+use anyhow::{bail, Context as _, Result};
+use serde::{Deserialize, Serialize};
+
+use crate::image::Metrics;
+
+use super::file::Shard;
+
+/// What became of a run.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Status {
+    /// Rendered and scored.
+    Ok,
+    /// The method does not handle something in the scene (recorded with its reason).
+    Declined,
+    /// Rendering failed (recorded with the error); the suite went on.
+    Error,
+}
+
+impl Status {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Status::Ok => "ok",
+            Status::Declined => "declined",
+            Status::Error => "error",
+        }
+    }
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RunRecord {
+    /// Position in the whole suite (shards keep it, so merged parts sort back in order).
+    pub index: usize,
+    pub id: String,
+    pub scene: String,
+    pub scene_hash: String,
+    pub method: String,
+    pub label: String,
+    pub budget: String,
+    pub parameters: BTreeMap<String, serde_json::Value>,
+    pub status: Status,
+    /// Why a run was declined or failed.
+    pub note: String,
+    /// The scene's [failure] table names this method.
+    pub expected_failure: bool,
+    pub resolution: [u32; 2],
+    /// Seed of the first timed repeat (repeat r used seed + r).
+    pub seed: u32,
+    pub warmup: u32,
+    pub repeats: u32,
+    pub device: String,
+    pub driver: String,
+    /// Median over the repeats of the run's total GPU time; None without timestamps.
+    pub gpu_ms: Option<f64>,
+    /// Median over the repeats of each pass's GPU time.
+    pub pass_gpu_ms: BTreeMap<String, Option<f64>>,
+    /// Median over the repeats of the wall-clock time (upload excluded, readback included).
+    pub wall_ms: Option<f64>,
+    /// The first repeat's image against the reference.
+    pub metrics: Option<Metrics>,
+    /// Mean over pixels and channels of the temporal standard deviation across the repeats'
+    /// images (successive seeds) relative to the reference (`image::metrics::flicker`).
+    pub flicker: Option<f64>,
+    /// Per-pixel estimates the method dropped as NaN or Inf, over all repeats (0 when right).
+    pub nonfinite_estimates: u64,
+    pub reference_spp: u32,
+    /// The run's thumbnail and error map, relative to the output folder.
+    pub image: Option<String>,
+    pub error_map: Option<String>,
+    /// On the per-scene Pareto front of (GPU time, relMSE) among the ok runs.
+    #[serde(default)]
+    pub pareto: bool,
+}
+
+/// Everything a suite (or one shard of it) produced so far.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SuiteResults {
+    pub suite: String,
+    pub suite_file: String,
+    pub suite_hash: String,
+    pub description: String,
+    /// The part of the suite these results cover; None once merged.
+    pub shard: Option<Shard>,
+    /// Runs in the whole suite, and those this shard plans.
+    pub runs_in_suite: usize,
+    pub runs_planned: usize,
+    /// False while the suite is running or when it was interrupted.
+    pub complete: bool,
+    pub device: String,
+    pub driver: String,
+    pub irad_version: String,
+    /// Per scene: its reference image (relative path), spp and where it is cached.
+    pub references: BTreeMap<String, ReferenceSummary>,
+    pub runs: Vec<RunRecord>,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ReferenceSummary {
+    pub spp: u32,
+    pub image: String,
+    pub cache: String,
+    pub gpu_ms: Option<f64>,
+    /// The scene's [failure] table: methods expected to fail, why, and the paper figure.
+    pub expected_to_fail: Vec<String>,
+    pub why: String,
+    pub source: String,
+}
+
+impl SuiteResults {
+    pub fn read(path: &Path) -> Result<SuiteResults> {
+        let text =
+            fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+        serde_json::from_str(&text)
+            .with_context(|| format!("parsing {} as irad suite results", path.display()))
+    }
+
+    /// Scene names in the order their first run appears.
+    pub fn scenes(&self) -> Vec<String> {
+        let mut seen = Vec::new();
+        for r in &self.runs {
+            if !seen.contains(&r.scene) {
+                seen.push(r.scene.clone());
+            }
+        }
+        seen
+    }
+
+    /// Marks, per scene, the ok runs no other ok run beats in both GPU time and relMSE
+    /// (at least as good in both, better in one).
+    pub fn mark_pareto(&mut self) {
+        let point = |r: &RunRecord| -> Option<(f64, f64)> {
+            let t = r.gpu_ms?;
+            let e = r.metrics?.rel_mse;
+            (r.status == Status::Ok && t.is_finite() && e.is_finite()).then_some((t, e))
+        };
+        let points: Vec<Option<(f64, f64)>> = self.runs.iter().map(point).collect();
+        for i in 0..self.runs.len() {
+            let Some((t, e)) = points[i] else {
+                self.runs[i].pareto = false;
+                continue;
+            };
+            let dominated = (0..self.runs.len()).any(|j| {
+                j != i
+                    && self.runs[j].scene == self.runs[i].scene
+                    && points[j].is_some_and(|(tj, ej)| tj <= t && ej <= e && (tj < t || ej < e))
+            });
+            self.runs[i].pareto = !dominated;
+        }
+    }
+
+    pub fn json(&self) -> String {
+        let mut text = serde_json::to_string_pretty(self).expect("results serialize");
+        text.push('\n');
+        text
+    }
+
+    /// The CSV: fixed columns, then `param:<name>` for every parameter any run has, then
+    /// `pass_ms:<name>` for every pass, in name order. Empty cells for undefined figures.
+    pub fn csv(&self) -> String {
+        let params: BTreeSet<&str> = self
+            .runs
+            .iter()
+            .flat_map(|r| r.parameters.keys().map(String::as_str))
+            .collect();
+        let passes: BTreeSet<&str> = self
+            .runs
+            .iter()
+            .flat_map(|r| r.pass_gpu_ms.keys().map(String::as_str))
+            .collect();
+        let mut header: Vec<String> = FIXED_COLUMNS.iter().map(|s| s.to_string()).collect();
+        header.extend(params.iter().map(|p| format!("param:{p}")));
+        header.extend(passes.iter().map(|p| format!("pass_ms:{p}")));
+        let mut out = csv_row(&header);
+        for r in &self.runs {
+            let m = r.metrics;
+            let f = |v: Option<f64>| {
+                v.filter(|x| x.is_finite())
+                    .map(|x| x.to_string())
+                    .unwrap_or_default()
+            };
+            let mut row = vec![
+                r.index.to_string(),
+                r.id.clone(),
+                r.scene.clone(),
+                r.method.clone(),
+                r.label.clone(),
+                r.budget.clone(),
+                r.status.as_str().to_string(),
+                r.expected_failure.to_string(),
+                r.pareto.to_string(),
+                r.resolution[0].to_string(),
+                r.resolution[1].to_string(),
+                r.seed.to_string(),
+                r.warmup.to_string(),
+                r.repeats.to_string(),
+                f(r.gpu_ms),
+                f(r.wall_ms),
+                f(m.map(|m| m.rel_mse)),
+                f(m.map(|m| m.rmse)),
+                f(m.map(|m| m.lab_error)),
+                f(m.map(|m| m.bias)),
+                f(m.map(|m| m.outliers)),
+                m.map(|m| m.nan_inf.to_string()).unwrap_or_default(),
+                f(r.flicker),
+                r.nonfinite_estimates.to_string(),
+                r.reference_spp.to_string(),
+                r.device.clone(),
+                r.driver.clone(),
+                r.scene_hash.clone(),
+                r.note.clone(),
+            ];
+            for p in &params {
+                row.push(match r.parameters.get(*p) {
+                    Some(serde_json::Value::String(s)) => s.clone(),
+                    Some(v) => v.to_string(),
+                    None => String::new(),
+                });
+            }
+            for p in &passes {
+                row.push(f(r.pass_gpu_ms.get(*p).copied().flatten()));
+            }
+            out += &csv_row(&row);
+        }
+        out
+    }
+}
+
+/// The CSV's first columns, in order.
+pub const FIXED_COLUMNS: &[&str] = &[
+    "index",
+    "id",
+    "scene",
+    "method",
+    "label",
+    "budget",
+    "status",
+    "expected_failure",
+    "pareto",
+    "width",
+    "height",
+    "seed",
+    "warmup",
+    "repeats",
+    "gpu_ms",
+    "wall_ms",
+    "rel_mse",
+    "rmse",
+    "lab_error",
+    "bias",
+    "outliers",
+    "nan_inf",
+    "flicker",
+    "nonfinite_estimates",
+    "reference_spp",
+    "device",
+    "driver",
+    "scene_hash",
+    "note",
+];
+
+/// One RFC 4180 row: fields with a comma, quote or line break are quoted, quotes doubled.
+fn csv_row(fields: &[String]) -> String {
+    let mut line = fields
+        .iter()
+        .map(|f| {
+            if f.contains([',', '"', '\n', '\r']) {
+                format!("\"{}\"", f.replace('"', "\"\""))
+            } else {
+                f.clone()
+            }
+        })
+        .collect::<Vec<_>>()
+        .join(",");
+    line.push('\n');
+    line
+}
+
+/// Parses CSV as `csv` writes it (RFC 4180: quoted fields, doubled quotes, line breaks inside
+/// quotes) into rows of fields.
+pub fn parse_csv(text: &str) -> Result<Vec<Vec<String>>> {
+    let mut rows = Vec::new();
+    let mut row = Vec::new();
+    let mut field = String::new();
+    let mut chars = text.chars().peekable();
+    let mut quoted = false;
+    let mut line = 1;
+    while let Some(c) = chars.next() {
+        if quoted {
+            match c {
+                '"' if chars.peek() == Some(&'"') => {
+                    chars.next();
+                    field.push('"');
+                }
+                '"' => quoted = false,
+                c => {
+                    if c == '\n' {
+                        line += 1;
+                    }
+                    field.push(c)
+                }
+            }
+            continue;
+        }
+        match c {
+            '"' if field.is_empty() => quoted = true,
+            '"' => bail!("line {line}: a quote inside an unquoted field"),
+            ',' => row.push(std::mem::take(&mut field)),
+            '\r' => {}
+            '\n' => {
+                row.push(std::mem::take(&mut field));
+                rows.push(std::mem::take(&mut row));
+                line += 1;
+            }
+            c => field.push(c),
+        }
+    }
+    if quoted {
+        bail!("line {line}: a quoted field is not closed");
+    }
+    if !field.is_empty() || !row.is_empty() {
+        row.push(field);
+        rows.push(row);
+    }
+    Ok(rows)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn csv_round_trips_quotes_commas_and_line_breaks() {
+        let fields: Vec<String> = ["plain", "a,b", "say \"hi\"", "two\nlines", ""]
+            .iter()
+            .map(|s| s.to_string())
+            .collect();
+        let text = csv_row(&fields) + &csv_row(&fields);
+        assert_eq!(parse_csv(&text).unwrap(), vec![fields.clone(), fields]);
+        assert!(parse_csv("\"open").is_err());
+    }
+}
