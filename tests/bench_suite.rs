@@ -1,0 +1,493 @@
+//! `irad bench suite`: the quick suite writes every output and they agree with each other (the
+//! charted points are the CSV's figures); references are cached and never reused stale;
+//! shards merge into the results of one whole run; an interrupted suite leaves readable
+//! results; bad suite files are one clear error.
+
+mod common;
+
+use std::collections::BTreeMap;
+use std::fs;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+use std::time::{Duration, Instant};
+
+use irad::bench::chart;
+use irad::bench::suite::file::Suite;
+use irad::bench::suite::results::parse_csv;
+use irad::bench::suite::{self, merge, Shard, Status, SuiteOptions, SuiteResults};
+
+fn irad(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_irad"))
+        .args(args)
+        .env("IRAD_VALIDATE", "1")
+        .output()
+        .unwrap()
+}
+
+fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("irad-bench-suite-{}-{name}", std::process::id()));
+    let _ = fs::remove_dir_all(&dir);
+    fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// The CSV as maps from column name to cell, one per row.
+fn csv_rows(path: &Path) -> Vec<BTreeMap<String, String>> {
+    let rows = parse_csv(&fs::read_to_string(path).unwrap()).unwrap();
+    let header = &rows[0];
+    rows[1..]
+        .iter()
+        .map(|row| {
+            assert_eq!(row.len(), header.len(), "ragged CSV row {row:?}");
+            header.iter().cloned().zip(row.iter().cloned()).collect()
+        })
+        .collect()
+}
+
+fn decode_png(path: &Path) -> (u32, u32) {
+    let decoder = png::Decoder::new(std::io::BufReader::new(fs::File::open(path).unwrap()));
+    let reader = decoder
+        .read_info()
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let info = reader.info();
+    (info.width, info.height)
+}
+
+/// Every output of a finished suite exists, parses and agrees with results.json; returns it.
+fn check_outputs(out: &Path) -> SuiteResults {
+    let results = SuiteResults::read(&out.join("results.json")).unwrap();
+    let rows = csv_rows(&out.join("results.csv"));
+    assert_eq!(rows.len(), results.runs.len());
+    for (row, run) in rows.iter().zip(&results.runs) {
+        assert_eq!(row["id"], run.id);
+        assert_eq!(row["status"], run.status.as_str());
+    }
+    for scene in results.scenes() {
+        let svg = fs::read_to_string(out.join(suite::output::chart_path(&scene))).unwrap();
+        let (axes, points) = chart::read_svg(&svg).unwrap();
+        // Exactly the ok runs with a positive time and relMSE are charted, at their CSV figures.
+        let chartable: Vec<&BTreeMap<String, String>> = rows
+            .iter()
+            .filter(|r| r["scene"] == scene && r["status"] == "ok")
+            .filter(|r| {
+                let pos = |k: &str| r[k].parse::<f64>().is_ok_and(|v| v > 0.0);
+                pos("gpu_ms") && pos("rel_mse")
+            })
+            .collect();
+        assert_eq!(points.len(), chartable.len(), "{scene}: {points:?}");
+        for row in chartable {
+            let p = points
+                .iter()
+                .find(|p| p.run_id == row["id"])
+                .unwrap_or_else(|| panic!("{} is not charted", row["id"]));
+            assert_eq!(p.x, row["gpu_ms"].parse::<f64>().unwrap(), "{}", row["id"]);
+            assert_eq!(p.y, row["rel_mse"].parse::<f64>().unwrap(), "{}", row["id"]);
+            assert_eq!(p.series, row["label"]);
+            assert_eq!(p.label, row["budget"]);
+            let (cx, cy) = axes.to_px(p.x, p.y);
+            assert!(
+                (cx - p.cx).abs() < 1e-2 && (cy - p.cy).abs() < 1e-2,
+                "{p:?}"
+            );
+        }
+    }
+    // The report names every scene and links only images that exist and decode.
+    let report = fs::read_to_string(out.join("report.md")).unwrap();
+    for scene in results.scenes() {
+        assert!(report.contains(&format!("## {scene}")), "{scene}");
+    }
+    let mut links = 0;
+    for part in report.split("](").skip(1) {
+        let link = &part[..part.find(')').unwrap()];
+        let path = out.join(link);
+        assert!(path.exists(), "report links {link}, which is missing");
+        if link.ends_with(".png") {
+            let (w, h) = decode_png(&path);
+            assert!(w > 0 && h > 0);
+        }
+        links += 1;
+    }
+    assert!(links > 2 * results.runs.len().min(1));
+    for run in &results.runs {
+        if run.status == Status::Ok {
+            let m = run.metrics.expect("ok runs are scored");
+            assert_eq!(m.nan_inf, 0, "{}", run.id);
+            assert_eq!(run.nonfinite_estimates, 0, "{}", run.id);
+            assert!(m.rel_mse.is_finite() && run.gpu_ms.is_some(), "{}", run.id);
+            if run.repeats >= 2 {
+                assert!(
+                    run.flicker.is_some_and(|f| f.is_finite() && f > 0.0),
+                    "{}",
+                    run.id
+                );
+            }
+            for image in [&run.image, &run.error_map] {
+                decode_png(&out.join(image.as_ref().unwrap()));
+            }
+        } else {
+            assert!(
+                !run.note.is_empty(),
+                "{}: a {:?} run says why",
+                run.id,
+                run.status
+            );
+        }
+    }
+    results
+}
+
+#[test]
+fn quick_suite_writes_every_output_and_charts_the_csv_figures() {
+    let dir = temp_dir("quick");
+    let (out, cache) = (dir.join("out"), dir.join("cache"));
+    let start = Instant::now();
+    let o = irad(&[
+        "bench",
+        "suite",
+        "--quick",
+        "-o",
+        out.to_str().unwrap(),
+        "--cache",
+        cache.to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{stderr}");
+    assert!(
+        !stderr.contains("[vulkan "),
+        "validation messages: {stderr}"
+    );
+    eprintln!("quick suite: {:.0} s", start.elapsed().as_secs_f64());
+    let results = check_outputs(&out);
+    assert!(results.complete);
+    assert_eq!(results.runs.len(), results.runs_in_suite);
+    // Both methods ran; ir declined the environment-lit scene; the stability scenes are in,
+    // with ir marked as the method expected to fail there.
+    let ok = |m: &str| {
+        results
+            .runs
+            .iter()
+            .any(|r| r.method == m && r.status == Status::Ok)
+    };
+    assert!(ok("reference") && ok("ir"));
+    assert!(results.runs.iter().any(|r| r.method == "ir"
+        && r.status == Status::Declined
+        && r.note.contains("environment")));
+    let failure_scenes: Vec<&String> = results
+        .references
+        .iter()
+        .filter(|(_, r)| !r.expected_to_fail.is_empty())
+        .map(|(s, _)| s)
+        .collect();
+    assert!(failure_scenes.len() >= 3, "{failure_scenes:?}");
+    assert!(results
+        .runs
+        .iter()
+        .filter(|r| failure_scenes.contains(&&r.scene) && r.method == "ir")
+        .all(|r| r.expected_failure));
+    assert!(results.runs.iter().any(|r| r.pareto));
+    let _ = fs::remove_dir_all(&dir);
+}
+
+const TINY_SUITE: &str = r#"
+name = "tiny"
+resolution = [16, 16]
+warmup = 0
+repeats = 2
+[reference]
+spp = 32
+[[scene]]
+path = "embedded:cornell-box"
+[[scene]]
+path = "point-light-plane/scene.toml"
+[[method]]
+method = "reference"
+label = "pt"
+budgets = [{ spp = 1 }, { spp = 4 }]
+[[method]]
+method = "ir"
+budgets = [{ vpls = 8, frames = 1 }]
+"#;
+
+fn scenes_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes")
+}
+
+fn run_suite(
+    ctx: &irad::gpu::Context,
+    suite: &Suite,
+    out: &Path,
+    cache: &Path,
+    shard: Shard,
+) -> SuiteResults {
+    let options = SuiteOptions {
+        out: out.to_path_buf(),
+        cache: cache.to_path_buf(),
+        shard,
+    };
+    suite::run(ctx, suite, &options, |_| {}).unwrap()
+}
+
+/// Figures that depend only on the bits rendered (not on timing).
+fn figures(results: &SuiteResults) -> Vec<(String, Option<irad::image::Metrics>, Option<f64>)> {
+    results
+        .runs
+        .iter()
+        .map(|r| (r.id.clone(), r.metrics, r.flicker))
+        .collect()
+}
+
+#[test]
+fn shards_merge_into_the_whole_suite() {
+    let dir = temp_dir("shards");
+    let cache = dir.join("cache");
+    let suite = Suite::parse("tiny.toml", TINY_SUITE, &scenes_dir()).unwrap();
+    assert_eq!(suite.runs.len(), 6);
+    common::with_gpu(|ctx| {
+        let whole = run_suite(ctx, &suite, &dir.join("whole"), &cache, Shard::WHOLE);
+        let parts: Vec<PathBuf> = (0..3).map(|i| dir.join(format!("part{i}"))).collect();
+        for (i, part) in parts.iter().enumerate() {
+            let r = run_suite(ctx, &suite, part, &cache, Shard { index: i, count: 3 });
+            assert_eq!(r.runs.len(), 2);
+            assert!(r.runs.iter().all(|run| run.index % 3 == i));
+        }
+        // Parts in any order give the whole suite, bit for bit in every figure.
+        let merged_dir = dir.join("merged");
+        let reversed: Vec<PathBuf> = parts.iter().rev().cloned().collect();
+        let merged = merge::merge(&reversed, &merged_dir).unwrap();
+        assert!(merged.complete && merged.shard.is_none());
+        assert_eq!(figures(&merged), figures(&whole));
+        assert_eq!(check_outputs(&merged_dir), merged);
+        check_outputs(&dir.join("whole"));
+        // Missing parts leave it incomplete; a part given twice, or another suite, is refused.
+        let partial = merge::merge(&parts[..2], &dir.join("partial")).unwrap();
+        assert!(!partial.complete);
+        let twice = merge::merge(&[parts[0].clone(), parts[0].clone()], &dir.join("twice"));
+        assert!(twice.unwrap_err().to_string().contains("in both"));
+        let other = Suite::parse(
+            "other.toml",
+            &TINY_SUITE.replace("spp = 32", "spp = 33"),
+            &scenes_dir(),
+        )
+        .unwrap();
+        run_suite(
+            ctx,
+            &other,
+            &dir.join("other"),
+            &cache,
+            Shard { index: 1, count: 3 },
+        );
+        let mixed = merge::merge(&[parts[0].clone(), dir.join("other")], &dir.join("mixed"));
+        assert!(mixed.unwrap_err().to_string().contains("same suite"));
+    });
+    let _ = fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn references_are_cached_and_never_reused_stale() {
+    let dir = temp_dir("cache");
+    let cache = dir.join("cache");
+    // A scene folder of our own, so editing it changes its content hash.
+    let scene_dir = dir.join("scenes/plane");
+    fs::create_dir_all(&scene_dir).unwrap();
+    for f in [
+        "scene.toml",
+        "point-light-plane.obj",
+        "point-light-plane.mtl",
+    ] {
+        fs::copy(
+            scenes_dir().join("point-light-plane").join(f),
+            scene_dir.join(f),
+        )
+        .unwrap();
+    }
+    let text = r#"
+name = "cache"
+resolution = [8, 8]
+warmup = 0
+repeats = 1
+[reference]
+spp = 8
+[[scene]]
+path = "plane/scene.toml"
+[[method]]
+method = "reference"
+budgets = [{ spp = 1 }]
+"#;
+    let entries = |cache: &Path| -> Vec<PathBuf> {
+        let mut found = Vec::new();
+        for scene in fs::read_dir(cache).unwrap() {
+            for key in fs::read_dir(scene.unwrap().path()).unwrap() {
+                found.push(key.unwrap().path());
+            }
+        }
+        found.sort();
+        found
+    };
+    common::with_gpu(|ctx| {
+        let base = dir.join("scenes");
+        let original = Suite::parse("cache.toml", text, &base).unwrap();
+        let first = run_suite(ctx, &original, &dir.join("a"), &cache, Shard::WHOLE);
+        let entry = entries(&cache);
+        assert_eq!(entry.len(), 1);
+        let record = entry[0].join("reference.json");
+        let written = fs::metadata(&record).unwrap().modified().unwrap();
+        // The same suite again reuses the reference: same figures, file untouched.
+        let again = run_suite(ctx, &original, &dir.join("b"), &cache, Shard::WHOLE);
+        assert_eq!(figures(&again), figures(&first));
+        assert_eq!(fs::metadata(&record).unwrap().modified().unwrap(), written);
+        // Other reference settings: a second entry.
+        let more = Suite::parse("cache.toml", &text.replace("spp = 8", "spp = 9"), &base).unwrap();
+        run_suite(ctx, &more, &dir.join("c"), &cache, Shard::WHOLE);
+        assert_eq!(entries(&cache).len(), 2);
+        // An edited scene (a brighter light) has another content hash: a new reference.
+        let toml_path = scene_dir.join("scene.toml");
+        let scene_text = fs::read_to_string(&toml_path).unwrap();
+        let edited =
+            scene_text.replacen("intensity = [", "intensity = [2.0, 2.0, 2.0]\n# was [", 1);
+        assert_ne!(edited, scene_text);
+        fs::write(&toml_path, edited).unwrap();
+        let edited = Suite::parse("cache.toml", text, &base).unwrap();
+        let brighter = run_suite(ctx, &edited, &dir.join("d"), &cache, Shard::WHOLE);
+        assert_eq!(entries(&cache).len(), 3);
+        assert_ne!(figures(&brighter), figures(&first));
+        // A cache entry whose record does not match its key (tampered, or a half-written
+        // entry from another version) is rendered again, not trusted.
+        let record = entries(&cache)[0].join("reference.json");
+        let tampered =
+            fs::read_to_string(&record)
+                .unwrap()
+                .replacen("\"seed\": ", "\"seed\": 1", 1);
+        fs::write(&record, tampered).unwrap();
+        let key_dirs = entries(&cache);
+        for (i, suite) in [&original, &more, &edited].into_iter().enumerate() {
+            run_suite(ctx, suite, &dir.join(format!("e{i}")), &cache, Shard::WHOLE);
+        }
+        assert_eq!(entries(&cache), key_dirs);
+        let fixed = fs::read_to_string(&record).unwrap();
+        assert!(
+            !fixed.contains("\"seed\": 1"),
+            "the stale record was reused: {fixed}"
+        );
+    });
+    let _ = fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn interrupted_suite_leaves_readable_results() {
+    let dir = temp_dir("interrupt");
+    let suite_path = dir.join("slow.toml");
+    // Enough runs that the suite is still going when the first result is on disk.
+    let budgets: Vec<String> = (1..=12).map(|i| format!("{{ spp = {} }}", 8 * i)).collect();
+    fs::write(
+        &suite_path,
+        format!(
+            "name = \"slow\"\nresolution = [32, 32]\nwarmup = 0\nrepeats = 2\n[reference]\nspp = 16\n[[scene]]\npath = \"embedded:cornell-box\"\n[[method]]\nmethod = \"reference\"\nbudgets = [{}]\n",
+            budgets.join(", ")
+        ),
+    )
+    .unwrap();
+    let out = dir.join("out");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_irad"))
+        .args(["bench", "suite", suite_path.to_str().unwrap(), "-o"])
+        .arg(&out)
+        .arg("--cache")
+        .arg(dir.join("cache"))
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let deadline = Instant::now() + Duration::from_secs(120);
+    loop {
+        let runs = SuiteResults::read(&out.join("results.json"))
+            .map(|r| r.runs.len())
+            .unwrap_or(0);
+        if runs >= 1 {
+            break;
+        }
+        assert!(Instant::now() < deadline, "no result after 120 s");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    // Ctrl-C.
+    let status = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let exit = child.wait().unwrap();
+    let results = check_outputs(&out);
+    assert!(
+        !exit.success(),
+        "the suite finished before it was interrupted"
+    );
+    assert!(
+        !results.complete && results.runs.len() < 12,
+        "{}",
+        results.runs.len()
+    );
+    assert!(fs::read_to_string(out.join("report.md"))
+        .unwrap()
+        .contains("incomplete"));
+    let _ = fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn bad_suite_files_name_file_field_and_value() {
+    let parse = |text: &str| {
+        Suite::parse("s.toml", text, &scenes_dir())
+            .map(|_| ())
+            .unwrap_err()
+            .to_string()
+    };
+    let with = |from: &str, to: &str| {
+        let t = TINY_SUITE.replacen(from, to, 1);
+        assert_ne!(t, TINY_SUITE, "{from}");
+        parse(&t)
+    };
+    let e = with("warmup = 0", "warmup = 0\ncolour = 1");
+    assert!(e.starts_with("s.toml: ") && e.contains("colour"), "{e}");
+    let e = with("vpls = 8", "vpls = 0");
+    assert!(
+        e.contains("s.toml: method[1].budgets[0]: ir: vpls = 0: must be in"),
+        "{e}"
+    );
+    let e = with("method = \"ir\"", "method = \"bidir\"");
+    assert!(e.contains("unknown method `bidir`"), "{e}");
+    let e = with("label = \"pt\"", "label = \"ir\"");
+    assert!(
+        e.contains("method[1].label = \"ir\": used by an earlier"),
+        "{e}"
+    );
+    let e = with(
+        "budgets = [{ vpls",
+        "scenes = [\"attic\"]\nbudgets = [{ vpls",
+    );
+    assert!(
+        e.contains("method[1].scenes = \"attic\": not the name"),
+        "{e}"
+    );
+    let e = with("point-light-plane/scene.toml", "nowhere/scene.toml");
+    assert!(
+        e.contains("s.toml: scene[1].path = \"nowhere/scene.toml\"") && e.contains("nowhere"),
+        "{e}"
+    );
+    let e = with("resolution = [16, 16]", "resolution = [0, 16]");
+    assert!(e.contains("resolution = [0, 16]"), "{e}");
+    let e = with(
+        "budgets = [{ spp = 1 }, { spp = 4 }]",
+        "params = { spp = 2 }\nbudgets = [{ spp = 1 }]",
+    );
+    assert!(
+        e.contains("method[0].budgets[0].spp = 1: also set in params"),
+        "{e}"
+    );
+    let e = with("budgets = [{ vpls = 8, frames = 1 }]", "budgets = []");
+    assert!(e.contains("method[1].budgets = []"), "{e}");
+    // The CLI prints it as one error line, no panic.
+    let o = irad(&["bench", "suite", "/nonexistent/suite.toml"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.starts_with("error: /nonexistent/suite.toml: cannot read it"),
+        "{err}"
+    );
+    assert!(!err.contains("panicked"), "{err}");
+}
