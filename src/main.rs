@@ -512,11 +512,9 @@ fn bench_suite(
     let bars = indicatif::MultiProgress::new();
     let overall = bars.add(ProgressBar::new(planned as u64));
     overall.set_style(
-        ProgressStyle::with_template(
-            "suite [{bar:30}] {pos}/{len} runs, {elapsed} elapsed, about {eta} left",
-        )
-        .expect("static template")
-        .progress_chars("=> "),
+        ProgressStyle::with_template("suite [{bar:30}] {pos}/{len} runs, {elapsed} elapsed{msg}")
+            .expect("static template")
+            .progress_chars("=> "),
     );
     let current = bars.add(ProgressBar::new(1));
     current.set_style(
@@ -529,6 +527,9 @@ fn bench_suite(
         cache,
         shard,
     };
+    let plan = suite.shard(shard);
+    let mut eta = suite::eta::Eta::default();
+    let mut last = std::time::Instant::now();
     let results =
         suite::run(&ctx, &suite, &options, |event| match event {
             Event::Reference {
@@ -558,6 +559,11 @@ fn bench_suite(
             }
             Event::Finished { run, record, .. } => {
                 overall.set_position(run as u64);
+                eta.finished(&suite, plan[run - 1], last.elapsed().as_secs_f64());
+                last = std::time::Instant::now();
+                if let Some(left) = eta.left(&suite, &plan[run..]) {
+                    overall.set_message(format!(", about {} left", indicatif::HumanDuration(left)));
+                }
                 let line =
                     match record.status {
                         Status::Ok => {

@@ -212,13 +212,13 @@ pub fn flicker(frames: &[Image], reference: &Image) -> Result<f64, MetricsError>
     let k = frames.len() as f64;
     let mut total = 0.0f64;
     for (i, r) in reference.pixels.iter().enumerate() {
-        for c in 0..3 {
+        for (c, &rc) in r.iter().enumerate() {
             let mean = frames.iter().map(|im| im.pixels[i][c] as f64).sum::<f64>() / k;
             let ss: f64 = frames
                 .iter()
                 .map(|im| (im.pixels[i][c] as f64 - mean).powi(2))
                 .sum();
-            let rc = r[c] as f64;
+            let rc = rc as f64;
             total += (ss / (k - 1.0) / (rc * rc + REL_MSE_EPSILON)).sqrt();
         }
     }

@@ -33,13 +33,13 @@ pub enum SuiteError {
     Param {
         file: String,
         field: String,
-        source: ParamError,
+        source: Box<ParamError>,
     },
     #[error("{file}: {field}: {source}")]
     Scene {
         file: String,
         field: String,
-        source: SceneError,
+        source: Box<SceneError>,
     },
 }
 
@@ -74,6 +74,7 @@ fn three() -> i64 {
 #[serde(deny_unknown_fields)]
 struct SceneEntry {
     path: String,
+    resolution: Option<[i64; 2]>,
     reference_spp: Option<i64>,
 }
 
@@ -199,19 +200,18 @@ impl Suite {
         let seed = count("seed", f.seed, 0)?;
         let warmup = count("warmup", f.warmup, 0)?;
         let repeats = count("repeats", f.repeats, 1)?;
-        let resolution = match f.resolution {
-            None => None,
+        let check_resolution = |name: &str, r: Option<[i64; 2]>| match r {
+            None => Ok(None),
             Some([w, h]) if (1..=16384).contains(&w) && (1..=16384).contains(&h) => {
-                Some((w as u32, h as u32))
+                Ok(Some((w as u32, h as u32)))
             }
-            Some([w, h]) => {
-                return Err(field(
-                    "resolution",
-                    format!("[{w}, {h}]"),
-                    "width and height must be in 1..=16384",
-                ))
-            }
+            Some([w, h]) => Err(field(
+                name,
+                format!("[{w}, {h}]"),
+                "width and height must be in 1..=16384",
+            )),
         };
+        let resolution = check_resolution("resolution", f.resolution)?;
         // A suite may pin its references' seed; otherwise REFERENCE_SEED.
         let mut reference_params = f.reference.clone();
         reference_params
@@ -220,7 +220,7 @@ impl Suite {
         let param_error = |field: String, source: ParamError| SuiteError::Param {
             file: file.into(),
             field,
-            source,
+            source: Box::new(source),
         };
         let reference = Method::from_params("reference", &reference_params)
             .map_err(|e| param_error("reference".into(), e))?;
@@ -255,10 +255,11 @@ impl Suite {
                 scene::load(&base.join(&entry.path)).map_err(|source| SuiteError::Scene {
                     file: file.into(),
                     field: format!("scene[{i}].path = {:?}", entry.path),
-                    source,
+                    source: Box::new(source),
                 })?
             };
-            if let Some((w, h)) = resolution {
+            let own = check_resolution(&format!("scene[{i}].resolution"), entry.resolution)?;
+            if let Some((w, h)) = own.or(resolution) {
                 scene.camera.width = w;
                 scene.camera.height = h;
             }

@@ -6,6 +6,7 @@
 //! readable results of the runs it finished. `--shard i/n` runs part of a suite; `merge`
 //! combines parts.
 
+pub mod eta;
 pub mod file;
 pub mod measure;
 pub mod merge;

@@ -1,0 +1,80 @@
+//! Time left in a suite, for its progress bar: each remaining run is estimated from the wall
+//! time per unit of work (renders x samples x pixels) of the finished runs of the same method
+//! label, or of all finished runs when its label has not run yet. Runs of one label scale
+//! about linearly in their samples; labels differ by orders of magnitude, so they are not
+//! pooled when they need not be.
+
+use std::collections::BTreeMap;
+use std::time::Duration;
+
+use super::file::{RunSpec, Suite};
+
+#[derive(Default)]
+pub struct Eta {
+    /// Per label: (seconds, units) of its finished runs.
+    by_label: BTreeMap<String, (f64, f64)>,
+    all: (f64, f64),
+}
+
+/// A run's work: renders x samples x pixels.
+pub fn units(suite: &Suite, run: &RunSpec) -> f64 {
+    let cam = &suite.scenes[run.scene].scene.camera;
+    (suite.warmup + suite.repeats) as f64
+        * run.method.samples() as f64
+        * cam.width as f64
+        * cam.height as f64
+}
+
+impl Eta {
+    /// `run` took `seconds` (its scene's reference included, when it came first).
+    pub fn finished(&mut self, suite: &Suite, run: &RunSpec, seconds: f64) {
+        let u = units(suite, run);
+        let label = &suite.entries[run.entry].label;
+        let e = self.by_label.entry(label.clone()).or_default();
+        e.0 += seconds;
+        e.1 += u;
+        self.all.0 += seconds;
+        self.all.1 += u;
+    }
+
+    /// The estimated time of `remaining`, None before any run finished.
+    pub fn left(&self, suite: &Suite, remaining: &[&RunSpec]) -> Option<Duration> {
+        if self.all.1 <= 0.0 {
+            return None;
+        }
+        let rate = |(s, u): (f64, f64)| s / u.max(1.0);
+        let seconds: f64 = remaining
+            .iter()
+            .map(|r| {
+                let label = &suite.entries[r.entry].label;
+                let per_unit = self
+                    .by_label
+                    .get(label)
+                    .map_or(rate(self.all), |&e| rate(e));
+                per_unit * units(suite, r)
+            })
+            .sum();
+        Some(Duration::from_secs_f64(seconds.max(0.0)))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn remaining_runs_are_estimated_per_label() {
+        let text = "name = \"e\"\nresolution = [10, 10]\nwarmup = 0\nrepeats = 1\n[reference]\nspp = 1\n[[scene]]\npath = \"embedded:cornell-box\"\n[[method]]\nmethod = \"reference\"\nbudgets = [{ spp = 1 }, { spp = 4 }]\n[[method]]\nmethod = \"ir\"\nbudgets = [{ frames = 1 }, { frames = 2 }]\n";
+        let suite = Suite::parse("e.toml", text, std::path::Path::new(".")).unwrap();
+        let runs: Vec<&RunSpec> = suite.runs.iter().collect();
+        let mut eta = Eta::default();
+        assert_eq!(eta.left(&suite, &runs), None);
+        eta.finished(&suite, runs[0], 1.0);
+        // spp 4 takes 4x spp 1; ir has not run, so it gets the overall rate (1 s per 100 units).
+        let left = eta.left(&suite, &runs[1..]).unwrap().as_secs_f64();
+        assert!((left - (4.0 + 1.0 + 2.0)).abs() < 1e-9, "{left}");
+        eta.finished(&suite, runs[2], 10.0);
+        let left = eta.left(&suite, &runs[3..]).unwrap().as_secs_f64();
+        assert!((left - 20.0).abs() < 1e-9, "{left}");
+    }
+}
