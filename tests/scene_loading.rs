@@ -559,6 +559,112 @@ fn every_committed_scene_loads() {
     assert!(count >= 4, "only {count} scenes under scenes/");
 }
 
+/// The stability suite: every scene under scenes/failure/ loads like the others and says which
+/// methods are expected to fail on it.
+#[test]
+fn every_failure_scene_loads_with_its_failure_table() {
+    let scenes = load_every_scene_in(&scenes_dir().join("failure"));
+    assert!(
+        scenes.len() >= 3,
+        "only {} scenes under scenes/failure/",
+        scenes.len()
+    );
+    for scene in &scenes {
+        let note = scene
+            .failure
+            .as_ref()
+            .unwrap_or_else(|| panic!("scenes/failure/{}: no [failure] table", scene.name));
+        assert!(note.methods.iter().all(|m| !m.is_empty()), "{}", scene.name);
+        outer_walls_face_in(scene);
+    }
+}
+
+/// Every triangle lying on a face of the scene's bounding box faces into the box: the suite's
+/// scenes are closed rooms seen from inside.
+fn outer_walls_face_in(scene: &Scene) {
+    let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+    for p in scene.triangles.iter().flat_map(|t| t.positions) {
+        lo = lo.min(p);
+        hi = hi.max(p);
+    }
+    let mut on_box = 0;
+    for t in &scene.triangles {
+        let [a, b, c] = t.positions;
+        let n = (b - a).cross(c - a).normalize();
+        for axis in 0..3 {
+            for (at, inward) in [(lo[axis], 1.0), (hi[axis], -1.0)] {
+                if t.positions.iter().all(|p| p[axis] == at) {
+                    assert_eq!(n[axis], inward, "{}: {t:?} faces out", scene.name);
+                    on_box += 1;
+                }
+            }
+        }
+    }
+    assert!(
+        on_box >= 12,
+        "{}: only {on_box} triangles on the box",
+        scene.name
+    );
+}
+
+#[test]
+fn failure_scene_facts() {
+    let facing_down = |scene: &Scene| {
+        let emissive: Vec<_> = scene
+            .triangles
+            .iter()
+            .filter(|t| scene.materials[t.material as usize].is_emissive())
+            .collect();
+        emissive.iter().all(|t| {
+            let [a, b, c] = t.positions;
+            (b - a).cross(c - a).normalize().y < -0.999
+        }) && !emissive.is_empty()
+    };
+    let failure = |name: &str| {
+        scene::load(&scenes_dir().join("failure").join(name).join("scene.toml"))
+            .unwrap_or_else(|e| panic!("scenes/failure/{name}: {e}"))
+    };
+
+    // u-office: the light is in room A (x < 3, z < 3), the camera in room B (x > 3.4, z < 3).
+    let office = failure("u-office");
+    assert!(office.lights.is_empty() && facing_down(&office));
+    for t in office
+        .triangles
+        .iter()
+        .filter(|t| office.materials[t.material as usize].is_emissive())
+    {
+        assert!(t.positions.iter().all(|p| p.x < 3.0 && p.z < 3.0), "{t:?}");
+    }
+    let eye = office.camera.position;
+    assert!(
+        eye.x > 3.4 && eye.x < 6.4 && eye.z > 0.0 && eye.z < 3.0,
+        "{eye}"
+    );
+
+    // corner-light: one point light within 0.1 of two walls and the ceiling; a bright object.
+    let corner = failure("corner-light");
+    match corner.lights[..] {
+        [scene::Light::Point { position, .. }] => {
+            assert!(
+                2.0 - position.x <= 0.1 && position.z + 2.0 <= 0.1,
+                "{position}"
+            );
+            assert!(2.5 - position.y <= 0.1, "{position}");
+        }
+        ref l => panic!("{l:?}"),
+    }
+    assert!(corner.materials.iter().any(|m| m.kd.min_element() >= 0.9));
+    assert!(corner.materials.iter().all(|m| m.ks == Vec3::ZERO));
+
+    // glossy-walls: glossy Phong walls (Ns in 100..=300) and one ceiling light facing down.
+    let glossy = failure("glossy-walls");
+    assert!(glossy.lights.is_empty() && facing_down(&glossy));
+    assert!(glossy
+        .materials
+        .iter()
+        .any(|m| m.ks.min_element() >= 0.5 && (100.0..=300.0).contains(&m.ns)));
+}
+
 #[test]
 fn cornell_box_facts() {
     let scene = committed("cornell-box");

@@ -16,7 +16,7 @@ pub enum SceneError {
     /// type, missing field); `message` is toml's, with line and column.
     #[error("{file}: {message}")]
     Toml { file: String, message: String },
-    /// A value out of its allowed range: a camera, light or environment field, an MTL
+    /// A value out of its allowed range: a camera, light, environment or failure field, an MTL
     /// material's key (`field` = "material `name` Kd"), an EXR texel.
     #[error("{file}: {field} = {value}: {problem}")]
     Invalid {

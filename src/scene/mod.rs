@@ -1,6 +1,7 @@
 //! Scenes (DESIGN.md "Scene files"): the CPU description every method starts from. A TOML file
-//! names a camera, OBJ/MTL meshes, analytic lights and an optional environment map; `load`
-//! turns it into flat triangle, material and light lists, checked and in irad's conventions.
+//! names a camera, OBJ/MTL meshes, analytic lights, an optional environment map and, for the
+//! stability suite (scenes/failure/), a `[failure]` note; `load` turns it into flat triangle,
+//! material and light lists, checked and in irad's conventions.
 //! `gpu` uploads a `Scene` as a `GpuScene`.
 //!
 //! Loading conventions: paths are relative to the scene file (MTL files to their OBJ); an MTL
