@@ -193,6 +193,9 @@ enum Bench {
         /// the parts with `irad bench merge`.
         #[arg(long, value_name = "I/N")]
         shard: Option<irad::bench::suite::Shard>,
+        /// Check the suite and list its runs (of this shard) without rendering anything.
+        #[arg(long)]
+        list: bool,
     },
     /// Merge the output folders of a suite's shards into one set of results, charts and report.
     Merge {
@@ -321,7 +324,8 @@ fn run(cli: Cli) -> Result<()> {
             out,
             cache,
             shard,
-        }) => bench_suite(&options, suite, quick, out, cache, shard),
+            list,
+        }) => bench_suite(&options, suite, quick, out, cache, shard, list),
         Command::Bench(Bench::Merge { parts, out }) => {
             let merged = irad::bench::suite::merge::merge(&parts, &out)?;
             println!(
@@ -481,6 +485,7 @@ fn bench_suite(
     out: Option<PathBuf>,
     cache: PathBuf,
     shard: Option<irad::bench::suite::Shard>,
+    list: bool,
 ) -> Result<()> {
     use irad::bench::suite::{self, Event, Shard, Status, Suite, SuiteOptions};
     let path = match suite {
@@ -491,6 +496,46 @@ fn bench_suite(
     let suite = Suite::load(&path)?;
     let shard = shard.unwrap_or(Shard::WHOLE);
     let out = out.unwrap_or_else(|| suite::default_out(&suite, shard));
+    if list {
+        let runs = suite.shard(shard);
+        println!(
+            "suite {} ({}): {} of {} runs{}",
+            suite.name,
+            path.display(),
+            runs.len(),
+            suite.runs.len(),
+            if shard == Shard::WHOLE {
+                String::new()
+            } else {
+                format!(" (shard {shard})")
+            }
+        );
+        for s in &suite.scenes {
+            let cam = &s.scene.camera;
+            let failing = s
+                .scene
+                .failure
+                .as_ref()
+                .map(|f| format!(", expected to fail: {}", f.methods.join(", ")))
+                .unwrap_or_default();
+            println!(
+                "  scene {} {}x{}, reference {} spp{failing}",
+                s.scene.name,
+                cam.width,
+                cam.height,
+                s.reference.samples()
+            );
+        }
+        for r in runs {
+            let declined = r
+                .method
+                .declines(&suite.scenes[r.scene].scene)
+                .map(|_| " (declines this scene)")
+                .unwrap_or_default();
+            println!("  {:>4} {}{declined}", r.index, r.id);
+        }
+        return Ok(());
+    }
     let ctx = Context::new(options)?;
     let planned = suite.shard(shard).len();
     println!(

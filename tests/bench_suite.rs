@@ -431,6 +431,45 @@ fn interrupted_suite_leaves_readable_results() {
 }
 
 #[test]
+fn every_suite_file_loads_and_the_stability_suite_has_every_failure_scene() {
+    let mut suites = vec![scenes_dir().join("failure/suite.toml")];
+    for entry in fs::read_dir(scenes_dir().join("suites")).unwrap() {
+        suites.push(entry.unwrap().path());
+    }
+    for path in &suites {
+        let suite = Suite::load(path).unwrap_or_else(|e| panic!("{e}"));
+        assert!(!suite.runs.is_empty(), "{}", path.display());
+    }
+    let stability = Suite::load(&scenes_dir().join("failure/suite.toml")).unwrap();
+    let in_suite: Vec<&str> = stability
+        .scenes
+        .iter()
+        .map(|s| s.scene.name.as_str())
+        .collect();
+    for entry in fs::read_dir(scenes_dir().join("failure")).unwrap() {
+        let path = entry.unwrap().path();
+        if path.join("scene.toml").exists() {
+            let name = path.file_name().unwrap().to_str().unwrap().to_string();
+            assert!(
+                in_suite.contains(&name.as_str()),
+                "{name} is not in the stability suite"
+            );
+        }
+    }
+    // Every method irad has runs on every stability scene it does not decline.
+    for s in &stability.scenes {
+        for method in irad::methods::METHOD_NAMES {
+            assert!(
+                stability.runs.iter().any(|r| r.method.name() == *method
+                    && stability.scenes[r.scene].scene.name == s.scene.name),
+                "{method} does not run on {}",
+                s.scene.name
+            );
+        }
+    }
+}
+
+#[test]
 fn bad_suite_files_name_file_field_and_value() {
     let parse = |text: &str| {
         Suite::parse("s.toml", text, &scenes_dir())
