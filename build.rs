@@ -1,5 +1,6 @@
 //! Embeds every committed spv/*.spv module in the binary (src/gpu/spirv.rs), so irad runs
-//! where glslang is not installed.
+//! where glslang is not installed; and hashes the Rust sources a reference image depends on
+//! (IRAD_REFERENCE_CODE_HASH, part of the benchmark harness's reference cache key).
 
 use std::{env, fs, path::Path};
 
@@ -33,4 +34,61 @@ fn main() {
         out,
     )
     .unwrap();
+    reference_code_hash(Path::new(&root));
+}
+
+/// Sources that shape a reference image besides its kernels' SPIR-V (hashed separately at run
+/// time): scene loading and upload, the BVH, the GPU core, samplers' tables, the reference's
+/// passes and accumulation, and how the harness combines a reference's halves.
+const REFERENCE_SOURCES: &[&str] = &[
+    "src/scene",
+    "src/bvh.rs",
+    "src/bvh",
+    "src/gpu",
+    "src/sampling",
+    "src/methods/reference.rs",
+    "src/methods/paths.rs",
+    "src/methods/gbuffer.rs",
+    "src/methods/accumulation.rs",
+    "src/methods/progressive.rs",
+    "src/bench/suite/references.rs",
+];
+
+fn reference_code_hash(root: &Path) {
+    let mut files = Vec::new();
+    for rel in REFERENCE_SOURCES {
+        println!("cargo:rerun-if-changed={rel}");
+        collect(&root.join(rel), &mut files);
+    }
+    files.sort();
+    // FNV-1a 64 over (relative path, length, bytes) of each file.
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    let mut feed = |bytes: &[u8]| {
+        for &b in bytes {
+            h ^= b as u64;
+            h = h.wrapping_mul(0x0000_0100_0000_01b3);
+        }
+    };
+    for f in &files {
+        let bytes = fs::read(f).unwrap();
+        let rel = f
+            .strip_prefix(root)
+            .unwrap()
+            .to_string_lossy()
+            .replace('\\', "/");
+        feed(rel.as_bytes());
+        feed(&(bytes.len() as u64).to_le_bytes());
+        feed(&bytes);
+    }
+    println!("cargo:rustc-env=IRAD_REFERENCE_CODE_HASH={h:016x}");
+}
+
+fn collect(path: &Path, files: &mut Vec<std::path::PathBuf>) {
+    if path.is_dir() {
+        for entry in fs::read_dir(path).unwrap() {
+            collect(&entry.unwrap().path(), files);
+        }
+    } else if path.extension().is_some_and(|e| e == "rs") {
+        files.push(path.to_path_buf());
+    }
 }

@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use anyhow::{bail, Result};
+use anyhow::{bail, Context as _, Result};
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 
@@ -60,6 +60,35 @@ enum Command {
     /// Benchmarks that measure and print.
     #[command(subcommand)]
     Bench(Bench),
+}
+
+#[derive(clap::Args)]
+struct SuiteArgs {
+    /// Suite TOML file (format in README, "Benchmark suites"); scenes/failure/suite.toml
+    /// is the stability suite.
+    #[arg(required_unless_present = "quick", conflicts_with = "quick")]
+    suite: Option<PathBuf>,
+    /// Run the built-in quick suite (scenes/suites/quick.toml of the source tree: 64x64,
+    /// a few budgets; about 3 minutes on lavapipe).
+    #[arg(long)]
+    quick: bool,
+    /// Output folder [default: out/bench/<suite name>, with -shard-I-of-N for a shard].
+    #[arg(short, long, value_name = "DIR")]
+    out: Option<PathBuf>,
+    /// Reference cache folder, shared by suites and shards.
+    #[arg(long, value_name = "DIR", default_value = "out/references")]
+    cache: PathBuf,
+    /// Run only part I of N (0-based) of the suite: run k belongs to part k mod N. Merge
+    /// the parts with `irad bench merge`.
+    #[arg(long, value_name = "I/N")]
+    shard: Option<irad::bench::suite::Shard>,
+    /// Check the suite and list its runs (of this shard) without rendering anything.
+    #[arg(long)]
+    list: bool,
+    /// Only render (or find in the cache) the references of the suite's scenes, the
+    /// scenes of shard I/N when --shard is given: a pre-pass before a sharded sweep.
+    #[arg(long)]
+    references_only: bool,
 }
 
 #[derive(clap::Args)]
@@ -174,29 +203,7 @@ enum Bench {
     /// results.csv, results.json, charts/<scene>.svg (relMSE against GPU time, log-log) and
     /// report.md (tables, Pareto-optimal runs, thumbnails and error maps) into the output
     /// folder, rewritten after every run, so an interrupted suite leaves readable results.
-    Suite {
-        /// Suite TOML file (format in README, "Benchmark suites"); scenes/failure/suite.toml
-        /// is the stability suite.
-        #[arg(required_unless_present = "quick", conflicts_with = "quick")]
-        suite: Option<PathBuf>,
-        /// Run the built-in quick suite (scenes/suites/quick.toml of the source tree: 64x64,
-        /// a few budgets; about 3 minutes on lavapipe).
-        #[arg(long)]
-        quick: bool,
-        /// Output folder [default: out/bench/<suite name>, with -shard-I-of-N for a shard].
-        #[arg(short, long, value_name = "DIR")]
-        out: Option<PathBuf>,
-        /// Reference cache folder, shared by suites and shards.
-        #[arg(long, value_name = "DIR", default_value = "out/references")]
-        cache: PathBuf,
-        /// Run only part I of N (0-based) of the suite: run k belongs to part k mod N. Merge
-        /// the parts with `irad bench merge`.
-        #[arg(long, value_name = "I/N")]
-        shard: Option<irad::bench::suite::Shard>,
-        /// Check the suite and list its runs (of this shard) without rendering anything.
-        #[arg(long)]
-        list: bool,
-    },
+    Suite(SuiteArgs),
     /// Merge the output folders of a suite's shards into one set of results, charts and report.
     Merge {
         /// Output folders of `irad bench suite --shard`.
@@ -205,6 +212,11 @@ enum Bench {
         /// Merged output folder.
         #[arg(short, long, value_name = "DIR")]
         out: PathBuf,
+        /// Merge parts measured on different devices, drivers or irad versions (refused by
+        /// default: their GPU times are not comparable). Charts then get a line per method
+        /// and device, and Pareto marks are per device.
+        #[arg(long)]
+        allow_mixed_devices: bool,
     },
     /// Rays/s of the GPU BVH traversal (closest and any hit; camera and random rays) next to
     /// obvhs's CWBVH on the CPU using every core, and the ratio GPU/CPU.
@@ -318,16 +330,13 @@ fn run(cli: Cli) -> Result<()> {
             );
             Ok(())
         }
-        Command::Bench(Bench::Suite {
-            suite,
-            quick,
+        Command::Bench(Bench::Suite(args)) => bench_suite(&options, args),
+        Command::Bench(Bench::Merge {
+            parts,
             out,
-            cache,
-            shard,
-            list,
-        }) => bench_suite(&options, suite, quick, out, cache, shard, list),
-        Command::Bench(Bench::Merge { parts, out }) => {
-            let merged = irad::bench::suite::merge::merge(&parts, &out)?;
+            allow_mixed_devices,
+        }) => {
+            let merged = irad::bench::suite::merge::merge(&parts, &out, allow_mixed_devices)?;
             println!(
                 "merged {} parts: {} of {} runs of suite {}{}",
                 parts.len(),
@@ -478,16 +487,17 @@ fn render(options: &ContextOptions, args: RenderArgs) -> Result<()> {
     Ok(())
 }
 
-fn bench_suite(
-    options: &ContextOptions,
-    suite: Option<PathBuf>,
-    quick: bool,
-    out: Option<PathBuf>,
-    cache: PathBuf,
-    shard: Option<irad::bench::suite::Shard>,
-    list: bool,
-) -> Result<()> {
+fn bench_suite(options: &ContextOptions, args: SuiteArgs) -> Result<()> {
     use irad::bench::suite::{self, Event, Shard, Status, Suite, SuiteOptions};
+    let SuiteArgs {
+        suite,
+        quick,
+        out,
+        cache,
+        shard,
+        list,
+        references_only,
+    } = args;
     let path = match suite {
         Some(p) => p,
         None if quick => suite::file::quick_suite_path(),
@@ -567,14 +577,29 @@ fn bench_suite(
             .expect("static template")
             .progress_chars("=> "),
     );
+    // Ctrl-C: stop after the run under way, with everything written; a second Ctrl-C quits
+    // at once, but never in the middle of writing the outputs.
+    static STOP: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+    let stop_bar = overall.clone();
+    ctrlc::set_handler(move || {
+        if STOP.swap(true, std::sync::atomic::Ordering::SeqCst) {
+            let _writing = suite::output::WRITING.lock();
+            std::process::exit(130);
+        }
+        stop_bar
+            .println("interrupted: stopping after the run under way (Ctrl-C again to quit now)");
+    })
+    .context("installing the Ctrl-C handler")?;
     let options = SuiteOptions {
         out: out.clone(),
         cache,
         shard,
+        stop: Some(&STOP),
+        references_only,
     };
     let plan = suite.shard(shard);
     let mut eta = suite::eta::Eta::default();
-    let mut last = std::time::Instant::now();
+    let mut run_start: Option<std::time::Instant> = None;
     let results =
         suite::run(&ctx, &suite, &options, |event| match event {
             Event::Reference {
@@ -598,14 +623,21 @@ fn bench_suite(
                 total,
                 ..
             } => {
+                if run_start.is_none() {
+                    run_start = Some(std::time::Instant::now());
+                }
                 current.set_length(total as u64);
                 current.set_position(done as u64);
                 current.set_message(format!("{id}: render {}/{renders}", render + 1));
             }
             Event::Finished { run, record, .. } => {
                 overall.set_position(run as u64);
-                eta.finished(&suite, plan[run - 1], last.elapsed().as_secs_f64());
-                last = std::time::Instant::now();
+                // Only rendered runs teach the estimate, from their first render on (a
+                // scene's reference comes before it).
+                if let (Status::Ok, Some(start)) = (record.status, run_start.take()) {
+                    eta.finished(&suite, plan[run - 1], start.elapsed().as_secs_f64());
+                }
+                run_start = None;
                 if let Some(left) = eta.left(&suite, &plan[run..]) {
                     overall.set_message(format!(", about {} left", indicatif::HumanDuration(left)));
                 }
@@ -639,6 +671,14 @@ fn bench_suite(
         "wrote {} (results.csv, results.json, charts/, images/)",
         out.join("report.md").display()
     );
+    if STOP.load(std::sync::atomic::Ordering::SeqCst) {
+        eprintln!(
+            "interrupted: {} of {} runs recorded; the outputs hold them, marked incomplete",
+            results.runs.len(),
+            results.runs_planned
+        );
+        std::process::exit(130);
+    }
     if errors > 0 {
         bail!("{errors} run(s) failed; their errors are in the report");
     }

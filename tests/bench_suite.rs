@@ -107,16 +107,25 @@ fn check_outputs(out: &Path) -> SuiteResults {
         }
         links += 1;
     }
-    assert!(links > 2 * results.runs.len().min(1));
+    let ok_runs = results
+        .runs
+        .iter()
+        .filter(|r| r.status == Status::Ok)
+        .count();
+    assert!(
+        links >= 2 * ok_runs + results.scenes().len(),
+        "{links} links"
+    );
     for run in &results.runs {
         if run.status == Status::Ok {
             let m = run.metrics.expect("ok runs are scored");
             assert_eq!(m.nan_inf, 0, "{}", run.id);
             assert_eq!(run.nonfinite_estimates, 0, "{}", run.id);
             assert!(m.rel_mse.is_finite() && run.gpu_ms.is_some(), "{}", run.id);
-            if run.repeats >= 2 {
+            if run.flicker_frames >= 2 {
+                // 0 only when every frame is identical (a black image, say).
                 assert!(
-                    run.flicker.is_some_and(|f| f.is_finite() && f > 0.0),
+                    run.flicker.is_some_and(|f| f.is_finite() && f >= 0.0),
                     "{}",
                     run.id
                 );
@@ -190,7 +199,7 @@ fn quick_suite_writes_every_output_and_charts_the_csv_figures() {
 
 const TINY_SUITE: &str = r#"
 name = "tiny"
-resolution = [16, 16]
+width = 16
 warmup = 0
 repeats = 2
 [reference]
@@ -223,6 +232,8 @@ fn run_suite(
         out: out.to_path_buf(),
         cache: cache.to_path_buf(),
         shard,
+        stop: None,
+        references_only: false,
     };
     suite::run(ctx, suite, &options, |_| {}).unwrap()
 }
@@ -253,15 +264,19 @@ fn shards_merge_into_the_whole_suite() {
         // Parts in any order give the whole suite, bit for bit in every figure.
         let merged_dir = dir.join("merged");
         let reversed: Vec<PathBuf> = parts.iter().rev().cloned().collect();
-        let merged = merge::merge(&reversed, &merged_dir).unwrap();
+        let merged = merge::merge(&reversed, &merged_dir, false).unwrap();
         assert!(merged.complete && merged.shard.is_none());
         assert_eq!(figures(&merged), figures(&whole));
         assert_eq!(check_outputs(&merged_dir), merged);
         check_outputs(&dir.join("whole"));
         // Missing parts leave it incomplete; a part given twice, or another suite, is refused.
-        let partial = merge::merge(&parts[..2], &dir.join("partial")).unwrap();
+        let partial = merge::merge(&parts[..2], &dir.join("partial"), false).unwrap();
         assert!(!partial.complete);
-        let twice = merge::merge(&[parts[0].clone(), parts[0].clone()], &dir.join("twice"));
+        let twice = merge::merge(
+            &[parts[0].clone(), parts[0].clone()],
+            &dir.join("twice"),
+            false,
+        );
         assert!(twice.unwrap_err().to_string().contains("in both"));
         let other = Suite::parse(
             "other.toml",
@@ -276,8 +291,45 @@ fn shards_merge_into_the_whole_suite() {
             &cache,
             Shard { index: 1, count: 3 },
         );
-        let mixed = merge::merge(&[parts[0].clone(), dir.join("other")], &dir.join("mixed"));
+        let mixed = merge::merge(
+            &[parts[0].clone(), dir.join("other")],
+            &dir.join("mixed"),
+            false,
+        );
         assert!(mixed.unwrap_err().to_string().contains("same suite"));
+        // Parts from another device are refused unless allowed, then charted apart.
+        let moved = dir.join("moved");
+        fs::create_dir_all(moved.join("images")).unwrap();
+        let mut elsewhere = SuiteResults::read(&parts[2].join("results.json")).unwrap();
+        elsewhere.device = "Another GPU".into();
+        for run in &mut elsewhere.runs {
+            run.device = "Another GPU".into();
+        }
+        fs::write(moved.join("results.json"), elsewhere.json()).unwrap();
+        for entry in fs::read_dir(parts[2].join("images")).unwrap() {
+            let entry = entry.unwrap();
+            fs::copy(entry.path(), moved.join("images").join(entry.file_name())).unwrap();
+        }
+        let two = [parts[0].clone(), parts[1].clone(), moved];
+        let e = merge::merge(&two, &dir.join("devices"), false)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("Another GPU") && e.contains("--allow-mixed-devices"),
+            "{e}"
+        );
+        let allowed = merge::merge(&two, &dir.join("devices"), true).unwrap();
+        assert!(allowed.device.starts_with("mixed"));
+        let svg = fs::read_to_string(
+            dir.join("devices")
+                .join(suite::output::chart_path("cornell-box")),
+        )
+        .unwrap();
+        let (_, points) = chart::read_svg(&svg).unwrap();
+        assert!(
+            points.iter().any(|p| p.series.contains("(Another GPU)")),
+            "{points:?}"
+        );
     });
     let _ = fs::remove_dir_all(&dir);
 }
@@ -302,7 +354,7 @@ fn references_are_cached_and_never_reused_stale() {
     }
     let text = r#"
 name = "cache"
-resolution = [8, 8]
+width = 8
 warmup = 0
 repeats = 1
 [reference]
@@ -381,7 +433,7 @@ fn interrupted_suite_leaves_readable_results() {
     fs::write(
         &suite_path,
         format!(
-            "name = \"slow\"\nresolution = [32, 32]\nwarmup = 0\nrepeats = 2\n[reference]\nspp = 16\n[[scene]]\npath = \"embedded:cornell-box\"\n[[method]]\nmethod = \"reference\"\nbudgets = [{}]\n",
+            "name = \"slow\"\nwidth = 32\nwarmup = 0\nrepeats = 2\n[reference]\nspp = 16\n[[scene]]\npath = \"embedded:cornell-box\"\n[[method]]\nmethod = \"reference\"\nbudgets = [{}]\n",
             budgets.join(", ")
         ),
     )
@@ -509,8 +561,30 @@ fn bad_suite_files_name_file_field_and_value() {
         e.contains("s.toml: scene[1].path = \"nowhere/scene.toml\"") && e.contains("nowhere"),
         "{e}"
     );
-    let e = with("resolution = [16, 16]", "resolution = [0, 16]");
-    assert!(e.contains("resolution = [0, 16]"), "{e}");
+    let e = with("width = 16", "width = 0");
+    assert!(e.contains("s.toml: width = 0: must be in"), "{e}");
+    let e = with(
+        "path = \"embedded:cornell-box\"",
+        "path = \"embedded:cornell-box\"\nresolution = [0, 16]",
+    );
+    assert!(e.contains("scene[0].resolution = [0, 16]"), "{e}");
+    let e = with("spp = 32", "spp = 32\nseed = 2");
+    assert!(
+        e.contains("reference.seed = 2: the reference of scene[0] would share"),
+        "{e}"
+    );
+    let e = with(
+        "budgets = [{ spp = 1 }, { spp = 4 }]",
+        "budgets = [{ spp = 4 }, { spp = 4, max_depth = 1024 }]",
+    );
+    assert!(e.contains("the same settings as budget"), "{e}");
+    let e = with("name = \"tiny\"", "name = \"..\"");
+    assert!(e.contains("name = \"..\""), "{e}");
+    let e = with("budgets = [{ vpls", "scenes = []\nbudgets = [{ vpls");
+    assert!(e.contains("method[1].scenes = []"), "{e}");
+    // A cause is said once.
+    let e = with("vpls = 8", "vpls = 0");
+    assert_eq!(e.matches("must be in").count(), 1, "{e}");
     let e = with(
         "budgets = [{ spp = 1 }, { spp = 4 }]",
         "params = { spp = 2 }\nbudgets = [{ spp = 1 }]",

@@ -366,8 +366,8 @@ fn variance_across_seeds_by_hand() {
 
 #[test]
 fn flicker_by_hand() {
-    // One pixel; channel 0 takes 1, 2, 3 (standard deviation 1) over a reference of 2:
-    // 1 / sqrt(4 + 0.01); the constant channels add 0. Averaged over 3 channels.
+    // One pixel; channel 0 takes 1, 2, 3 (variance 1) over a reference of 2: 1 / (4 + 0.01);
+    // the constant channels add 0. Averaged over 3 channels, then the square root.
     let frames: Vec<Image> = [1.0, 2.0, 3.0]
         .iter()
         .map(|&v| image(1, 1, &[[v, 5.0, 5.0]]))
@@ -375,7 +375,7 @@ fn flicker_by_hand() {
     let reference = image(1, 1, &[[2.0, 5.0, 5.0]]);
     assert_close(
         metrics::flicker(&frames, &reference).unwrap(),
-        1.0 / (4.01f64).sqrt() / 3.0,
+        (1.0 / 4.01f64 / 3.0).sqrt(),
         1e-12,
         "1 pixel",
     );

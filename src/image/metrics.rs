@@ -61,6 +61,23 @@ pub struct Metrics {
     pub nan_inf: u64,
 }
 
+impl Metrics {
+    /// Each figure's mean over `all` (NaN when any is NaN), the NaN/Inf counts summed: the
+    /// expected error of one image, estimated from several.
+    pub fn mean(all: &[Metrics]) -> Metrics {
+        let n = all.len() as f64;
+        let mean = |f: fn(&Metrics) -> f64| all.iter().map(f).sum::<f64>() / n;
+        Metrics {
+            rel_mse: mean(|m| m.rel_mse),
+            rmse: mean(|m| m.rmse),
+            lab_error: mean(|m| m.lab_error),
+            bias: mean(|m| m.bias),
+            outliers: mean(|m| m.outliers),
+            nan_inf: all.iter().map(|m| m.nan_inf).sum(),
+        }
+    }
+}
+
 #[derive(Debug, thiserror::Error, PartialEq)]
 pub enum MetricsError {
     #[error("the image under test is {}x{} but the reference is {}x{}", .test.0, .test.1, .reference.0, .reference.1)]
@@ -188,10 +205,12 @@ pub fn variance_across_seeds(images: &[Image]) -> Result<f64, MetricsError> {
 }
 
 /// Flicker (temporal stability): `frames` are renders of one static view with successive
-/// seeds, as an animation would show them. Per pixel and channel the temporal standard
-/// deviation (unbiased, divided by F - 1) relative to the reference, sqrt(var / (r^2 + 0.01))
-/// (the relMSE's normalization, so flicker^2 is the variance part of relMSE), averaged over
-/// pixels and channels. Non-finite values make it NaN.
+/// seeds, as an animation would show them. Per pixel and channel the temporal variance
+/// (unbiased, divided by F - 1) relative to the reference, var / (r^2 + 0.01) (relMSE's
+/// normalization), averaged over pixels and channels, then the square root: a relative
+/// temporal standard deviation whose square is the variance part of relMSE, with no bias
+/// from the number of frames (a mean of per-pixel square roots would shrink with few
+/// frames). Non-finite values make it NaN.
 pub fn flicker(frames: &[Image], reference: &Image) -> Result<f64, MetricsError> {
     if frames.len() < 2 {
         return Err(MetricsError::TooFewImages {
@@ -219,10 +238,10 @@ pub fn flicker(frames: &[Image], reference: &Image) -> Result<f64, MetricsError>
                 .map(|im| (im.pixels[i][c] as f64 - mean).powi(2))
                 .sum();
             let rc = rc as f64;
-            total += (ss / (k - 1.0) / (rc * rc + REL_MSE_EPSILON)).sqrt();
+            total += ss / (k - 1.0) / (rc * rc + REL_MSE_EPSILON);
         }
     }
-    Ok(total / (3 * reference.pixels.len()) as f64)
+    Ok((total / (3 * reference.pixels.len()) as f64).sqrt())
 }
 
 /// Y = 0.2126 R + 0.7152 G + 0.0722 B of linear RGB.

@@ -75,6 +75,15 @@ impl Method {
         }
     }
 
+    /// Work in units that scale a method's cost at a fixed resolution, for time estimates:
+    /// samples per pixel, or frames times light paths.
+    pub fn work(&self) -> f64 {
+        match self {
+            Method::Reference(s) => s.spp as f64,
+            Method::Ir(s) => s.frames as f64 * s.paths as f64,
+        }
+    }
+
     /// The method's settings by the names `from_params` reads (the seed apart), sorted, so a
     /// record's parameters can be fed back. A bias that is off is not listed.
     pub fn parameters(&self) -> BTreeMap<String, serde_json::Value> {
@@ -99,10 +108,8 @@ impl Method {
                         Absorption::Roulette => "roulette",
                     }),
                 );
-                // The clamp is recorded only when on: it is a named, measured bias.
-                if s.g_clamp > 0.0 {
-                    p.insert("clamp".into(), json!(s.g_clamp));
-                }
+                // 0: off (the clamp is a named, measured bias).
+                p.insert("clamp".into(), json!(s.g_clamp));
                 p.insert("interleave".into(), json!(s.interleave));
                 p.insert(
                     "pixel_centres".into(),

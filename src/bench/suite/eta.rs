@@ -1,5 +1,5 @@
 //! Time left in a suite, for its progress bar: each remaining run is estimated from the wall
-//! time per unit of work (renders x samples x pixels) of the finished runs of the same method
+//! time per unit of work (renders x `Method::work` x pixels) of the finished runs of the same method
 //! label, or of all finished runs when its label has not run yet. Runs of one label scale
 //! about linearly in their samples; labels differ by orders of magnitude, so they are not
 //! pooled when they need not be.
@@ -16,11 +16,11 @@ pub struct Eta {
     all: (f64, f64),
 }
 
-/// A run's work: renders x samples x pixels.
+/// A run's work: renders x `Method::work` x pixels.
 pub fn units(suite: &Suite, run: &RunSpec) -> f64 {
     let cam = &suite.scenes[run.scene].scene.camera;
-    (suite.warmup + suite.repeats) as f64
-        * run.method.samples() as f64
+    (suite.warmup + suite.repeats.max(suite.flicker_frames)) as f64
+        * run.method.work()
         * cam.width as f64
         * cam.height as f64
 }
@@ -64,7 +64,7 @@ mod tests {
 
     #[test]
     fn remaining_runs_are_estimated_per_label() {
-        let text = "name = \"e\"\nresolution = [10, 10]\nwarmup = 0\nrepeats = 1\n[reference]\nspp = 1\n[[scene]]\npath = \"embedded:cornell-box\"\n[[method]]\nmethod = \"reference\"\nbudgets = [{ spp = 1 }, { spp = 4 }]\n[[method]]\nmethod = \"ir\"\nbudgets = [{ frames = 1 }, { frames = 2 }]\n";
+        let text = "name = \"e\"\nwidth = 10\nwarmup = 0\nrepeats = 1\nflicker_frames = 0\n[reference]\nspp = 1\n[[scene]]\npath = \"embedded:cornell-box\"\n[[method]]\nmethod = \"reference\"\nbudgets = [{ spp = 1 }, { spp = 4 }]\n[[method]]\nmethod = \"ir\"\nbudgets = [{ frames = 1, vpls = 1 }, { frames = 2, vpls = 1 }]\n";
         let suite = Suite::parse("e.toml", text, std::path::Path::new(".")).unwrap();
         let runs: Vec<&RunSpec> = suite.runs.iter().collect();
         let mut eta = Eta::default();

@@ -29,17 +29,18 @@ pub enum SuiteError {
         value: String,
         problem: String,
     },
-    #[error("{file}: {field}: {source}")]
+    // `cause`, not `source`: the message already holds it, so `{:#}` does not repeat it.
+    #[error("{file}: {field}: {cause}")]
     Param {
         file: String,
         field: String,
-        source: Box<ParamError>,
+        cause: Box<ParamError>,
     },
-    #[error("{file}: {field}: {source}")]
+    #[error("{file}: {field}: {cause}")]
     Scene {
         file: String,
         field: String,
-        source: Box<SceneError>,
+        cause: Box<SceneError>,
     },
 }
 
@@ -49,13 +50,15 @@ struct SuiteFile {
     name: String,
     #[serde(default)]
     description: String,
-    resolution: Option<[i64; 2]>,
+    width: Option<i64>,
     #[serde(default = "one")]
     seed: i64,
     #[serde(default = "one")]
     warmup: i64,
     #[serde(default = "three")]
     repeats: i64,
+    #[serde(default = "four")]
+    flicker_frames: i64,
     reference: toml::Table,
     #[serde(default)]
     scene: Vec<SceneEntry>,
@@ -68,6 +71,9 @@ fn one() -> i64 {
 }
 fn three() -> i64 {
     3
+}
+fn four() -> i64 {
+    4
 }
 
 #[derive(Debug, Deserialize)]
@@ -101,6 +107,8 @@ pub struct Suite {
     pub seed: u32,
     pub warmup: u32,
     pub repeats: u32,
+    /// Renders with successive seeds whose flicker is measured (0: none).
+    pub flicker_frames: u32,
     pub scenes: Vec<SuiteScene>,
     pub entries: Vec<SuiteMethod>,
     /// Every run in suite order; `index` is the position here.
@@ -111,6 +119,8 @@ pub struct Suite {
 pub struct SuiteScene {
     /// The scene with the suite's resolution applied.
     pub scene: Scene,
+    /// The scene's path as the suite file writes it.
+    pub path: String,
     /// The reference method (seed included) for this scene.
     pub reference: Method,
 }
@@ -137,10 +147,12 @@ pub struct RunSpec {
 }
 
 impl RunSpec {
-    /// A file name for the run's images: the id with every character that is not
-    /// `[A-Za-z0-9._=-]` replaced by `_`.
+    /// A file name for the run's images: the index, then the id with every character that is
+    /// not `[A-Za-z0-9._=-]` replaced by `_`.
     pub fn file_stem(&self) -> String {
-        file_safe(&self.id)
+        // The index keeps stems unique where names differ only in characters file_safe
+        // replaces ("a_b/c" and "a/b_c").
+        format!("{:04}-{}", self.index, file_safe(&self.id))
     }
 }
 
@@ -179,11 +191,14 @@ impl Suite {
             value,
             problem: problem.into(),
         };
-        if f.name.trim().is_empty() || file_safe(&f.name) != f.name {
+        if f.name.trim().is_empty()
+            || file_safe(&f.name) != f.name
+            || f.name.chars().all(|c| c == '.')
+        {
             return Err(field(
                 "name",
                 format!("{:?}", f.name),
-                "must be non-empty and use only letters, digits, '.', '_', '=' and '-'",
+                "must use only letters, digits, '.', '_', '=' and '-', and not only dots",
             ));
         }
         let count = |name: &str, v: i64, min: i64| {
@@ -200,6 +215,19 @@ impl Suite {
         let seed = count("seed", f.seed, 0)?;
         let warmup = count("warmup", f.warmup, 0)?;
         let repeats = count("repeats", f.repeats, 1)?;
+        let flicker_frames = count("flicker_frames", f.flicker_frames, 0)?;
+        if flicker_frames == 1 {
+            return Err(field(
+                "flicker_frames",
+                "1".into(),
+                "flicker needs 2 or more frames (0 turns it off)",
+            ));
+        }
+        if let Some(w) = f.width {
+            if !(1..=16384).contains(&w) {
+                return Err(field("width", w.to_string(), "must be in 1..=16384"));
+            }
+        }
         let check_resolution = |name: &str, r: Option<[i64; 2]>| match r {
             None => Ok(None),
             Some([w, h]) if (1..=16384).contains(&w) && (1..=16384).contains(&h) => {
@@ -211,7 +239,7 @@ impl Suite {
                 "width and height must be in 1..=16384",
             )),
         };
-        let resolution = check_resolution("resolution", f.resolution)?;
+
         // A suite may pin its references' seed; otherwise REFERENCE_SEED.
         let mut reference_params = f.reference.clone();
         reference_params
@@ -220,7 +248,7 @@ impl Suite {
         let param_error = |field: String, source: ParamError| SuiteError::Param {
             file: file.into(),
             field,
-            source: Box::new(source),
+            cause: Box::new(source),
         };
         let reference = Method::from_params("reference", &reference_params)
             .map_err(|e| param_error("reference".into(), e))?;
@@ -255,20 +283,32 @@ impl Suite {
                 scene::load(&base.join(&entry.path)).map_err(|source| SuiteError::Scene {
                     file: file.into(),
                     field: format!("scene[{i}].path = {:?}", entry.path),
-                    source: Box::new(source),
+                    cause: Box::new(source),
                 })?
             };
             let own = check_resolution(&format!("scene[{i}].resolution"), entry.resolution)?;
-            if let Some((w, h)) = own.or(resolution) {
+            if let Some((w, h)) = own {
                 scene.camera.width = w;
                 scene.camera.height = h;
+            } else if let Some(w) = f.width {
+                // The scene's own aspect ratio, so the framing is the scene's.
+                let cam = &mut scene.camera;
+                let h = (w as f64 * cam.height as f64 / cam.width as f64)
+                    .round()
+                    .max(1.0);
+                cam.width = w as u32;
+                cam.height = h as u32;
             }
-            if let Some(prev) = scenes.iter().find(|s| s.scene.name == scene.name) {
+            let key = |name: &str| file_safe(name).to_lowercase();
+            if let Some(prev) = scenes
+                .iter()
+                .find(|s| key(&s.scene.name) == key(&scene.name))
+            {
                 return Err(field(
                     &format!("scene[{i}].path"),
                     format!("{:?}", entry.path),
                     &format!(
-                        "a second scene named {:?} (scene names key charts and files)",
+                        "a second scene named {:?} (scene names key charts and files, compared as file names, ignoring case)",
                         prev.scene.name
                     ),
                 ));
@@ -294,12 +334,35 @@ impl Suite {
                     .map_err(|e| param_error(format!("scene[{i}].reference_spp"), e))?;
             }
             hash.write(&scene.content_hash.to_le_bytes());
-            scenes.push(SuiteScene { scene, reference });
+            scenes.push(SuiteScene {
+                scene,
+                path: entry.path.clone(),
+                reference,
+            });
+        }
+
+        let renders = warmup as u64 + repeats.max(flicker_frames) as u64;
+        let run_seed = |s: u32| (s.wrapping_sub(seed) as u64) < renders;
+        for (i, s) in scenes.iter().enumerate() {
+            // The reference is two halves, seeds r and r + 1 (references.rs).
+            let r = s.reference.seed();
+            if run_seed(r) || run_seed(r.wrapping_add(1)) {
+                return Err(field(
+                    "reference.seed",
+                    r.to_string(),
+                    &format!(
+                        "the reference of scene[{i}] would share random numbers with the runs, which use seeds {seed}..{} (seed + warm-up + repeats or flicker frames): pick a seed far from them",
+                        seed as u64 + renders
+                    ),
+                ));
+            }
         }
 
         let scene_names: BTreeSet<&str> = scenes.iter().map(|s| s.scene.name.as_str()).collect();
         let mut entries = Vec::new();
         let mut labels = BTreeSet::new();
+        // Per entry, per budget: the method and its budget label, checked whatever scenes apply.
+        let mut budgets: Vec<Vec<(Method, String)>> = Vec::new();
         for (i, m) in f.method.iter().enumerate() {
             let label = m.label.clone().unwrap_or_else(|| m.method.clone());
             if label.is_empty() || file_safe(&label) != label {
@@ -317,6 +380,13 @@ impl Suite {
                 ));
             }
             if let Some(names) = &m.scenes {
+                if names.is_empty() {
+                    return Err(field(
+                        &format!("method[{i}].scenes"),
+                        "[]".into(),
+                        "names no scene: leave it out to run on every scene",
+                    ));
+                }
                 if let Some(unknown) = names.iter().find(|n| !scene_names.contains(n.as_str())) {
                     return Err(field(
                         &format!("method[{i}].scenes"),
@@ -339,6 +409,42 @@ impl Suite {
                     "needs at least one budget ({} for the defaults)",
                 ));
             }
+            let mut methods: Vec<(Method, String)> = Vec::new();
+            for (b, budget) in m.budgets.iter().enumerate() {
+                let mut params = m.params.clone();
+                for (k, v) in budget {
+                    if k == "seed" || params.contains_key(k) {
+                        return Err(field(
+                            &format!("method[{i}].budgets[{b}].{k}"),
+                            v.to_string(),
+                            "also set in params (or a seed): a budget adds keys, it does not override",
+                        ));
+                    }
+                    params.insert(k.clone(), v.clone());
+                }
+                params.insert("seed".into(), toml::Value::Integer(seed as i64));
+                let method = Method::from_params(&m.method, &params)
+                    .map_err(|e| param_error(format!("method[{i}].budgets[{b}]"), e))?;
+                let text = budget
+                    .iter()
+                    .map(|(k, v)| format!("{k}={}", plain(v)))
+                    .collect::<Vec<_>>()
+                    .join(" ");
+                let text = if text.is_empty() {
+                    "defaults".into()
+                } else {
+                    text
+                };
+                if let Some((_, same)) = methods.iter().find(|(other, _)| *other == method) {
+                    return Err(field(
+                        &format!("method[{i}].budgets[{b}]"),
+                        format!("{{ {text} }}"),
+                        &format!("the same settings as budget {{ {same} }}"),
+                    ));
+                }
+                methods.push((method, text));
+            }
+            budgets.push(methods);
             entries.push(SuiteMethod {
                 method: m.method.clone(),
                 label,
@@ -355,45 +461,14 @@ impl Suite {
                 if !applies {
                     continue;
                 }
-                for (b, budget) in m.budgets.iter().enumerate() {
-                    let mut params = m.params.clone();
-                    for (k, v) in budget {
-                        if k == "seed" || params.contains_key(k) {
-                            return Err(field(
-                                &format!("method[{e}].budgets[{b}].{k}"),
-                                v.to_string(),
-                                "also set in params (or a seed): a budget adds keys, it does not override",
-                            ));
-                        }
-                        params.insert(k.clone(), v.clone());
-                    }
-                    params.insert("seed".into(), toml::Value::Integer(seed as i64));
-                    let method = Method::from_params(&m.method, &params)
-                        .map_err(|e2| param_error(format!("method[{e}].budgets[{b}]"), e2))?;
-                    let budget = budget
-                        .iter()
-                        .map(|(k, v)| format!("{k}={}", plain(v)))
-                        .collect::<Vec<_>>()
-                        .join(" ");
-                    let budget = if budget.is_empty() {
-                        "defaults".into()
-                    } else {
-                        budget
-                    };
+                for (method, budget) in &budgets[e] {
                     let id = format!("{}/{}/{}", suite_scene.scene.name, entries[e].label, budget);
-                    if runs.iter().any(|r: &RunSpec| r.id == id) {
-                        return Err(field(
-                            &format!("method[{e}].budgets[{b}]"),
-                            budget,
-                            "the same budget twice",
-                        ));
-                    }
                     runs.push(RunSpec {
                         index: runs.len(),
                         scene: s,
                         entry: e,
-                        method,
-                        budget,
+                        method: method.clone(),
+                        budget: budget.clone(),
                         id,
                     });
                 }
@@ -408,6 +483,7 @@ impl Suite {
             seed,
             warmup,
             repeats,
+            flicker_frames,
             scenes,
             entries,
             runs,

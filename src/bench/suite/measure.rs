@@ -1,8 +1,9 @@
-//! One run of a suite, measured: `warmup` untimed renders, then `repeats` timed renders with
-//! successive seeds (seed, seed + 1, ...). Reported: the median over the repeats of each
-//! pass's GPU time, of the total GPU time and of the wall time; the first repeat's image
-//! scored against the reference; and the flicker across the repeats' images (a static view
-//! rendered frame after frame with fresh random numbers, as an animation shows it).
+//! One run of a suite, measured: `warmup` untimed renders, then K = max(repeats, flicker
+//! frames) renders with successive seeds (seed, seed + 1, ...). Reported: the median over the
+//! first `repeats` of each pass's GPU time, of the total GPU time and of the wall time; the
+//! error figures of every one of the K images against the reference, averaged (one image's
+//! figures are as noisy as the image); and the flicker across the first F images (a static
+//! view rendered frame after frame with fresh random numbers, as an animation shows it).
 
 use std::collections::BTreeMap;
 
@@ -33,7 +34,10 @@ impl From<RunError> for MeasureError {
 pub struct Measured {
     /// The first timed repeat's image (seed = the method's seed).
     pub image: Image,
+    /// Each figure averaged over the K images (NaN/Inf counts summed).
     pub metrics: Metrics,
+    /// Images scored.
+    pub scored: u32,
     pub flicker: Option<f64>,
     pub gpu_ms: Option<f64>,
     pub pass_gpu_ms: BTreeMap<String, Option<f64>>,
@@ -41,8 +45,8 @@ pub struct Measured {
     pub nonfinite_estimates: u64,
 }
 
-/// Renders `method` `warmup + repeats` times; `progress(render, renders, done, total)` reports
-/// the render under way and its samples.
+/// Renders `method` `warmup + max(repeats, flicker_frames)` times; `progress(render, renders,
+/// done, total)` reports the render under way and its samples.
 #[allow(clippy::too_many_arguments)]
 pub fn measure(
     ctx: &Context,
@@ -53,14 +57,16 @@ pub fn measure(
     reference: &Image,
     warmup: u32,
     repeats: u32,
+    flicker_frames: u32,
     mut progress: impl FnMut(u32, u32, u32, u32),
 ) -> Result<Measured, MeasureError> {
     let repeats = repeats.max(1);
-    let renders = warmup + repeats;
+    let k = repeats.max(flicker_frames);
+    let renders = warmup + k;
     let seed = method.seed();
     for w in 0..warmup {
-        // Warm-up seeds follow the timed ones, so no timed image repeats one.
-        let m = method.with_seed(seed.wrapping_add(repeats + w));
+        // Warm-up seeds follow the scored ones, so no scored image repeats one.
+        let m = method.with_seed(seed.wrapping_add(k + w));
         renderers.run(ctx, &m, scene, gpu_scene, |d, t| progress(w, renders, d, t))?;
     }
     let mut images = Vec::with_capacity(repeats as usize);
@@ -68,15 +74,17 @@ pub fn measure(
     let mut wall = Vec::new();
     let mut passes: BTreeMap<String, Vec<Option<f64>>> = BTreeMap::new();
     let mut nonfinite = 0u64;
-    for r in 0..repeats {
+    for r in 0..k {
         let m = method.with_seed(seed.wrapping_add(r));
         let out = renderers.run(ctx, &m, scene, gpu_scene, |d, t| {
             progress(warmup + r, renders, d, t)
         })?;
-        gpu.push(out.passes.total_gpu_ms());
-        wall.push(out.wall_ms);
-        for (name, ms, _) in &out.passes.passes {
-            passes.entry(name.clone()).or_default().push(*ms);
+        if r < repeats {
+            gpu.push(out.passes.total_gpu_ms());
+            wall.push(out.wall_ms);
+            for (name, ms, _) in &out.passes.passes {
+                passes.entry(name.clone()).or_default().push(*ms);
+            }
         }
         nonfinite += out.nonfinite_estimates as u64;
         images.push(out.image);
@@ -85,15 +93,22 @@ pub fn measure(
         let mut v: Vec<f64> = values.iter().copied().collect::<Option<Vec<f64>>>()?;
         Some(median(&mut v))
     };
-    let metrics = image::compare(&images[0], reference)
+    let scores = images
+        .iter()
+        .map(|im| image::compare(im, reference))
+        .collect::<Result<Vec<Metrics>, _>>()
         .map_err(|e| MeasureError::Failed(format!("scoring against the reference: {e}")))?;
-    let flicker = if images.len() >= 2 {
-        metrics::flicker(&images, reference).ok()
+    let flicker = if flicker_frames >= 2 {
+        Some(
+            metrics::flicker(&images[..flicker_frames as usize], reference)
+                .map_err(|e| MeasureError::Failed(format!("measuring flicker: {e}")))?,
+        )
     } else {
         None
     };
     Ok(Measured {
-        metrics,
+        metrics: Metrics::mean(&scores),
+        scored: k,
         flicker,
         gpu_ms: median_of(&gpu),
         pass_gpu_ms: passes

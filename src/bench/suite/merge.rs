@@ -2,7 +2,9 @@
 //! number of machines by any batch system) into one folder with one results.json, CSV, set of
 //! charts and report, as if the suite had run in one go. Parts must come from the same suite
 //! (equal suite hash: same suite text, same scene contents); a run recorded by two parts is
-//! an error, and missing runs leave the merged results marked incomplete.
+//! an error, and missing runs leave the merged results marked incomplete. Parts measured on
+//! different devices, drivers or irad versions are refused unless allowed: their GPU times
+//! do not share an axis (when allowed, each device gets its own lines and Pareto marks).
 
 use std::collections::BTreeMap;
 use std::fs;
@@ -14,7 +16,7 @@ use super::output;
 use super::results::SuiteResults;
 
 /// Merges the results in `parts` into `out` (which must not be one of them).
-pub fn merge(parts: &[PathBuf], out: &Path) -> Result<SuiteResults> {
+pub fn merge(parts: &[PathBuf], out: &Path, allow_mixed_devices: bool) -> Result<SuiteResults> {
     if parts.is_empty() {
         bail!("nothing to merge: name the output folders of the shards");
     }
@@ -55,8 +57,19 @@ pub fn merge(parts: &[PathBuf], out: &Path) -> Result<SuiteResults> {
                 );
             }
         }
-        let device = format!("{} (driver {})", results.device, results.driver);
+        let device = format!(
+            "{} (driver {}, irad {})",
+            results.device, results.driver, results.irad_version
+        );
         if !devices.contains(&device) {
+            if !devices.is_empty() && !allow_mixed_devices {
+                bail!(
+                    "{}: measured on {device}, but {} on {}: GPU times of different devices, drivers or builds are not comparable (pass --allow-mixed-devices to merge them anyway, each device charted apart)",
+                    part.display(),
+                    parts[0].display(),
+                    devices[0]
+                );
+            }
             devices.push(device);
         }
         match &mut merged {

@@ -17,6 +17,7 @@ pub mod results;
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
 
 use anyhow::Result;
 
@@ -38,6 +39,10 @@ pub struct SuiteOptions {
     /// Root of the reference cache.
     pub cache: PathBuf,
     pub shard: Shard,
+    /// Set (by a Ctrl-C handler) to stop after the run under way; the results say incomplete.
+    pub stop: Option<&'static AtomicBool>,
+    /// Only render (or find) the references of this shard's scenes; no runs.
+    pub references_only: bool,
 }
 
 /// What the suite is doing, for progress bars.
@@ -95,10 +100,28 @@ pub fn run(
     };
     output::write(&options.out, &results)?;
     let renderers = Renderers::default();
+    let stopped = || options.stop.is_some_and(|s| s.load(Ordering::SeqCst));
+    if options.references_only {
+        // Shard i renders the references of scenes i, i + n, ...: a pre-pass for a sweep
+        // whose shards share one cache.
+        for (s, _) in suite.scenes.iter().enumerate() {
+            if s % options.shard.count == options.shard.index && !stopped() {
+                if let Err(e) =
+                    prepare_scene(ctx, &renderers, suite, s, options, &mut results, &mut on)
+                {
+                    anyhow::bail!("{}: {e}", suite.scenes[s].scene.name);
+                }
+            }
+        }
+        results.runs_planned = 0;
+        results.complete = !stopped();
+        output::write(&options.out, &results)?;
+        return Ok(results);
+    }
     let mut done = 0usize;
     for (s, suite_scene) in suite.scenes.iter().enumerate() {
         let runs: Vec<_> = planned.iter().filter(|r| r.scene == s).collect();
-        if runs.is_empty() {
+        if runs.is_empty() || stopped() {
             continue;
         }
         let scene = &suite_scene.scene;
@@ -110,6 +133,9 @@ pub fn run(
             Err("every method declines this scene".to_string())
         };
         for spec in runs {
+            if stopped() {
+                break;
+            }
             let record = run_one(
                 ctx,
                 &renderers,
@@ -140,13 +166,13 @@ pub fn run(
             });
         }
     }
-    results.complete = true;
+    results.complete = !stopped() && results.runs.len() == results.runs_planned;
     output::write(&options.out, &results)?;
     Ok(results)
 }
 
 /// A scene uploaded with its reference image, or why not.
-type Prepared = std::result::Result<(GpuScene, Image), String>;
+type Prepared = std::result::Result<(GpuScene, Image, Option<f64>), String>;
 
 fn prepare_scene(
     ctx: &Context,
@@ -163,6 +189,14 @@ fn prepare_scene(
         GpuScene::upload(ctx, scene).map_err(|e| format!("uploading the scene: {e}"))?;
     let key = references::ReferenceKey::new(scene, &suite_scene.reference);
     let cached = references::lookup(&options.cache, &key).is_some();
+    if cached {
+        on(Event::Reference {
+            scene: &scene.name,
+            done: 1,
+            total: 1,
+            cached,
+        });
+    }
     let reference = references::get_or_render(
         ctx,
         renderers,
@@ -193,13 +227,15 @@ fn prepare_scene(
             spp: reference_spp(&suite_scene.reference),
             image: image_name,
             cache: reference.exr.display().to_string(),
+            seed: suite_scene.reference.seed(),
             gpu_ms: reference.record.gpu_ms,
+            rel_mse: reference.record.rel_mse,
             expected_to_fail: failure.map(|f| f.methods.clone()).unwrap_or_default(),
             why: failure.map(|f| f.why.clone()).unwrap_or_default(),
             source: failure.map(|f| f.source.clone()).unwrap_or_default(),
         },
     );
-    Ok((gpu_scene, reference.image))
+    Ok((gpu_scene, reference.image, reference.record.rel_mse))
 }
 
 fn reference_spp(method: &Method) -> u32 {
@@ -225,6 +261,7 @@ fn run_one(
         index: spec.index,
         id: spec.id.clone(),
         scene: scene.name.clone(),
+        scene_path: suite_scene.path.clone(),
         scene_hash: format!("{:016x}", scene.content_hash),
         method: spec.method.name().into(),
         label: suite.entries[spec.entry].label.clone(),
@@ -240,6 +277,8 @@ fn run_one(
         seed: spec.method.seed(),
         warmup: suite.warmup,
         repeats: suite.repeats,
+        flicker_frames: suite.flicker_frames,
+        scored: 0,
         device: info.name.clone(),
         driver: info.driver.clone(),
         gpu_ms: None,
@@ -249,6 +288,8 @@ fn run_one(
         flicker: None,
         nonfinite_estimates: 0,
         reference_spp: reference_spp(&suite_scene.reference),
+        reference_seed: suite_scene.reference.seed(),
+        reference_rel_mse: None,
         image: None,
         error_map: None,
         pareto: false,
@@ -258,7 +299,7 @@ fn run_one(
         record.note = why;
         return Ok(record);
     }
-    let (gpu_scene, reference) = match prepared {
+    let (gpu_scene, reference, reference_rel_mse) = match prepared {
         Ok(p) => p,
         Err(e) => {
             record.status = Status::Error;
@@ -275,6 +316,7 @@ fn run_one(
         reference,
         suite.warmup,
         suite.repeats,
+        suite.flicker_frames,
         progress,
     );
     let m = match measured {
@@ -305,6 +347,8 @@ fn run_one(
     record.pass_gpu_ms = m.pass_gpu_ms;
     record.wall_ms = Some(m.wall_ms);
     record.metrics = Some(m.metrics);
+    record.scored = m.scored;
+    record.reference_rel_mse = *reference_rel_mse;
     record.flicker = m.flicker;
     record.nonfinite_estimates = m.nonfinite_estimates;
     record.image = Some(image_name);

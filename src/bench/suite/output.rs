@@ -17,7 +17,7 @@ use super::results::{Status, SuiteResults};
 /// (a results.json) is emptied of what a suite writes first, so no stale chart or image
 /// survives; anything else in it is left alone.
 pub fn prepare(out: &Path) -> Result<()> {
-    if out.join("results.json").exists() {
+    if SuiteResults::read(&out.join("results.json")).is_ok() {
         for dir in ["images", "charts"] {
             let d = out.join(dir);
             if d.exists() {
@@ -40,24 +40,34 @@ pub fn chart_path(scene: &str) -> String {
     format!("charts/{}.svg", file_safe(scene))
 }
 
-/// relMSE against GPU time for one scene: a series per method label, a point per ok run.
+/// relMSE against GPU time for one scene: a series per method label (and device, when the
+/// results mix devices), a point per ok run.
 pub fn chart(results: &SuiteResults, scene: &str) -> Chart {
     let mut series: Vec<Series> = Vec::new();
+    let mixed = results
+        .runs
+        .iter()
+        .any(|r| r.device != results.runs[0].device);
     for r in results
         .runs
         .iter()
         .filter(|r| r.scene == scene && r.status == Status::Ok)
     {
+        let name = if mixed {
+            format!("{} ({})", r.label, r.device)
+        } else {
+            r.label.clone()
+        };
         let point = Point {
             x: r.gpu_ms.unwrap_or(f64::NAN),
             y: r.metrics.map(|m| m.rel_mse).unwrap_or(f64::NAN),
             label: r.budget.clone(),
             run_id: r.id.clone(),
         };
-        match series.iter_mut().find(|s| s.name == r.label) {
+        match series.iter_mut().find(|s| s.name == name) {
             Some(s) => s.points.push(point),
             None => series.push(Series {
-                name: r.label.clone(),
+                name,
                 points: vec![point],
             }),
         }
@@ -70,8 +80,13 @@ pub fn chart(results: &SuiteResults, scene: &str) -> Chart {
     }
 }
 
+/// Held while the outputs are written: a second Ctrl-C takes it before exiting, so the
+/// files on disk always agree with each other.
+pub static WRITING: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
 /// Writes results.json, results.csv, one chart per scene and report.md.
 pub fn write(out: &Path, results: &SuiteResults) -> Result<()> {
+    let _writing = WRITING.lock().unwrap_or_else(|e| e.into_inner());
     atomic_write(&out.join("results.json"), &results.json())?;
     atomic_write(&out.join("results.csv"), &results.csv())?;
     for scene in results.scenes() {

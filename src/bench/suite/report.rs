@@ -43,10 +43,14 @@ pub fn markdown(results: &SuiteResults) -> String {
     let _ = writeln!(
         md,
         "- GPU and wall times are medians over each run's repeats (successive seeds) after its \
-         warm-up renders; the figures score the first repeat's image against the scene's \
-         reference (DESIGN.md \"Error metrics\"); flicker is the temporal standard deviation \
-         across the repeats relative to the reference. {PARETO_MARK} marks the runs no other \
-         run of the scene beats in both GPU time and relMSE."
+         warm-up renders; each error figure is the mean over the run's images (successive \
+         seeds) of that image's figure against the scene's reference (DESIGN.md \"Error \
+         metrics\"); flicker is the per-pixel temporal variance over the flicker frames \
+         relative to the reference, averaged, square-rooted. {PARETO_MARK} marks the runs no other \
+         run of the scene beats in both GPU time and relMSE (on the same device); a run with \
+         NaN/Inf is never marked.{LIMITED_MARK} marks a relMSE within {LIMITED_FACTOR}x of the \
+         reference's own (estimated from its two halves): there the reference's noise, not the \
+         run, sets the figure; render the reference with more samples."
     );
     let _ = writeln!(
         md,
@@ -93,7 +97,12 @@ pub fn markdown(results: &SuiteResults) -> String {
                 r.budget,
                 fixed(r.gpu_ms, 2),
                 fixed(r.wall_ms, 1),
-                sci(m.map(|m| m.rel_mse)),
+                sci(m.map(|m| m.rel_mse))
+                    + if limited_by_reference(r) {
+                        LIMITED_MARK
+                    } else {
+                        ""
+                    },
                 sci(m.map(|m| m.rmse)),
                 fixed(m.map(|m| m.lab_error), 2),
                 percent(m.map(|m| m.bias)),
@@ -125,6 +134,18 @@ pub fn markdown(results: &SuiteResults) -> String {
         md += "\n";
     }
     md
+}
+
+/// Marks a relMSE within `LIMITED_FACTOR` of the reference's own: the reference's noise, not
+/// the run, sets that figure.
+pub const LIMITED_MARK: &str = " ‡";
+pub const LIMITED_FACTOR: f64 = 10.0;
+
+fn limited_by_reference(r: &RunRecord) -> bool {
+    match (r.metrics, r.reference_rel_mse) {
+        (Some(m), Some(floor)) => m.rel_mse < LIMITED_FACTOR * floor,
+        _ => false,
+    }
 }
 
 fn fixed(v: Option<f64>, digits: usize) -> String {

@@ -42,6 +42,8 @@ pub struct RunRecord {
     pub index: usize,
     pub id: String,
     pub scene: String,
+    /// The scene file as the suite names it (`embedded:cornell-box` for the built-in one).
+    pub scene_path: String,
     pub scene_hash: String,
     pub method: String,
     pub label: String,
@@ -57,6 +59,10 @@ pub struct RunRecord {
     pub seed: u32,
     pub warmup: u32,
     pub repeats: u32,
+    /// Frames (successive seeds) the flicker is measured over; 0 for none.
+    pub flicker_frames: u32,
+    /// Images whose figures are averaged in `metrics`: max(repeats, flicker_frames).
+    pub scored: u32,
     pub device: String,
     pub driver: String,
     /// Median over the repeats of the run's total GPU time; None without timestamps.
@@ -65,7 +71,7 @@ pub struct RunRecord {
     pub pass_gpu_ms: BTreeMap<String, Option<f64>>,
     /// Median over the repeats of the wall-clock time (upload excluded, readback included).
     pub wall_ms: Option<f64>,
-    /// The first repeat's image against the reference.
+    /// Against the reference, each figure averaged over the scored images.
     pub metrics: Option<Metrics>,
     /// Mean over pixels and channels of the temporal standard deviation across the repeats'
     /// images (successive seeds) relative to the reference (`image::metrics::flicker`).
@@ -73,6 +79,10 @@ pub struct RunRecord {
     /// Per-pixel estimates the method dropped as NaN or Inf, over all repeats (0 when right).
     pub nonfinite_estimates: u64,
     pub reference_spp: u32,
+    pub reference_seed: u32,
+    /// The reference's own relMSE, estimated from its two halves: a run's relMSE cannot be
+    /// measured much below it (the report flags runs within 10x of it).
+    pub reference_rel_mse: Option<f64>,
     /// The run's thumbnail and error map, relative to the output folder.
     pub image: Option<String>,
     pub error_map: Option<String>,
@@ -108,7 +118,10 @@ pub struct ReferenceSummary {
     pub spp: u32,
     pub image: String,
     pub cache: String,
+    pub seed: u32,
     pub gpu_ms: Option<f64>,
+    /// The reference's own relMSE, estimated from its two halves (references.rs).
+    pub rel_mse: Option<f64>,
     /// The scene's [failure] table: methods expected to fail, why, and the paper figure.
     pub expected_to_fail: Vec<String>,
     pub why: String,
@@ -134,13 +147,16 @@ impl SuiteResults {
         seen
     }
 
-    /// Marks, per scene, the ok runs no other ok run beats in both GPU time and relMSE
-    /// (at least as good in both, better in one).
+    /// Marks, per scene and device, the ok runs no other ok run beats in both GPU time and
+    /// relMSE (at least as good in both, better in one). A run that produced any NaN or Inf
+    /// is never marked (its relMSE leaves those values out).
     pub fn mark_pareto(&mut self) {
         let point = |r: &RunRecord| -> Option<(f64, f64)> {
             let t = r.gpu_ms?;
-            let e = r.metrics?.rel_mse;
-            (r.status == Status::Ok && t.is_finite() && e.is_finite()).then_some((t, e))
+            let m = r.metrics?;
+            let e = m.rel_mse;
+            let finite = m.nan_inf == 0 && r.nonfinite_estimates == 0;
+            (r.status == Status::Ok && finite && t.is_finite() && e.is_finite()).then_some((t, e))
         };
         let points: Vec<Option<(f64, f64)>> = self.runs.iter().map(point).collect();
         for i in 0..self.runs.len() {
@@ -151,6 +167,7 @@ impl SuiteResults {
             let dominated = (0..self.runs.len()).any(|j| {
                 j != i
                     && self.runs[j].scene == self.runs[i].scene
+                    && self.runs[j].device == self.runs[i].device
                     && points[j].is_some_and(|(tj, ej)| tj <= t && ej <= e && (tj < t || ej < e))
             });
             self.runs[i].pareto = !dominated;
@@ -191,6 +208,7 @@ impl SuiteResults {
                 r.index.to_string(),
                 r.id.clone(),
                 r.scene.clone(),
+                r.scene_path.clone(),
                 r.method.clone(),
                 r.label.clone(),
                 r.budget.clone(),
@@ -202,6 +220,8 @@ impl SuiteResults {
                 r.seed.to_string(),
                 r.warmup.to_string(),
                 r.repeats.to_string(),
+                r.flicker_frames.to_string(),
+                r.scored.to_string(),
                 f(r.gpu_ms),
                 f(r.wall_ms),
                 f(m.map(|m| m.rel_mse)),
@@ -213,6 +233,8 @@ impl SuiteResults {
                 f(r.flicker),
                 r.nonfinite_estimates.to_string(),
                 r.reference_spp.to_string(),
+                r.reference_seed.to_string(),
+                f(r.reference_rel_mse),
                 r.device.clone(),
                 r.driver.clone(),
                 r.scene_hash.clone(),
@@ -239,6 +261,7 @@ pub const FIXED_COLUMNS: &[&str] = &[
     "index",
     "id",
     "scene",
+    "scene_path",
     "method",
     "label",
     "budget",
@@ -250,6 +273,8 @@ pub const FIXED_COLUMNS: &[&str] = &[
     "seed",
     "warmup",
     "repeats",
+    "flicker_frames",
+    "scored",
     "gpu_ms",
     "wall_ms",
     "rel_mse",
@@ -261,6 +286,8 @@ pub const FIXED_COLUMNS: &[&str] = &[
     "flicker",
     "nonfinite_estimates",
     "reference_spp",
+    "reference_seed",
+    "reference_rel_mse",
     "device",
     "driver",
     "scene_hash",
@@ -336,6 +363,91 @@ pub fn parse_csv(text: &str) -> Result<Vec<Vec<String>>> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn run(scene: &str, device: &str, gpu_ms: f64, rel_mse: f64) -> RunRecord {
+        RunRecord {
+            index: 0,
+            id: format!("{scene}/{gpu_ms}/{rel_mse}"),
+            scene: scene.into(),
+            scene_path: String::new(),
+            scene_hash: String::new(),
+            method: "reference".into(),
+            label: "pt".into(),
+            budget: String::new(),
+            parameters: BTreeMap::new(),
+            status: Status::Ok,
+            note: String::new(),
+            expected_failure: false,
+            resolution: [1, 1],
+            seed: 0,
+            warmup: 0,
+            repeats: 1,
+            flicker_frames: 0,
+            scored: 1,
+            device: device.into(),
+            driver: String::new(),
+            gpu_ms: Some(gpu_ms),
+            pass_gpu_ms: BTreeMap::new(),
+            wall_ms: None,
+            metrics: Some(Metrics {
+                rel_mse,
+                rmse: 0.0,
+                lab_error: 0.0,
+                bias: 0.0,
+                outliers: 0.0,
+                nan_inf: 0,
+            }),
+            flicker: None,
+            nonfinite_estimates: 0,
+            reference_spp: 1,
+            reference_seed: 9,
+            reference_rel_mse: None,
+            image: None,
+            error_map: None,
+            pareto: false,
+        }
+    }
+
+    #[test]
+    fn pareto_marks_the_undominated_runs_per_scene_and_device() {
+        let mut runs = vec![
+            run("a", "gpu", 1.0, 1.0),  // fastest: on the front
+            run("a", "gpu", 2.0, 0.5),  // on the front
+            run("a", "gpu", 3.0, 0.5),  // same error, slower: dominated
+            run("a", "gpu", 2.0, 0.5),  // a tie with the second: both kept
+            run("a", "gpu", 4.0, 0.1),  // most accurate: on the front
+            run("a", "gpu", 5.0, 2.0),  // dominated by all
+            run("b", "gpu", 9.0, 9.0),  // alone in its scene
+            run("a", "cpu", 50.0, 5.0), // alone on its device
+        ];
+        let mut nan = run("a", "gpu", 0.5, 0.01); // would dominate, but produced a NaN
+        nan.metrics.as_mut().unwrap().nan_inf = 1;
+        runs.push(nan);
+        let mut declined = run("a", "gpu", 0.1, 0.001);
+        declined.status = Status::Declined;
+        runs.push(declined);
+        let mut results = SuiteResults {
+            suite: "s".into(),
+            suite_file: String::new(),
+            suite_hash: String::new(),
+            description: String::new(),
+            shard: None,
+            runs_in_suite: runs.len(),
+            runs_planned: runs.len(),
+            complete: true,
+            device: "gpu".into(),
+            driver: String::new(),
+            irad_version: String::new(),
+            references: BTreeMap::new(),
+            runs,
+        };
+        results.mark_pareto();
+        let marks: Vec<bool> = results.runs.iter().map(|r| r.pareto).collect();
+        assert_eq!(
+            marks,
+            [true, true, false, true, true, false, true, true, false, false]
+        );
+    }
 
     #[test]
     fn csv_round_trips_quotes_commas_and_line_breaks() {
