@@ -379,12 +379,9 @@ fn flicker_by_hand() {
         1e-12,
         "1 pixel",
     );
-    // A black reference pixel is normalized by sqrt(0.01): std 0.5 gives 5.
-    let frames = [
-        image(1, 1, &[gray(0.0)]),
-        image(1, 1, &[[0.0, 0.0, 0.5f32.sqrt() * 1.0]]),
-    ];
-    let want = ((0.5f64.sqrt() - 0.0).powi(2) / 2.0 / 0.01).sqrt() / 3.0;
+    // A black reference pixel is normalized by 0.01: values 0 and 0.5 have variance 0.125.
+    let frames = [image(1, 1, &[gray(0.0)]), image(1, 1, &[[0.0, 0.0, 0.5]])];
+    let want = (0.125f64 / 0.01 / 3.0).sqrt();
     assert_close(
         metrics::flicker(&frames, &image(1, 1, &[gray(0.0)])).unwrap(),
         want,
