@@ -68,8 +68,8 @@ struct SuiteArgs {
     /// is the stability suite.
     #[arg(required_unless_present = "quick", conflicts_with = "quick")]
     suite: Option<PathBuf>,
-    /// Run the built-in quick suite (scenes/suites/quick.toml of the source tree: 64x64,
-    /// a few budgets; about 3 minutes on lavapipe).
+    /// Run the built-in quick suite (scenes/suites/quick.toml of the source tree: 64 pixels wide,
+    /// a few budgets; about a minute on lavapipe).
     #[arg(long)]
     quick: bool,
     /// Output folder [default: out/bench/<suite name>, with -shard-I-of-N for a shard].

@@ -194,6 +194,13 @@ fn quick_suite_writes_every_output_and_charts_the_csv_figures() {
         .filter(|r| failure_scenes.contains(&&r.scene) && r.method == "ir")
         .all(|r| r.expected_failure));
     assert!(results.runs.iter().any(|r| r.pareto));
+    // Every reference knows its own error (from its halves), and the report says it.
+    let report = fs::read_to_string(out.join("report.md")).unwrap();
+    for (scene, r) in &results.references {
+        let e = r.rel_mse.unwrap_or(f64::NAN);
+        assert!(e.is_finite() && e > 0.0, "{scene}: {e}");
+        assert!(report.contains(&format!("{e:.3e}")), "{scene}");
+    }
     let _ = fs::remove_dir_all(&dir);
 }
 

@@ -57,6 +57,9 @@ pub fn markdown(results: &SuiteResults) -> String {
         "- Error maps: per-pixel relMSE, log scale from {ERROR_MAP_MIN:e} (black) through red \
          and yellow to {ERROR_MAP_MAX} (white); magenta marks NaN/Inf.\n"
     );
+    md += "- relMSE is at most 1 where an image is too dark (x = 0 gives r^2 / (r^2 + 0.01)) but \
+           unbounded for fireflies: a method that misses light altogether can chart below one \
+           that finds it noisily. Read relMSE with the bias and outliers columns.\n\n";
     md += "Data: [results.csv](results.csv), [results.json](results.json).\n\n";
 
     for scene in results.scenes() {
@@ -73,10 +76,17 @@ pub fn markdown(results: &SuiteResults) -> String {
                     r.source
                 );
             }
+            let noise = match r.rel_mse {
+                Some(e) => format!(" Its own relMSE, estimated from its two halves: {e:.3e}."),
+                None => String::new(),
+            };
             let _ = writeln!(
                 md,
-                "Reference: {} samples per pixel, cached at `{}`.\n",
-                r.spp, r.cache
+                "Reference: {} samples per pixel (seeds {} and {}, half each), cached at `{}`.{noise}\n",
+                r.spp,
+                r.seed,
+                r.seed.wrapping_add(1),
+                r.cache
             );
         }
         let _ = writeln!(md, "![relMSE against GPU time]({})\n", chart_path(&scene));
