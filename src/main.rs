@@ -500,7 +500,16 @@ fn bench_suite(options: &ContextOptions, args: SuiteArgs) -> Result<()> {
     } = args;
     let path = match suite {
         Some(p) => p,
-        None if quick => suite::file::quick_suite_path(),
+        None if quick => {
+            let path = suite::file::quick_suite_path();
+            if !path.exists() {
+                bail!(
+                    "--quick runs {}, from the source tree irad was built in, which is not there: run irad from its checkout or name a suite file",
+                    path.display()
+                );
+            }
+            path
+        }
         None => bail!("name a suite file or pass --quick"),
     };
     let suite = Suite::load(&path)?;
