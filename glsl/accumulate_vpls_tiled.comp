@@ -20,12 +20,14 @@ layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 #include "gbuffer.glsl"
 #include "radiance.glsl"
 #include "vpl.glsl"
+#include "vpl_shading.glsl"
 
 layout(push_constant) uniform GatherParams {
     uint vpl_begin;   // shade VPL slots [vpl_begin, vpl_end)
     uint vpl_end;
     float g_clamp;    // 0: no clamp; else the geometry term is min(G, g_clamp)
     uint interleave;  // k (1: every pixel shades every VPL)
+    float weight;     // multiplies every VPL's contribution (bir's share of each side)
 } params;
 
 // Each pixel's interleaved estimate of this frame (k > 1 only).
@@ -33,48 +35,6 @@ layout(set = 0, binding = 15, std430) buffer VplRadiance { vec4 vpl_radiance[]; 
 
 #define CHUNK 64u
 shared Vpl chunk[CHUNK];
-
-vec3 shade_from_vpl(Vpl v, vec3 x, vec3 origin, vec3 n, vec3 side, vec3 wo, Material m) {
-    uint kind = vpl_kind(v);
-    if (kind == VPL_NONE) return vec3(0.0);
-    vec3 d = v.position.xyz - x;
-    float dist2 = dot(d, d);
-    if (dist2 <= 0.0) return vec3(0.0);
-    vec3 w = d * inversesqrt(dist2);
-    float cos_x = dot(n, w);
-    if (cos_x <= 0.0 || dot(side, w) <= 0.0) return vec3(0.0);
-    vec3 fx = bsdf_eval(m, n, wo, w);
-    if (max(max(fx.r, fx.g), fx.b) <= 0.0) return vec3(0.0);
-
-    // Emitted toward x per unit G, and G = cos_v cos_x / d^2 (cos_v = 1 for point lights).
-    vec3 emitted;
-    float cos_v = 1.0;
-    vec3 target = v.position.xyz;
-    if (kind == VPL_SURFACE) {
-        cos_v = dot(v.normal.xyz, -w);
-        if (cos_v <= 0.0) return vec3(0.0);
-        Material mv = materials[floatBitsToUint(v.normal.w)];
-        emitted = v.power.rgb * bsdf_eval(mv, v.normal.xyz, v.incident.xyz, -w);
-        target = offset_origin(target, v.normal.xyz);
-    } else if (kind == VPL_AREA) {
-        cos_v = dot(v.normal.xyz, -w);
-        if (cos_v <= 0.0) return vec3(0.0);
-        emitted = v.power.rgb * INV_PI;
-    } else if (kind == VPL_SPOT) {
-        Light l;
-        l.direction = v.normal;
-        l.cone = vec4(v.power.w, 0.0, 0.0, 0.0);
-        emitted = v.power.rgb * spot_falloff(l, -w);
-    } else {
-        emitted = v.power.rgb;
-    }
-    float g = cos_v * cos_x / dist2;
-    if (params.g_clamp > 0.0) g = min(g, params.g_clamp);
-    vec3 contribution = emitted * fx * g;
-    if (max(max(contribution.r, contribution.g), contribution.b) <= 0.0) return vec3(0.0);
-    if (trace_any(origin, target - origin, 0.9999)) return vec3(0.0);
-    return contribution;
-}
 
 void main() {
     uvec2 pixel = gl_GlobalInvocationID.xy;
@@ -109,12 +69,13 @@ void main() {
             // The first slot of this chunk in my subset, then every subsets-th.
             uint first = (subset + subsets - base % subsets) % subsets;
             for (uint j = first; j < CHUNK; j += subsets) {
-                sum += shade_from_vpl(chunk[j], x, origin, n, side, wo, m);
+                sum += shade_from_vpl(chunk[j], x, origin, n, side, wo, m, params.g_clamp);
             }
         }
         barrier();
     }
     if (!inside) return;
+    sum *= params.weight;
     if (k == 1u) {
         accumulate_radiance(index, sum);
     } else {

@@ -12,7 +12,7 @@ use crate::methods::accumulation::Accumulation;
 use crate::methods::gbuffer::GBuffer;
 use crate::scene::gpu::GpuScene;
 
-use super::walk::VplBuffers;
+use super::walk::Vpl;
 
 /// VPL slots shaded per dispatch (8 chunks of 64).
 pub const SLOTS_PER_DISPATCH: u32 = 512;
@@ -24,6 +24,7 @@ struct GatherParams {
     vpl_end: u32,
     g_clamp: f32,
     interleave: u32,
+    weight: f32,
 }
 
 pub struct AccumulateVpls(Kernel);
@@ -33,26 +34,27 @@ impl AccumulateVpls {
         Ok(AccumulateVpls(Kernel::new(ctx, "accumulate_vpls_tiled")?))
     }
 
-    /// Shades the VPL slots `slots`; `g_clamp` 0 leaves the geometry term unclamped. With
-    /// `interleave` 1 it adds into `accumulation`; above, it writes `vpl_radiance` for the
-    /// filter.
+    /// Shades the VPL slots `slots` of `vpls`, each contribution times `weight`; `g_clamp` 0
+    /// leaves the geometry term unclamped. With `interleave` 1 it adds into `accumulation`;
+    /// above, it writes `vpl_radiance` for the filter.
     #[allow(clippy::too_many_arguments)]
     pub fn record<'a>(
         &'a self,
         cmd: &mut Commands<'a>,
         scene: &'a GpuScene,
         gbuffer: &'a GBuffer,
-        vpls: &'a VplBuffers,
+        vpls: &'a Buffer<Vpl>,
         accumulation: &'a Accumulation,
         vpl_radiance: &'a Buffer<Vec4>,
         slots: Range<u32>,
         g_clamp: f32,
         interleave: u32,
+        weight: f32,
     ) -> GpuResult<()> {
         let mut bindings = scene.bindings();
         bindings.push(bind("GBuffer", &gbuffer.texels));
         bindings.extend(accumulation.bindings());
-        bindings.push(bind("Vpls", &vpls.vpls));
+        bindings.push(bind("Vpls", vpls));
         bindings.push(bind("VplRadiance", vpl_radiance));
         if interleave > 1 {
             cmd.fill_zero(vpl_radiance);
@@ -70,6 +72,7 @@ impl AccumulateVpls {
                 vpl_end: end,
                 g_clamp,
                 interleave: interleave.max(1),
+                weight,
             };
             self.0
                 .dispatch(cmd, &bindings, &params, scene.image_workgroups())?;

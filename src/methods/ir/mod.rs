@@ -167,12 +167,13 @@ impl InstantRadiosity {
                         cmd,
                         gpu_scene,
                         &gbuffer,
-                        &vpls,
+                        &vpls.vpls,
                         &accumulation,
                         &vpl_radiance,
                         slots.clone(),
                         settings.g_clamp,
                         interleave,
+                        1.0,
                     )
                 })?;
                 if interleave > 1 {
