@@ -101,11 +101,11 @@ struct RenderArgs {
     /// Samples per pixel (reference: one path per pixel per frame).
     #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..))]
     spp: u32,
-    /// ir: frames, each with a fresh VPL set and fresh subpixel positions.
+    /// ir, bir: frames, each with a fresh VPL set and fresh subpixel positions.
     #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..))]
     frames: u32,
     /// ir: paths started on the lights per frame (Keller's N; about N / (1 - mean albedo)
-    /// VPLs).
+    /// VPLs). bir: VPLs per frame, standard and reverse together.
     #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(1..=1 << 20))]
     vpls: u32,
     /// ir: fractional absorption, floor(rho^j N) paths reach vertex j (Keller's, for stills),
@@ -123,6 +123,16 @@ struct RenderArgs {
     /// as VPLs (Keller's original).
     #[arg(long, value_enum, default_value_t = DirectArg::Nee)]
     direct: DirectArg,
+    /// bir: which VPLs are shaded: standard (from the lights), reverse (from the camera) or
+    /// both at weight 1/2 each.
+    #[arg(long, value_enum, default_value_t = StrategyArg::Both)]
+    strategy: StrategyArg,
+    /// bir: camera points per frame the reverse VPLs start from (the M of Segovia's Eq. 7).
+    #[arg(long, default_value_t = 50, value_parser = clap::value_parser!(u32).range(1..=65536))]
+    pool: u32,
+    /// bir: next-event samples per reverse VPL for its outgoing radiance.
+    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=1024))]
+    light_samples: u32,
     /// Seed of every random and quasi-random number: same seed, same device, same bits.
     #[arg(long, default_value_t = 0)]
     seed: u32,
@@ -154,6 +164,18 @@ enum MethodArg {
     Reference,
     /// Instant radiosity (Keller 97): VPLs from a quasi-random walk from the lights.
     Ir,
+    /// Bidirectional instant radiosity (Segovia 06): VPLs from the lights and from the camera.
+    Bir,
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum StrategyArg {
+    /// Standard VPLs only (from the lights).
+    Standard,
+    /// Reverse VPLs only (ends of length-2 camera paths).
+    Reverse,
+    /// Both sides, each at weight 1/2.
+    Both,
 }
 
 #[derive(Clone, Copy, clap::ValueEnum)]
@@ -425,6 +447,19 @@ fn render(options: &ContextOptions, args: RenderArgs) -> Result<()> {
                 DirectArg::Nee => DirectLight::NextEvent,
                 DirectArg::Vpl => DirectLight::Vpl,
             },
+            pixels,
+        }),
+        MethodArg::Bir => Method::Bir(irad::methods::bir::BirSettings {
+            vpls: args.vpls.max(2),
+            frames: args.frames,
+            seed: args.seed,
+            strategy: match args.strategy {
+                StrategyArg::Standard => irad::methods::bir::Strategy::Standard,
+                StrategyArg::Reverse => irad::methods::bir::Strategy::Reverse,
+                StrategyArg::Both => irad::methods::bir::Strategy::Both,
+            },
+            pool: args.pool,
+            light_samples: args.light_samples,
             pixels,
         }),
     };

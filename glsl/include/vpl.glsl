@@ -18,10 +18,14 @@ struct Vpl {
     vec4 incident;  // surface: unit direction toward where the light came from
 };
 
+// A kernel that defines VPL_NO_BUFFER gets the layout only (every declared buffer must be
+// bound).
+#ifndef VPL_NO_BUFFER
 #ifdef VPL_WRITE
 layout(set = 0, binding = 13, std430) writeonly buffer Vpls { Vpl vpls[]; };
 #else
 layout(set = 0, binding = 13, std430) readonly buffer Vpls { Vpl vpls[]; };
+#endif
 #endif
 
 uint vpl_kind(Vpl v) {

@@ -11,6 +11,7 @@ use serde_json::json;
 use thiserror::Error;
 
 use crate::gpu::{Context, GpuError};
+use crate::methods::bir::{Bir, BirError, BirSettings, Strategy};
 use crate::methods::gbuffer::PixelSampling;
 use crate::methods::ir::schedule::Absorption;
 use crate::methods::ir::{DirectLight, InstantRadiosity, IrError, IrSettings};
@@ -20,12 +21,13 @@ use crate::scene::gpu::GpuScene;
 use crate::scene::Scene;
 
 /// Every method irad has, by the name `--method` and suite files use.
-pub const METHOD_NAMES: &[&str] = &["reference", "ir"];
+pub const METHOD_NAMES: &[&str] = &["reference", "ir", "bir"];
 
 #[derive(Clone, Debug, PartialEq)]
 pub enum Method {
     Reference(ReferenceSettings),
     Ir(IrSettings),
+    Bir(BirSettings),
 }
 
 /// A parameter a method cannot take: `method: key = value: problem`.
@@ -47,6 +49,7 @@ impl Method {
         match self {
             Method::Reference(_) => "reference",
             Method::Ir(_) => "ir",
+            Method::Bir(_) => "bir",
         }
     }
 
@@ -54,6 +57,7 @@ impl Method {
         match self {
             Method::Reference(s) => s.seed,
             Method::Ir(s) => s.seed,
+            Method::Bir(s) => s.seed,
         }
     }
 
@@ -63,6 +67,7 @@ impl Method {
         match &mut m {
             Method::Reference(s) => s.seed = seed,
             Method::Ir(s) => s.seed = seed,
+            Method::Bir(s) => s.seed = seed,
         }
         m
     }
@@ -72,6 +77,7 @@ impl Method {
         match self {
             Method::Reference(s) => s.spp as u64,
             Method::Ir(s) => s.frames as u64,
+            Method::Bir(s) => s.frames as u64,
         }
     }
 
@@ -81,6 +87,7 @@ impl Method {
         match self {
             Method::Reference(s) => s.spp as f64,
             Method::Ir(s) => s.frames as f64 * s.paths as f64,
+            Method::Bir(s) => s.frames as f64 * s.vpls as f64,
         }
     }
 
@@ -123,6 +130,17 @@ impl Method {
                     }),
                 );
             }
+            Method::Bir(s) => {
+                p.insert("vpls".into(), json!(s.vpls));
+                p.insert("frames".into(), json!(s.frames));
+                p.insert("strategy".into(), json!(s.strategy.name()));
+                p.insert("pool".into(), json!(s.pool));
+                p.insert("light_samples".into(), json!(s.light_samples));
+                p.insert(
+                    "pixel_centres".into(),
+                    json!(s.pixels == PixelSampling::Centres),
+                );
+            }
         }
         p
     }
@@ -130,6 +148,7 @@ impl Method {
     /// `name` with `params` over its defaults (those of `irad render`). Keys are the flags of
     /// `irad render` with `-` written `_`: reference takes spp, max_depth, roulette_depth,
     /// pixel_centres, seed; ir takes vpls, frames, absorption, clamp, interleave, direct,
+    /// pixel_centres, seed; bir takes vpls, frames, strategy, pool, light_samples,
     /// pixel_centres, seed.
     pub fn from_params(name: &str, params: &toml::Table) -> Result<Method, ParamError> {
         let mut reader = Params {
@@ -168,6 +187,23 @@ impl Method {
                     pixels: reader.pixels()?,
                 })
             }
+            "bir" => {
+                let d = BirSettings::default();
+                Method::Bir(BirSettings {
+                    vpls: reader.uint("vpls", d.vpls, 2, 1 << 20)?,
+                    frames: reader.uint("frames", d.frames, 1, u32::MAX)?,
+                    seed: reader.uint("seed", d.seed, 0, u32::MAX)?,
+                    strategy: match reader.choice("strategy", &["standard", "reverse", "both"])? {
+                        Some("standard") => Strategy::Standard,
+                        Some("reverse") => Strategy::Reverse,
+                        Some(_) => Strategy::Both,
+                        None => d.strategy,
+                    },
+                    pool: reader.uint("pool", d.pool, 1, 1 << 16)?,
+                    light_samples: reader.uint("light_samples", d.light_samples, 1, 1024)?,
+                    pixels: reader.pixels()?,
+                })
+            }
             _ => return Err(ParamError::UnknownMethod(name.to_string())),
         };
         reader.refuse_unknown()?;
@@ -182,6 +218,10 @@ impl Method {
                 .environment
                 .is_some()
                 .then(|| IrError::Environment.to_string()),
+            Method::Bir(_) => scene
+                .environment
+                .is_some()
+                .then(|| BirError::Environment.to_string()),
         }
     }
 }
@@ -296,6 +336,7 @@ impl<'a> Params<'a> {
 pub struct Renderers {
     reference: OnceCell<Reference>,
     ir: OnceCell<InstantRadiosity>,
+    bir: OnceCell<Bir>,
 }
 
 #[derive(Debug, Error)]
@@ -331,6 +372,14 @@ impl Renderers {
                     .map_err(|e| match e {
                         IrError::Environment => RunError::Declined(e.to_string()),
                         IrError::Gpu(g) => RunError::Gpu(g),
+                    })
+            }
+            Method::Bir(settings) => {
+                let bir = get_or_try_init(&self.bir, || Bir::new(ctx))?;
+                bir.render(ctx, scene, gpu_scene, settings, progress)
+                    .map_err(|e| match e {
+                        BirError::Environment => RunError::Declined(e.to_string()),
+                        BirError::Gpu(g) => RunError::Gpu(g),
                     })
             }
         }

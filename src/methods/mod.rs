@@ -2,6 +2,7 @@
 //! BVH, samplers and accumulation buffer. `reference` is the ground truth.
 
 pub mod accumulation;
+pub mod bir;
 pub mod gbuffer;
 pub mod ir;
 pub mod method;

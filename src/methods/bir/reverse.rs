@@ -1,0 +1,104 @@
+//! glsl/trace_reverse_vpls.comp and glsl/shade_reverse_vpls.comp: bir's reverse VPLs (the ends
+//! of length-2 camera paths, Segovia 06 Section 3.1), their exact density over the frame's pool
+//! of camera points (Eq. 7) and their outgoing radiance (diffuse approximation, lit by the
+//! lights and the frame's standard VPLs).
+
+use std::ops::Range;
+
+use bytemuck::{Pod, Zeroable};
+
+use crate::gpu::{bind, Buffer, Commands, Context, GpuResult, Kernel};
+use crate::methods::gbuffer::GBuffer;
+use crate::methods::ir::walk::Vpl;
+use crate::scene::gpu::GpuScene;
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct ReverseParams {
+    count: u32,
+    pool: u32,
+    seed: u32,
+    pixels: u32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct ShadeParams {
+    count: u32,
+    light_samples: u32,
+    vpl_begin: u32,
+    vpl_end: u32,
+    seed: u32,
+    weight: f32,
+}
+
+pub struct TraceReverseVpls(Kernel);
+
+impl TraceReverseVpls {
+    pub fn new(ctx: &Context) -> GpuResult<Self> {
+        Ok(TraceReverseVpls(Kernel::new(ctx, "trace_reverse_vpls")?))
+    }
+
+    /// Writes `reverse.len()` reverse VPLs drawn from a pool of `pool` camera points of
+    /// `gbuffer`, with their densities.
+    pub fn record<'a>(
+        &'a self,
+        cmd: &mut Commands<'a>,
+        scene: &'a GpuScene,
+        gbuffer: &'a GBuffer,
+        reverse: &'a Buffer<Vpl>,
+        pool: u32,
+        seed: u32,
+    ) -> GpuResult<()> {
+        let mut bindings = scene.bindings();
+        bindings.push(bind("GBuffer", &gbuffer.texels));
+        bindings.push(bind("ReverseVpls", reverse));
+        let count = reverse.len() as u32;
+        let params = ReverseParams {
+            count,
+            pool: pool.max(1),
+            seed,
+            pixels: scene.pixel_count() as u32,
+        };
+        self.0
+            .dispatch(cmd, &bindings, &params, [count.div_ceil(64), 1, 1])
+    }
+}
+
+pub struct ShadeReverseVpls(Kernel);
+
+impl ShadeReverseVpls {
+    pub fn new(ctx: &Context) -> GpuResult<Self> {
+        Ok(ShadeReverseVpls(Kernel::new(ctx, "shade_reverse_vpls")?))
+    }
+
+    /// Sets each reverse VPL's power from its radiance, lit by `light_samples` next-event
+    /// samples and the standard VPL slots `slots` of `vpls`, times `weight`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn record<'a>(
+        &'a self,
+        cmd: &mut Commands<'a>,
+        scene: &'a GpuScene,
+        reverse: &'a Buffer<Vpl>,
+        vpls: &'a Buffer<Vpl>,
+        slots: Range<u32>,
+        light_samples: u32,
+        seed: u32,
+        weight: f32,
+    ) -> GpuResult<()> {
+        let mut bindings = scene.bindings();
+        bindings.push(bind("Vpls", vpls));
+        bindings.push(bind("ReverseVpls", reverse));
+        let count = reverse.len() as u32;
+        let params = ShadeParams {
+            count,
+            light_samples,
+            vpl_begin: slots.start,
+            vpl_end: slots.end,
+            seed,
+            weight,
+        };
+        self.0
+            .dispatch(cmd, &bindings, &params, [count.div_ceil(64), 1, 1])
+    }
+}
