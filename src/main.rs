@@ -133,6 +133,21 @@ struct RenderArgs {
     /// bir: next-event samples per reverse VPL for its outgoing radiance.
     #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=1024))]
     light_samples: u32,
+    /// bir: candidates per kept VPL (the paper's resampling ratio r); 0 shades every
+    /// candidate, no resampling.
+    #[arg(long, default_value_t = 10)]
+    ratio: u32,
+    /// bir: the resampling CDF's uniform floor, a fraction of the mean candidate power
+    /// (0: none, which darkens the image where powers are underestimated: Segovia Fig. 3).
+    #[arg(long, default_value_t = 0.1)]
+    floor: f32,
+    /// bir: camera points per candidate for its power estimate.
+    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..=1024))]
+    power_samples: u32,
+    /// bir: candidates resampled together (0: the whole frame's), so storage stays
+    /// O(batch + kept VPLs).
+    #[arg(long, default_value_t = 0)]
+    batch: u32,
     /// Seed of every random and quasi-random number: same seed, same device, same bits.
     #[arg(long, default_value_t = 0)]
     seed: u32,
@@ -449,6 +464,9 @@ fn render(options: &ContextOptions, args: RenderArgs) -> Result<()> {
             },
             pixels,
         }),
+        MethodArg::Bir if !(args.floor.is_finite() && args.floor >= 0.0) => {
+            bail!("--floor {}: must be a finite number >= 0", args.floor)
+        }
         MethodArg::Bir => Method::Bir(irad::methods::bir::BirSettings {
             vpls: args.vpls.max(2),
             frames: args.frames,
@@ -460,6 +478,10 @@ fn render(options: &ContextOptions, args: RenderArgs) -> Result<()> {
             },
             pool: args.pool,
             light_samples: args.light_samples,
+            ratio: args.ratio,
+            floor: args.floor,
+            power_samples: args.power_samples,
+            batch: args.batch,
             pixels,
         }),
     };

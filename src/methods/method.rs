@@ -136,6 +136,10 @@ impl Method {
                 p.insert("strategy".into(), json!(s.strategy.name()));
                 p.insert("pool".into(), json!(s.pool));
                 p.insert("light_samples".into(), json!(s.light_samples));
+                p.insert("ratio".into(), json!(s.ratio));
+                p.insert("floor".into(), json!(s.floor));
+                p.insert("power_samples".into(), json!(s.power_samples));
+                p.insert("batch".into(), json!(s.batch));
                 p.insert(
                     "pixel_centres".into(),
                     json!(s.pixels == PixelSampling::Centres),
@@ -148,8 +152,8 @@ impl Method {
     /// `name` with `params` over its defaults (those of `irad render`). Keys are the flags of
     /// `irad render` with `-` written `_`: reference takes spp, max_depth, roulette_depth,
     /// pixel_centres, seed; ir takes vpls, frames, absorption, clamp, interleave, direct,
-    /// pixel_centres, seed; bir takes vpls, frames, strategy, pool, light_samples,
-    /// pixel_centres, seed.
+    /// pixel_centres, seed; bir takes vpls, frames, strategy, pool, light_samples, ratio,
+    /// floor, power_samples, batch, pixel_centres, seed.
     pub fn from_params(name: &str, params: &toml::Table) -> Result<Method, ParamError> {
         let mut reader = Params {
             method: name,
@@ -201,6 +205,10 @@ impl Method {
                     },
                     pool: reader.uint("pool", d.pool, 1, 1 << 16)?,
                     light_samples: reader.uint("light_samples", d.light_samples, 1, 1024)?,
+                    ratio: reader.uint("ratio", d.ratio, 0, 1 << 16)?,
+                    floor: reader.non_negative("floor", d.floor)?,
+                    power_samples: reader.uint("power_samples", d.power_samples, 1, 1024)?,
+                    batch: reader.uint("batch", d.batch, 0, 1 << 20)?,
                     pixels: reader.pixels()?,
                 })
             }

@@ -23,4 +23,7 @@ pub struct RenderOutput {
     pub wall_ms: f64,
     /// Per-pixel estimates that were NaN or Inf and were dropped (0 in a correct run).
     pub nonfinite_estimates: u32,
+    /// Method-specific figures for records and reports (bir: the fraction of kept VPLs from
+    /// each side, rays per kept VPL), by name.
+    pub stats: Vec<(String, f64)>,
 }

@@ -94,6 +94,7 @@ impl Reference {
             passes,
             wall_ms: start.elapsed().as_secs_f64() * 1e3,
             nonfinite_estimates: accumulation.nonfinite_estimates()?,
+            stats: Vec::new(),
         })
     }
 }

@@ -11,6 +11,7 @@
 //! side; `reverse` to the reverse side, plus half a budget of light paths that light them;
 //! `both` half to each.
 
+pub mod resample;
 pub mod reverse;
 
 use std::time::Instant;
@@ -30,6 +31,7 @@ use crate::sampling::pcg;
 use crate::scene::gpu::GpuScene;
 use crate::scene::Scene;
 
+use resample::{Candidates, EstimateVplPower, ResampleBuffers, ResampleVpls};
 use reverse::{ShadeReverseVpls, TraceReverseVpls};
 
 /// Which VPLs a frame shades.
@@ -61,6 +63,15 @@ pub struct BirSettings {
     pub pool: u32,
     /// Next-event samples per reverse VPL for its radiance.
     pub light_samples: u32,
+    /// Candidates per kept VPL (the paper's r); 0 shades every candidate (no resampling).
+    pub ratio: u32,
+    /// The CDF's uniform floor, as a fraction of the mean candidate power (Fig. 3).
+    pub floor: f32,
+    /// Camera points per candidate for its power estimate (the paper's fast M = 5).
+    pub power_samples: u32,
+    /// Candidates resampled together: the frame's `vpls` in batches of this many, so storage
+    /// stays O(batch + N') (end of Section 4.2). 0: one batch per frame.
+    pub batch: u32,
     pub pixels: PixelSampling,
 }
 
@@ -73,6 +84,10 @@ impl Default for BirSettings {
             strategy: Strategy::Both,
             pool: 50,
             light_samples: 4,
+            ratio: 10,
+            floor: 0.1,
+            power_samples: 5,
+            batch: 0,
             pixels: PixelSampling::Jittered,
         }
     }
@@ -98,14 +113,15 @@ pub struct Split {
 }
 
 impl Split {
-    pub fn new(settings: &BirSettings, mean_albedo: f64) -> Split {
-        let n = settings.vpls.max(2);
+    /// The split of `vpls` VPLs under `strategy`.
+    pub fn new(strategy: Strategy, vpls: u32, mean_albedo: f64) -> Split {
+        let n = vpls.max(2);
         // Light paths that give about `vpls` surface VPLs: N rho / (1 - rho) of them.
         let paths_for = |vpls: u32| -> u32 {
             let rho = mean_albedo.clamp(0.05, 0.95);
             ((vpls as f64 * (1.0 - rho) / rho).ceil() as u32).max(1)
         };
-        match settings.strategy {
+        match strategy {
             Strategy::Standard => Split {
                 light_paths: paths_for(n),
                 reverse: 0,
@@ -134,6 +150,8 @@ pub struct Bir {
     walk: TraceVpls,
     trace_reverse: TraceReverseVpls,
     shade_reverse: ShadeReverseVpls,
+    power: EstimateVplPower,
+    resample: ResampleVpls,
     gather: AccumulateVpls,
 }
 
@@ -145,6 +163,8 @@ impl Bir {
             walk: TraceVpls::new(ctx)?,
             trace_reverse: TraceReverseVpls::new(ctx)?,
             shade_reverse: ShadeReverseVpls::new(ctx)?,
+            power: EstimateVplPower::new(ctx)?,
+            resample: ResampleVpls::new(ctx)?,
             gather: AccumulateVpls::new(ctx)?,
         })
     }
@@ -162,7 +182,16 @@ impl Bir {
         }
         let start = Instant::now();
         let rho = mean_albedo(scene);
-        let split = Split::new(settings, rho);
+        let vpls_per_frame = settings.vpls.max(2);
+        let batch = if settings.batch == 0 {
+            vpls_per_frame
+        } else {
+            settings.batch.clamp(2, vpls_per_frame)
+        };
+        let batches = vpls_per_frame.div_ceil(batch);
+        let split = Split::new(settings.strategy, batch, rho);
+        let resampling = settings.ratio > 0;
+        let draws = (batch / settings.ratio.max(1)).max(1);
         let gbuffer = GBuffer::new(ctx, gpu_scene)?;
         let accumulation = Accumulation::new(ctx, gpu_scene.width, gpu_scene.height)?;
         let vpls = VplBuffers::new(
@@ -173,6 +202,22 @@ impl Bir {
             Buffer::zeroed(ctx, "ReverseVpls", split.reverse.max(1) as usize)?;
         let unused = Buffer::zeroed(ctx, "VplRadiance", 1)?;
         let slots = vpls.layout.surface_slots();
+        let standard_count = if split.standard_weight > 0.0 {
+            slots.end - slots.start
+        } else {
+            0
+        };
+        let candidates = standard_count + split.reverse;
+        let resample_buffers = ResampleBuffers::new(ctx, candidates)?;
+        let kept: Buffer<Vpl> = Buffer::zeroed(
+            ctx,
+            "KeptVpls",
+            if resampling {
+                (draws * batches) as usize
+            } else {
+                1
+            },
+        )?;
         let frames = settings.frames.max(1);
         let passes = progressive::run(
             ctx,
@@ -201,75 +246,217 @@ impl Bir {
                         u32::MAX,
                     )
                 })?;
-                let walk_seed = pcg::hash(&[settings.seed, frame, 0x76706c73]);
-                cmd.pass("vpl walk", |cmd| {
-                    self.walk.record(cmd, gpu_scene, &vpls, walk_seed)
-                })?;
-                if split.reverse > 0 {
-                    let reverse_seed = pcg::hash(&[settings.seed, frame, 0x72657672]);
-                    cmd.pass("reverse vpls", |cmd| {
-                        self.trace_reverse.record(
+                for b in 0..batches {
+                    let walk_seed = pcg::hash(&[settings.seed, frame, b, 0x76706c73]);
+                    let reverse_seed = pcg::hash(&[settings.seed, frame, b, 0x72657672]);
+                    let power_seed = pcg::hash(&[settings.seed, frame, b, 0x706f7772]);
+                    cmd.pass("vpl walk", |cmd| {
+                        self.walk.record(cmd, gpu_scene, &vpls, walk_seed)
+                    })?;
+                    if split.reverse > 0 {
+                        cmd.pass("reverse vpls", |cmd| {
+                            self.trace_reverse.record(
+                                cmd,
+                                gpu_scene,
+                                &gbuffer,
+                                &reverse,
+                                settings.pool,
+                                reverse_seed,
+                            )
+                        })?;
+                        cmd.pass("reverse radiance", |cmd| {
+                            self.shade_reverse.record(
+                                cmd,
+                                gpu_scene,
+                                &reverse,
+                                &vpls.vpls,
+                                slots.clone(),
+                                settings.light_samples,
+                                reverse_seed,
+                                split.reverse_weight,
+                            )
+                        })?;
+                    }
+                    if resampling {
+                        cmd.pass("vpl power", |cmd| {
+                            self.power.record(
+                                cmd,
+                                gpu_scene,
+                                &gbuffer,
+                                &vpls.vpls,
+                                slots.start,
+                                standard_count,
+                                0,
+                                &resample_buffers,
+                                settings.power_samples,
+                                power_seed,
+                                split.standard_weight,
+                            )?;
+                            self.power.record(
+                                cmd,
+                                gpu_scene,
+                                &gbuffer,
+                                &reverse,
+                                0,
+                                split.reverse,
+                                standard_count,
+                                &resample_buffers,
+                                settings.power_samples,
+                                power_seed,
+                                1.0,
+                            )
+                        })?;
+                        let sources = Candidates {
+                            standard: &vpls.vpls,
+                            standard_begin: slots.start,
+                            standard_count,
+                            standard_scale: split.standard_weight,
+                            reverse: &reverse,
+                        };
+                        cmd.pass("resampling", |cmd| {
+                            self.resample.record(
+                                cmd,
+                                &sources,
+                                &resample_buffers,
+                                &kept,
+                                b * draws,
+                                draws,
+                                settings.floor,
+                                power_seed,
+                            )
+                        })?;
+                    } else {
+                        cmd.pass("vpl accumulation", |cmd| {
+                            self.gather_unresampled(
+                                cmd,
+                                gpu_scene,
+                                &gbuffer,
+                                &accumulation,
+                                &vpls,
+                                &reverse,
+                                &unused,
+                                &split,
+                                1.0 / batches as f32,
+                            )
+                        })?;
+                    }
+                }
+                if resampling {
+                    cmd.pass("vpl accumulation", |cmd| {
+                        // Each batch's draws estimate its candidates' sum; the batches are
+                        // `batches` estimates of one frame's.
+                        self.gather.record(
                             cmd,
                             gpu_scene,
                             &gbuffer,
-                            &reverse,
-                            settings.pool,
-                            reverse_seed,
-                        )
-                    })?;
-                    cmd.pass("reverse radiance", |cmd| {
-                        self.shade_reverse.record(
-                            cmd,
-                            gpu_scene,
-                            &reverse,
-                            &vpls.vpls,
-                            slots.clone(),
-                            settings.light_samples,
-                            reverse_seed,
-                            split.reverse_weight,
+                            &kept,
+                            &accumulation,
+                            &unused,
+                            0..draws * batches,
+                            0.0,
+                            1,
+                            1.0 / batches as f32,
                         )
                     })?;
                 }
-                cmd.pass("vpl accumulation", |cmd| {
-                    if split.standard_weight > 0.0 {
-                        self.gather.record(
-                            cmd,
-                            gpu_scene,
-                            &gbuffer,
-                            &vpls.vpls,
-                            &accumulation,
-                            &unused,
-                            slots.clone(),
-                            0.0,
-                            1,
-                            split.standard_weight,
-                        )?;
-                    }
-                    if split.reverse > 0 {
-                        // The reverse side's weight is in its VPLs' power.
-                        self.gather.record(
-                            cmd,
-                            gpu_scene,
-                            &gbuffer,
-                            &reverse,
-                            &accumulation,
-                            &unused,
-                            0..split.reverse,
-                            0.0,
-                            1,
-                            1.0,
-                        )?;
-                    }
-                    Ok(())
-                })
+                Ok(())
             },
             progress,
         )?;
+        let mut stats = Vec::new();
+        if resampling {
+            let kept_counts = resample_buffers.stats.read()?;
+            let all = (kept_counts[0] + kept_counts[1]).max(1) as f64;
+            stats.push(("kept_standard_fraction".into(), kept_counts[0] as f64 / all));
+            stats.push(("kept_reverse_fraction".into(), kept_counts[1] as f64 / all));
+        }
+        let sampling_rays =
+            sampling_rays(&vpls.layout, &split, settings, standard_count, resampling);
+        let kept_per_frame = if resampling { draws } else { candidates } as f64;
+        stats.push((
+            "sampling_rays_per_kept_vpl".into(),
+            sampling_rays / kept_per_frame,
+        ));
+        stats.push((
+            "gather_rays_per_kept_vpl".into(),
+            gpu_scene.pixel_count() as f64,
+        ));
         Ok(RenderOutput {
             image: accumulation.resolve(frames),
             passes,
             wall_ms: start.elapsed().as_secs_f64() * 1e3,
             nonfinite_estimates: accumulation.nonfinite_estimates()?,
+            stats,
         })
     }
+
+    /// Without resampling: every candidate shaded, each side at its weight.
+    #[allow(clippy::too_many_arguments)]
+    fn gather_unresampled<'a>(
+        &'a self,
+        cmd: &mut crate::gpu::Commands<'a>,
+        gpu_scene: &'a GpuScene,
+        gbuffer: &'a GBuffer,
+        accumulation: &'a Accumulation,
+        vpls: &'a VplBuffers,
+        reverse: &'a Buffer<Vpl>,
+        unused: &'a Buffer<glam::Vec4>,
+        split: &Split,
+        scale: f32,
+    ) -> Result<(), GpuError> {
+        if split.standard_weight > 0.0 {
+            self.gather.record(
+                cmd,
+                gpu_scene,
+                gbuffer,
+                &vpls.vpls,
+                accumulation,
+                unused,
+                vpls.layout.surface_slots(),
+                0.0,
+                1,
+                split.standard_weight * scale,
+            )?;
+        }
+        if split.reverse > 0 {
+            // The reverse side's weight is in its VPLs' power.
+            self.gather.record(
+                cmd,
+                gpu_scene,
+                gbuffer,
+                reverse,
+                accumulation,
+                unused,
+                0..split.reverse,
+                0.0,
+                1,
+                scale,
+            )?;
+        }
+        Ok(())
+    }
+}
+
+/// Rays the sampling pass casts per batch, at most (every slot and sample assumed alive): the
+/// walk's closest hits, the reverse VPLs' trace and Eq. 7 shadow rays, their radiance (next
+/// events at x2 and x3, the x3 trace, one shadow ray per standard VPL), and the power
+/// estimates' shadow rays.
+fn sampling_rays(
+    layout: &Schedule,
+    split: &Split,
+    settings: &BirSettings,
+    standard_count: u32,
+    resampling: bool,
+) -> f64 {
+    let walk = layout.slot_count as f64;
+    let r = split.reverse as f64;
+    let k = settings.light_samples.max(1) as f64;
+    let surface = (layout.slot_count - layout.surface_slots().start) as f64;
+    let reverse = r * (1.0 + settings.pool as f64) + r * k * (3.0 + surface);
+    let power = if resampling {
+        (standard_count as f64 + r) * settings.power_samples as f64
+    } else {
+        0.0
+    };
+    walk + reverse + power
 }

@@ -1,0 +1,64 @@
+#version 450
+// The power a candidate VPL brings to the camera (Segovia 06 Section 3.2, 4.2), for bir's
+// resampling: the camera response to the VPL, estimated with M length-2 camera paths: M
+// G-buffer points at pseudo-random pixels, each shaded by the VPL (one shadow ray), the
+// luminance summed and scaled by pixels / M. Writes row 0 of Weights (the estimate, times
+// `scale`) and row 1 (1 for a VPL, 0 for an empty slot: only those get the CDF's floor).
+//
+// Numbers: pixel m of candidate c is pcg(seed, c, m) mod the pixel count.
+
+#extension GL_GOOGLE_include_directive : require
+
+layout(local_size_x = 64, local_size_y = 1, local_size_z = 1) in;
+
+#include "bvh.glsl"
+#include "scene.glsl"
+#include "sampling.glsl"
+#include "bsdf.glsl"
+#include "lights.glsl"
+#include "gbuffer.glsl"
+#include "vpl.glsl"
+#include "vpl_shading.glsl"
+
+// Two rows of `row_length`: the weights, then the non-empty flags.
+layout(set = 0, binding = 17, std430) writeonly buffer Weights { float weights[]; };
+
+layout(push_constant) uniform PowerParams {
+    uint count;        // candidates in this dispatch
+    uint source_begin; // first slot of Vpls they come from
+    uint offset;       // their first candidate index
+    uint row_length;   // candidates in all
+    uint samples;      // M camera points per candidate
+    uint seed;
+    uint pixels;
+    float scale;       // the side's weight (standard VPLs' 1/2 under `both`)
+} params;
+
+void main() {
+    uint i = gl_GlobalInvocationID.x;
+    if (i >= params.count) return;
+    uint c = params.offset + i;
+    Vpl v = vpls[params.source_begin + i];
+    if (vpl_kind(v) == VPL_NONE) {
+        weights[c] = 0.0;
+        weights[params.row_length + c] = 0.0;
+        return;
+    }
+    float sum = 0.0;
+    for (uint m = 0u; m < params.samples; ++m) {
+        uint pixel = hash4(params.seed, c, m, 0x706f7772u) % params.pixels;
+        GBufferTexel g = gbuffer[pixel];
+        if (g.position.w < 0.0) continue;
+        vec3 x = g.position.xyz;
+        vec3 wo = -g.direction.xyz;
+        vec3 ng = g.geometric_normal.xyz;
+        vec3 side = dot(wo, ng) >= 0.0 ? ng : -ng;
+        vec3 ns = g.shading_normal.xyz;
+        vec3 n = dot(ns, side) >= 0.0 ? ns : -ns;
+        Material mat = materials[floatBitsToUint(g.shading_normal.w)];
+        sum += luminance(shade_from_vpl(v, x, offset_origin(x, side), n, side, wo, mat, 0.0));
+    }
+    float w = sum * params.scale * float(params.pixels) / float(max(params.samples, 1u));
+    weights[c] = (isnan(w) || isinf(w)) ? 0.0 : w;
+    weights[params.row_length + c] = 1.0;
+}

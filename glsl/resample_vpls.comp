@@ -1,0 +1,87 @@
+#version 450
+// bir's resampling (Segovia 06 Sections 3.2 and 4.2): from the C candidates of a batch
+// (standard VPLs first, then reverse VPLs), N' are drawn with probability proportional to
+// their estimated power to the camera plus a uniform floor, q_c = (w_c + delta n_c) / W',
+// W' = sum w + delta K, K the non-empty candidates, delta = floor * sum w / K (1 when no
+// candidate has power): every VPL that can contribute keeps a non-zero probability (the
+// paper's Fig. 3). Systematic sampling: draw k takes the candidate whose cumulative interval
+// holds (k + xi) W' / N', one xi per batch, so candidate c is drawn N' q_c times in
+// expectation; each draw is a VPL of power P_c / (N' q_c), the paper's "density times CDF
+// weight, energy times the count chosen", and the sum over draws is an unbiased estimate of
+// the sum over candidates. Needs the inclusive prefix sums of both rows (Scanned) and their
+// totals.
+
+#extension GL_GOOGLE_include_directive : require
+
+layout(local_size_x = 64, local_size_y = 1, local_size_z = 1) in;
+
+#include "sampling.glsl"
+#include "vpl.glsl"
+#include "reverse_vpl.glsl"
+
+layout(set = 0, binding = 17, std430) readonly buffer Weights { float weights[]; };
+layout(set = 0, binding = 18, std430) writeonly buffer KeptVpls { Vpl kept[]; };
+layout(set = 0, binding = 19, std430) readonly buffer Scanned { float scanned[]; };
+layout(set = 0, binding = 20, std430) readonly buffer RowTotals { float totals[]; };
+// Draws kept per side, over the whole render (for the report).
+layout(set = 0, binding = 21, std430) buffer ResampleStats { uint kept_standard; uint kept_reverse; };
+
+layout(push_constant) uniform ResampleParams {
+    uint draws;           // N' of this batch
+    uint kept_offset;     // where they go in KeptVpls
+    uint candidates;      // C
+    uint standard;        // S: candidates [0, S) are Vpls[standard_begin + c]
+    uint standard_begin;
+    float standard_scale; // the standard side's weight
+    float floor_fraction;
+    uint seed;
+} params;
+
+float cumulative(uint c, float delta) {  // inclusive, floored
+    return scanned[c] + delta * scanned[params.candidates + c];
+}
+
+void main() {
+    uint k = gl_GlobalInvocationID.x;
+    if (k >= params.draws) return;
+    Vpl none;
+    none.position = vec4(0.0, 0.0, 0.0, uintBitsToFloat(VPL_NONE));
+    none.normal = vec4(0.0);
+    none.power = vec4(0.0);
+    none.incident = vec4(0.0);
+    float total = totals[0];
+    float nonempty = totals[1];
+    if (nonempty < 0.5 || params.candidates == 0u) {
+        kept[params.kept_offset + k] = none;
+        return;
+    }
+    float delta = total > 0.0 ? params.floor_fraction * total / nonempty : 1.0;
+    float all = total + delta * nonempty;
+    float xi = random(params.seed, 0u, 0x72736d70u, 0u);
+    float target = (float(k) + xi) / float(params.draws) * all;
+    // The first candidate whose inclusive cumulative exceeds the target.
+    uint lo = 0u;
+    uint hi = params.candidates - 1u;
+    while (lo < hi) {
+        uint mid = (lo + hi) / 2u;
+        if (cumulative(mid, delta) > target) hi = mid; else lo = mid + 1u;
+    }
+    uint c = lo;
+    float q = (weights[c] + delta * weights[params.candidates + c]) / all;
+    if (!(q > 0.0)) {
+        kept[params.kept_offset + k] = none;
+        return;
+    }
+    Vpl v;
+    float scale = 1.0 / (float(params.draws) * q);
+    if (c < params.standard) {
+        v = vpls[params.standard_begin + c];
+        scale *= params.standard_scale;
+        atomicAdd(kept_standard, 1u);
+    } else {
+        v = reverse_vpls[c - params.standard];
+        atomicAdd(kept_reverse, 1u);
+    }
+    v.power.rgb *= scale;
+    kept[params.kept_offset + k] = v;
+}

@@ -1,0 +1,164 @@
+//! glsl/estimate_vpl_power.comp and glsl/resample_vpls.comp: bir's resampling (Segovia 06
+//! Sections 3.2, 4.2): each candidate's power to the camera from M camera points, a CDF over
+//! the candidates by the GPU prefix sum (two rows: the powers and the non-empty flags, for the
+//! uniform floor), and N' systematic draws, each a VPL of power P_c / (N' q_c).
+
+use bytemuck::{Pod, Zeroable};
+
+use crate::gpu::prefix_sum::PrefixSum;
+use crate::gpu::{bind, Buffer, Commands, Context, GpuResult, Kernel};
+use crate::methods::gbuffer::GBuffer;
+use crate::methods::ir::walk::Vpl;
+use crate::scene::gpu::GpuScene;
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct PowerParams {
+    count: u32,
+    source_begin: u32,
+    offset: u32,
+    row_length: u32,
+    samples: u32,
+    seed: u32,
+    pixels: u32,
+    scale: f32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct ResampleParams {
+    draws: u32,
+    kept_offset: u32,
+    candidates: u32,
+    standard: u32,
+    standard_begin: u32,
+    standard_scale: f32,
+    floor_fraction: f32,
+    seed: u32,
+}
+
+/// The per-batch buffers of the resampling: weights and their scan, two rows of `candidates`.
+pub struct ResampleBuffers {
+    pub candidates: u32,
+    pub weights: Buffer<f32>,
+    pub scanned: Buffer<f32>,
+    pub totals: Buffer<f32>,
+    pub scan: PrefixSum,
+    /// Draws kept from the standard and the reverse side, over the whole render.
+    pub stats: Buffer<u32>,
+}
+
+impl ResampleBuffers {
+    pub fn new(ctx: &Context, candidates: u32) -> GpuResult<Self> {
+        let n = 2 * candidates.max(1) as usize;
+        Ok(ResampleBuffers {
+            candidates: candidates.max(1),
+            weights: Buffer::zeroed(ctx, "Weights", n)?,
+            scanned: Buffer::zeroed(ctx, "Scanned", n)?,
+            totals: Buffer::zeroed(ctx, "RowTotals", 2)?,
+            scan: PrefixSum::new(ctx, candidates.max(1) as usize, 2)?,
+            stats: Buffer::zeroed(ctx, "ResampleStats", 2)?,
+        })
+    }
+}
+
+pub struct EstimateVplPower(Kernel);
+
+impl EstimateVplPower {
+    pub fn new(ctx: &Context) -> GpuResult<Self> {
+        Ok(EstimateVplPower(Kernel::new(ctx, "estimate_vpl_power")?))
+    }
+
+    /// Weights candidates `offset..offset + count` from slots `source_begin..` of `source`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn record<'a>(
+        &'a self,
+        cmd: &mut Commands<'a>,
+        scene: &'a GpuScene,
+        gbuffer: &'a GBuffer,
+        source: &'a Buffer<Vpl>,
+        source_begin: u32,
+        count: u32,
+        offset: u32,
+        buffers: &'a ResampleBuffers,
+        samples: u32,
+        seed: u32,
+        scale: f32,
+    ) -> GpuResult<()> {
+        if count == 0 {
+            return Ok(());
+        }
+        let mut bindings = scene.bindings();
+        bindings.push(bind("GBuffer", &gbuffer.texels));
+        bindings.push(bind("Vpls", source));
+        bindings.push(bind("Weights", &buffers.weights));
+        let params = PowerParams {
+            count,
+            source_begin,
+            offset,
+            row_length: buffers.candidates,
+            samples: samples.max(1),
+            seed,
+            pixels: scene.pixel_count() as u32,
+            scale,
+        };
+        self.0
+            .dispatch(cmd, &bindings, &params, [count.div_ceil(64), 1, 1])
+    }
+}
+
+/// Where a batch's candidates come from.
+pub struct Candidates<'a> {
+    pub standard: &'a Buffer<Vpl>,
+    pub standard_begin: u32,
+    pub standard_count: u32,
+    pub standard_scale: f32,
+    pub reverse: &'a Buffer<Vpl>,
+}
+
+pub struct ResampleVpls(Kernel);
+
+impl ResampleVpls {
+    pub fn new(ctx: &Context) -> GpuResult<Self> {
+        Ok(ResampleVpls(Kernel::new(ctx, "resample_vpls")?))
+    }
+
+    /// Scans the weights and writes `draws` VPLs into `kept` from `kept_offset`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn record<'a>(
+        &'a self,
+        cmd: &mut Commands<'a>,
+        candidates: &Candidates<'a>,
+        buffers: &'a ResampleBuffers,
+        kept: &'a Buffer<Vpl>,
+        kept_offset: u32,
+        draws: u32,
+        floor_fraction: f32,
+        seed: u32,
+    ) -> GpuResult<()> {
+        buffers
+            .scan
+            .record(cmd, &buffers.weights, &buffers.scanned, &buffers.totals)?;
+        let bindings = vec![
+            bind("Vpls", candidates.standard),
+            bind("ReverseVpls", candidates.reverse),
+            bind("Weights", &buffers.weights),
+            bind("KeptVpls", kept),
+            bind("Scanned", &buffers.scanned),
+            bind("RowTotals", &buffers.totals),
+            bind("ResampleStats", &buffers.stats),
+        ];
+        let params = ResampleParams {
+            draws,
+            kept_offset,
+            candidates: buffers.candidates,
+            standard: candidates.standard_count,
+            standard_begin: candidates.standard_begin,
+            standard_scale: candidates.standard_scale,
+            floor_fraction,
+            seed,
+        };
+        self.0
+            .dispatch(cmd, &bindings, &params, [draws.div_ceil(64), 1, 1])
+    }
+}
