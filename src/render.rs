@@ -109,6 +109,7 @@ pub fn render(
         wall_ms: output.wall_ms,
         metrics,
         warnings,
+        stats: output.stats.iter().cloned().collect(),
         irad_version: image::sidecar::IRAD_VERSION.into(),
     };
     let paths = image::write_all(&job.out, &output.image, &record, job.exposure)?;

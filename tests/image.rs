@@ -535,6 +535,9 @@ fn record() -> RenderRecord {
             nan_inf: 0,
         }),
         warnings: vec!["spot light 2: \"cone\" wider than 90 degrees".into()],
+        stats: [("kept_reverse_fraction".to_string(), 0.25)]
+            .into_iter()
+            .collect(),
         irad_version: sidecar::IRAD_VERSION.into(),
     }
 }

@@ -46,6 +46,9 @@ pub struct RenderRecord {
     pub metrics: Option<Metrics>,
     #[serde(default)]
     pub warnings: Vec<String>,
+    /// Method-specific figures (bir: fractions of kept VPLs per side, rays per kept VPL).
+    #[serde(default)]
+    pub stats: BTreeMap<String, f64>,
     pub irad_version: String,
 }
 

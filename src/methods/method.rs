@@ -313,6 +313,19 @@ impl<'a> Params<'a> {
                 "roulette_depth",
                 "pixel_centres",
             ],
+            "bir" => &[
+                "vpls",
+                "frames",
+                "seed",
+                "strategy",
+                "pool",
+                "light_samples",
+                "ratio",
+                "floor",
+                "power_samples",
+                "batch",
+                "pixel_centres",
+            ],
             _ => &[
                 "vpls",
                 "frames",
@@ -437,6 +450,23 @@ mod tests {
                 ..Default::default()
             })
         );
+    }
+
+    #[test]
+    fn bir_parameters_read_back() {
+        let bir = Method::from_params(
+            "bir",
+            &table("vpls = 64\nframes = 3\nstrategy = \"reverse\"\npool = 7\nlight_samples = 2\nratio = 0\nfloor = 0.5\npower_samples = 9\nbatch = 32"),
+        )
+        .unwrap();
+        let back: toml::Table = bir
+            .parameters()
+            .into_iter()
+            .map(|(k, v)| (k, toml::Value::try_from(v).unwrap()))
+            .collect();
+        assert_eq!(Method::from_params("bir", &back).unwrap(), bir);
+        let e = Method::from_params("bir", &table("strategy = \"sideways\"")).unwrap_err();
+        assert!(e.to_string().contains("strategy = \"sideways\""), "{e}");
     }
 
     #[test]

@@ -43,6 +43,8 @@ pub struct Measured {
     pub pass_gpu_ms: BTreeMap<String, Option<f64>>,
     pub wall_ms: f64,
     pub nonfinite_estimates: u64,
+    /// The method's own figures, averaged over the scored images.
+    pub stats: BTreeMap<String, f64>,
 }
 
 /// Renders `method` `warmup + max(repeats, flicker_frames)` times; `progress(render, renders,
@@ -74,6 +76,7 @@ pub fn measure(
     let mut wall = Vec::new();
     let mut passes: BTreeMap<String, Vec<Option<f64>>> = BTreeMap::new();
     let mut nonfinite = 0u64;
+    let mut stats: BTreeMap<String, f64> = BTreeMap::new();
     for r in 0..k {
         let m = method.with_seed(seed.wrapping_add(r));
         let out = renderers.run(ctx, &m, scene, gpu_scene, |d, t| {
@@ -87,6 +90,9 @@ pub fn measure(
             }
         }
         nonfinite += out.nonfinite_estimates as u64;
+        for (name, value) in &out.stats {
+            *stats.entry(name.clone()).or_default() += value / k as f64;
+        }
         images.push(out.image);
     }
     let median_of = |values: &[Option<f64>]| -> Option<f64> {
@@ -117,6 +123,7 @@ pub fn measure(
             .collect(),
         wall_ms: median(&mut wall),
         nonfinite_estimates: nonfinite,
+        stats,
         image: images.swap_remove(0),
     })
 }

@@ -293,6 +293,7 @@ fn run_one(
         image: None,
         error_map: None,
         pareto: false,
+        stats: BTreeMap::new(),
     };
     if let Some(why) = spec.method.declines(scene) {
         record.status = Status::Declined;
@@ -351,6 +352,7 @@ fn run_one(
     record.reference_rel_mse = *reference_rel_mse;
     record.flicker = m.flicker;
     record.nonfinite_estimates = m.nonfinite_estimates;
+    record.stats = m.stats;
     record.image = Some(image_name);
     record.error_map = Some(error_name);
     Ok(record)

@@ -124,6 +124,16 @@ pub fn markdown(results: &SuiteResults) -> String {
             );
         }
         md += "\n";
+        let with_stats: Vec<&&RunRecord> = runs.iter().filter(|r| !r.stats.is_empty()).collect();
+        if !with_stats.is_empty() {
+            md += "Method figures (averaged over each run's images):\n\n";
+            for r in with_stats {
+                let figures: Vec<String> =
+                    r.stats.iter().map(|(k, v)| format!("{k} {v:.4}")).collect();
+                let _ = writeln!(md, "- {} {}: {}", r.label, r.budget, figures.join(", "));
+            }
+            md += "\n";
+        }
         md += "| run | image | error map |\n|---|---|---|\n";
         if let Some(r) = reference {
             let _ = writeln!(

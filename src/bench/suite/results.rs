@@ -89,6 +89,10 @@ pub struct RunRecord {
     /// On the per-scene Pareto front of (GPU time, relMSE) among the ok runs.
     #[serde(default)]
     pub pareto: bool,
+    /// The method's own figures (bir: kept fractions per side, rays per kept VPL), averaged
+    /// over the scored images.
+    #[serde(default)]
+    pub stats: BTreeMap<String, f64>,
 }
 
 /// Everything a suite (or one shard of it) produced so far.
@@ -193,9 +197,15 @@ impl SuiteResults {
             .iter()
             .flat_map(|r| r.pass_gpu_ms.keys().map(String::as_str))
             .collect();
+        let stats: BTreeSet<&str> = self
+            .runs
+            .iter()
+            .flat_map(|r| r.stats.keys().map(String::as_str))
+            .collect();
         let mut header: Vec<String> = FIXED_COLUMNS.iter().map(|s| s.to_string()).collect();
         header.extend(params.iter().map(|p| format!("param:{p}")));
         header.extend(passes.iter().map(|p| format!("pass_ms:{p}")));
+        header.extend(stats.iter().map(|p| format!("stat:{p}")));
         let mut out = csv_row(&header);
         for r in &self.runs {
             let m = r.metrics;
@@ -249,6 +259,9 @@ impl SuiteResults {
             }
             for p in &passes {
                 row.push(f(r.pass_gpu_ms.get(*p).copied().flatten()));
+            }
+            for p in &stats {
+                row.push(f(r.stats.get(*p).copied()));
             }
             out += &csv_row(&row);
         }
@@ -405,6 +418,7 @@ mod tests {
             image: None,
             error_map: None,
             pareto: false,
+            stats: BTreeMap::new(),
         }
     }
 
