@@ -148,6 +148,10 @@ struct RenderArgs {
     /// O(batch + kept VPLs).
     #[arg(long, default_value_t = 0)]
     batch: u32,
+    /// bir: choose the lights that start light paths by their power instead of by their
+    /// measured contribution to what the camera sees (Segovia Section 4.1).
+    #[arg(long)]
+    light_cdf_off: bool,
     /// Seed of every random and quasi-random number: same seed, same device, same bits.
     #[arg(long, default_value_t = 0)]
     seed: u32,
@@ -482,6 +486,7 @@ fn render(options: &ContextOptions, args: RenderArgs) -> Result<()> {
             floor: args.floor,
             power_samples: args.power_samples,
             batch: args.batch,
+            light_cdf: !args.light_cdf_off,
             pixels,
         }),
     };

@@ -40,7 +40,7 @@ fn walk_reproduces_kellers_survivor_counts() {
         let buffers = VplBuffers::new(ctx, schedule.clone()).unwrap();
         let walk = TraceVpls::new(ctx).unwrap();
         let mut cmd = Commands::new(ctx).unwrap();
-        walk.record(&mut cmd, &gpu, &buffers, 3).unwrap();
+        walk.record(&mut cmd, &gpu, &buffers, 3, None).unwrap();
         cmd.submit_and_wait().unwrap();
         let vpls = buffers.vpls.read().unwrap();
         for (j, level) in schedule.levels.iter().enumerate() {

@@ -140,6 +140,7 @@ impl Method {
                 p.insert("floor".into(), json!(s.floor));
                 p.insert("power_samples".into(), json!(s.power_samples));
                 p.insert("batch".into(), json!(s.batch));
+                p.insert("light_cdf".into(), json!(s.light_cdf));
                 p.insert(
                     "pixel_centres".into(),
                     json!(s.pixels == PixelSampling::Centres),
@@ -209,6 +210,7 @@ impl Method {
                     floor: reader.non_negative("floor", d.floor)?,
                     power_samples: reader.uint("power_samples", d.power_samples, 1, 1024)?,
                     batch: reader.uint("batch", d.batch, 0, 1 << 20)?,
+                    light_cdf: reader.flag("light_cdf", d.light_cdf)?,
                     pixels: reader.pixels()?,
                 })
             }
@@ -293,6 +295,14 @@ impl<'a> Params<'a> {
         }
     }
 
+    fn flag(&mut self, key: &str, default: bool) -> Result<bool, ParamError> {
+        let Some(v) = self.params.get(key) else {
+            return Ok(default);
+        };
+        v.as_bool()
+            .ok_or_else(|| self.error(key, v, "expected true or false"))
+    }
+
     fn pixels(&mut self) -> Result<PixelSampling, ParamError> {
         let Some(v) = self.params.get("pixel_centres") else {
             return Ok(PixelSampling::Jittered);
@@ -324,6 +334,7 @@ impl<'a> Params<'a> {
                 "floor",
                 "power_samples",
                 "batch",
+                "light_cdf",
                 "pixel_centres",
             ],
             _ => &[
@@ -456,7 +467,7 @@ mod tests {
     fn bir_parameters_read_back() {
         let bir = Method::from_params(
             "bir",
-            &table("vpls = 64\nframes = 3\nstrategy = \"reverse\"\npool = 7\nlight_samples = 2\nratio = 0\nfloor = 0.5\npower_samples = 9\nbatch = 32"),
+            &table("vpls = 64\nframes = 3\nstrategy = \"reverse\"\npool = 7\nlight_samples = 2\nratio = 0\nfloor = 0.5\npower_samples = 9\nbatch = 32\nlight_cdf = false"),
         )
         .unwrap();
         let back: toml::Table = bir

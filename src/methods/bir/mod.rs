@@ -11,6 +11,7 @@
 //! side; `reverse` to the reverse side, plus half a budget of light paths that light them;
 //! `both` half to each.
 
+pub mod light_cdf;
 pub mod resample;
 pub mod reverse;
 
@@ -31,6 +32,7 @@ use crate::sampling::pcg;
 use crate::scene::gpu::GpuScene;
 use crate::scene::Scene;
 
+use light_cdf::LightCdf;
 use resample::{Candidates, EstimateVplPower, ResampleBuffers, ResampleVpls};
 use reverse::{ShadeReverseVpls, TraceReverseVpls};
 
@@ -72,6 +74,9 @@ pub struct BirSettings {
     /// Candidates resampled together: the frame's `vpls` in batches of this many, so storage
     /// stays O(batch + N') (end of Section 4.2). 0: one batch per frame.
     pub batch: u32,
+    /// Start light paths by each light's measured contribution to the camera (Section 4.1)
+    /// instead of by its power.
+    pub light_cdf: bool,
     pub pixels: PixelSampling,
 }
 
@@ -88,6 +93,7 @@ impl Default for BirSettings {
             floor: 0.1,
             power_samples: 5,
             batch: 0,
+            light_cdf: true,
             pixels: PixelSampling::Jittered,
         }
     }
@@ -155,6 +161,9 @@ pub struct Bir {
     gather: AccumulateVpls,
 }
 
+/// Below this many light entries a camera-driven table cannot differ from the power-based one.
+const LIGHT_CDF_MIN_ENTRIES: usize = 2;
+
 impl Bir {
     pub fn new(ctx: &Context) -> Result<Self, GpuError> {
         Ok(Bir {
@@ -218,6 +227,12 @@ impl Bir {
                 1
             },
         )?;
+        let light_cdf =
+            if settings.light_cdf && gpu_scene.light_entries.len() >= LIGHT_CDF_MIN_ENTRIES {
+                Some(LightCdf::new(ctx, gpu_scene)?)
+            } else {
+                None
+            };
         let frames = settings.frames.max(1);
         let passes = progressive::run(
             ctx,
@@ -246,12 +261,22 @@ impl Bir {
                         u32::MAX,
                     )
                 })?;
+                // Once per render, on the first frame's G-buffer: the table only steers which
+                // lights start paths (each walk divides by the probability it used), so it
+                // need not change per frame, and lavapipe pays per dispatch.
+                if let (Some(cdf), 0) = (&light_cdf, frame) {
+                    let seed = pcg::hash(&[settings.seed, 0x6c636466]);
+                    cmd.pass("light cdf", |cmd| {
+                        cdf.record(cmd, gpu_scene, &gbuffer, seed, settings.floor)
+                    })?;
+                }
+                let entries = light_cdf.as_ref().map(|c| &c.table);
                 for b in 0..batches {
                     let walk_seed = pcg::hash(&[settings.seed, frame, b, 0x76706c73]);
                     let reverse_seed = pcg::hash(&[settings.seed, frame, b, 0x72657672]);
                     let power_seed = pcg::hash(&[settings.seed, frame, b, 0x706f7772]);
                     cmd.pass("vpl walk", |cmd| {
-                        self.walk.record(cmd, gpu_scene, &vpls, walk_seed)
+                        self.walk.record(cmd, gpu_scene, &vpls, walk_seed, entries)
                     })?;
                     if split.reverse > 0 {
                         cmd.pass("reverse vpls", |cmd| {

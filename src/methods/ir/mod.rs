@@ -160,7 +160,7 @@ impl InstantRadiosity {
                 })?;
                 let walk_seed = pcg::hash(&[settings.seed, frame, 0x76706c73]);
                 cmd.pass("vpl walk", |cmd| {
-                    self.walk.record(cmd, gpu_scene, &vpls, walk_seed)
+                    self.walk.record(cmd, gpu_scene, &vpls, walk_seed, None)
                 })?;
                 cmd.pass("vpl accumulation", |cmd| {
                     self.gather.record(

@@ -5,7 +5,7 @@ use bytemuck::{Pod, Zeroable};
 use glam::Vec4;
 
 use crate::gpu::{bind, Buffer, Commands, Context, GpuResult, Kernel};
-use crate::scene::gpu::GpuScene;
+use crate::scene::gpu::{GpuScene, LightEntry};
 
 use super::schedule::Schedule;
 
@@ -62,16 +62,26 @@ impl TraceVpls {
         Ok(TraceVpls(Kernel::new(ctx, "trace_vpls")?))
     }
 
-    /// Clears the slots (a path that ends early leaves its later slots empty) and walks.
+    /// Clears the slots (a path that ends early leaves its later slots empty) and walks,
+    /// choosing lights by `entries` when given (bir's camera-driven table) instead of the
+    /// scene's power-based one.
     pub fn record<'a>(
         &'a self,
         cmd: &mut Commands<'a>,
         scene: &'a GpuScene,
         buffers: &'a VplBuffers,
         seed: u32,
+        entries: Option<&'a Buffer<LightEntry>>,
     ) -> GpuResult<()> {
         cmd.fill_zero(&buffers.vpls);
         let mut bindings = scene.bindings();
+        if let Some(entries) = entries {
+            for b in bindings.iter_mut() {
+                if b.name == "LightEntries" {
+                    *b = bind("LightEntries", entries);
+                }
+            }
+        }
         bindings.push(bind("Vpls", &buffers.vpls));
         bindings.push(bind("VplSchedule", &buffers.schedule));
         let params = WalkParams {

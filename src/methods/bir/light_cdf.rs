@@ -1,0 +1,96 @@
+//! glsl/estimate_light_contributions.comp and glsl/build_light_cdf.comp: bir's many-light
+//! sampling (Segovia 06 Section 4.1): each light's contribution to what the camera sees,
+//! measured once per render at `SAMPLES` camera points and one bounce beyond, summed per light by the GPU
+//! prefix sum (one row per light), and the table that starts light paths in proportion to it
+//! plus a floor, so no light that can contribute has zero probability.
+
+use bytemuck::{Pod, Zeroable};
+
+use crate::gpu::prefix_sum::PrefixSum;
+use crate::gpu::{bind, Buffer, Commands, Context, GpuResult, Kernel};
+use crate::methods::gbuffer::GBuffer;
+use crate::scene::gpu::{GpuScene, LightEntry};
+
+/// Camera samples the light contributions are measured at.
+pub const SAMPLES: u32 = 1024;
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct ContributionParams {
+    samples: u32,
+    entries: u32,
+    seed: u32,
+    pixels: u32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct CdfParams {
+    entries: u32,
+    floor_fraction: f32,
+}
+
+pub struct LightCdf {
+    estimate: Kernel,
+    build: Kernel,
+    entries: u32,
+    contributions: Buffer<f32>,
+    sums: Buffer<f32>,
+    totals: Buffer<f32>,
+    scan: PrefixSum,
+    /// The camera-driven light table, laid out as the scene's LightEntries.
+    pub table: Buffer<LightEntry>,
+}
+
+impl LightCdf {
+    pub fn new(ctx: &Context, scene: &GpuScene) -> GpuResult<Self> {
+        let entries = scene.light_entries.len().max(1) as u32;
+        let n = (entries * SAMPLES) as usize;
+        Ok(LightCdf {
+            estimate: Kernel::new(ctx, "estimate_light_contributions")?,
+            build: Kernel::new(ctx, "build_light_cdf")?,
+            entries,
+            contributions: Buffer::zeroed(ctx, "Contributions", n)?,
+            sums: Buffer::zeroed(ctx, "light contribution sums", n)?,
+            totals: Buffer::zeroed(ctx, "RowTotals", entries as usize)?,
+            scan: PrefixSum::new(ctx, SAMPLES as usize, entries as usize)?,
+            table: Buffer::zeroed(ctx, "CameraLightEntries", entries as usize)?,
+        })
+    }
+
+    /// Measures this frame's contributions on `gbuffer` and rebuilds `table`.
+    pub fn record<'a>(
+        &'a self,
+        cmd: &mut Commands<'a>,
+        scene: &'a GpuScene,
+        gbuffer: &'a GBuffer,
+        seed: u32,
+        floor_fraction: f32,
+    ) -> GpuResult<()> {
+        let mut bindings = scene.bindings();
+        bindings.push(bind("GBuffer", &gbuffer.texels));
+        bindings.push(bind("Contributions", &self.contributions));
+        let params = ContributionParams {
+            samples: SAMPLES,
+            entries: self.entries,
+            seed,
+            pixels: scene.pixel_count() as u32,
+        };
+        self.estimate.dispatch(
+            cmd,
+            &bindings,
+            &params,
+            [SAMPLES.div_ceil(64), self.entries, 1],
+        )?;
+        self.scan
+            .record(cmd, &self.contributions, &self.sums, &self.totals)?;
+        let mut bindings = scene.bindings();
+        bindings.push(bind("RowTotals", &self.totals));
+        bindings.push(bind("CameraLightEntries", &self.table));
+        let params = CdfParams {
+            entries: self.entries,
+            floor_fraction,
+        };
+        self.build.dispatch(cmd, &bindings, &params, [1, 1, 1])
+    }
+}
