@@ -1,10 +1,10 @@
 #version 450
 // bir's resampling (Segovia 06 Sections 3.2 and 4.2): from the C candidates of a batch
 // (standard VPLs first, then reverse VPLs), N' are drawn with probability proportional to
-// their estimated power to the camera plus a uniform floor, q_c = (w_c + delta n_c) / W',
-// W' = sum w + delta K, K the non-empty candidates, delta = floor * sum w / K (1 when no
-// candidate has power): every VPL that can contribute keeps a non-zero probability (the
-// paper's Fig. 3). Systematic sampling: draw k takes the candidate whose cumulative interval
+// their estimated power to the camera times their side's weight (SideWeights) plus a uniform
+// floor, q_c = (a_c w_c + delta n_c) / W', W' = sum a w + delta K, K the non-empty
+// candidates, delta = floor * sum a w / K (1 when no candidate has power): every VPL that can
+// contribute keeps a non-zero probability (the paper's Fig. 3). Systematic sampling: draw k takes the candidate whose cumulative interval
 // holds (k + xi) W' / N', one xi per batch, so candidate c is drawn N' q_c times in
 // expectation; each draw is a VPL of power P_c / (N' q_c), the paper's "density times CDF
 // weight, energy times the count chosen", and the sum over draws is an unbiased estimate of
@@ -25,6 +25,8 @@ layout(set = 0, binding = 19, std430) readonly buffer Scanned { float scanned[];
 layout(set = 0, binding = 20, std430) readonly buffer RowTotals { float totals[]; };
 // Draws kept per side, over the whole render (for the report).
 layout(set = 0, binding = 21, std430) buffer ResampleStats { uint kept_standard; uint kept_reverse; };
+// x, y: the standard and reverse sides' weights (sum 1); z, w: their running power sums.
+layout(set = 0, binding = 24, std430) readonly buffer SideWeights { vec4 side; };
 
 layout(push_constant) uniform ResampleParams {
     uint draws;           // N' of this batch
@@ -32,13 +34,21 @@ layout(push_constant) uniform ResampleParams {
     uint candidates;      // C
     uint standard;        // S: candidates [0, S) are Vpls[standard_begin + c]
     uint standard_begin;
-    float standard_scale; // the standard side's weight
+    float unused;
     float floor_fraction;
     uint seed;
 } params;
 
+// The weighted inclusive cumulative of candidate c: a_s S(c) for the standard part, then
+// a_s S(S - 1) + a_r (S(c) - S(S - 1)).
+float weighted(uint c) {
+    if (c < params.standard) return side.x * scanned[c];
+    float standard_sum = params.standard > 0u ? scanned[params.standard - 1u] : 0.0;
+    return side.x * standard_sum + side.y * (scanned[c] - standard_sum);
+}
+
 float cumulative(uint c, float delta) {  // inclusive, floored
-    return scanned[c] + delta * scanned[params.candidates + c];
+    return weighted(c) + delta * scanned[params.candidates + c];
 }
 
 void main() {
@@ -49,12 +59,12 @@ void main() {
     none.normal = vec4(0.0);
     none.power = vec4(0.0);
     none.incident = vec4(0.0);
-    float total = totals[0];
     float nonempty = totals[1];
     if (nonempty < 0.5 || params.candidates == 0u) {
         kept[params.kept_offset + k] = none;
         return;
     }
+    float total = weighted(params.candidates - 1u);
     float delta = total > 0.0 ? params.floor_fraction * total / nonempty : 1.0;
     float all = total + delta * nonempty;
     float xi = random(params.seed, 0u, 0x72736d70u, 0u);
@@ -67,16 +77,16 @@ void main() {
         if (cumulative(mid, delta) > target) hi = mid; else lo = mid + 1u;
     }
     uint c = lo;
-    float q = (weights[c] + delta * weights[params.candidates + c]) / all;
+    float a = c < params.standard ? side.x : side.y;
+    float q = (a * weights[c] + delta * weights[params.candidates + c]) / all;
     if (!(q > 0.0)) {
         kept[params.kept_offset + k] = none;
         return;
     }
     Vpl v;
-    float scale = 1.0 / (float(params.draws) * q);
+    float scale = a / (float(params.draws) * q);
     if (c < params.standard) {
         v = vpls[params.standard_begin + c];
-        scale *= params.standard_scale;
         atomicAdd(kept_standard, 1u);
     } else {
         v = reverse_vpls[c - params.standard];

@@ -6,8 +6,9 @@
 //   - light -> x2: next-event estimation at x2 (K samples);
 //   - light -> x3 -> x2: K cosine-distributed directions from x2 to x3, next-event estimation
 //     at x3 (one sample each), the full BSDF at x3;
-//   - light -> ... -> v -> x3 -> x2: the same x3 connected to every standard VPL v of the
-//     frame (surface VPLs only; one shadow ray each).
+//   - light -> ... -> v -> x3 -> x2: the same x3 connected to `connections` standard VPLs
+//     of the frame drawn uniformly (with replacement) from its surface slots, each weighted by
+//     slots / connections (one shadow ray each; all of them when connections is 0).
 // Extending to x3 matters where standard VPLs starve near x2 but not one bounce further (the
 // U office: x2 by room B's door, x3 in the corridor, the standard VPLs in room A); connecting
 // x2 to standard VPLs directly as well would count those path lengths twice. A reverse VPL on
@@ -39,6 +40,7 @@ layout(push_constant) uniform ShadeParams {
     uint vpl_end;
     uint seed;
     float weight;        // bir's share of the reverse side (1/2 when both sides are shaded)
+    uint connections;    // standard VPLs per x3 (0: every one)
 } params;
 
 // One next-event sample at x (offset already) with material m seen from wo: f cos L / pdf.
@@ -96,8 +98,18 @@ void main() {
         vec3 o3 = offset_origin(x3, side3);
         Material m3 = materials[triangle_material(hit.triangle)];
         vec3 incoming = next_event(o3, n3, side3, wo3, m3, k, 8u * j + 6u);
-        for (uint s = params.vpl_begin; s < params.vpl_end; ++s) {
-            incoming += shade_from_vpl(vpls[s], x3, o3, n3, side3, wo3, m3, 0.0);
+        uint slots = params.vpl_end - params.vpl_begin;
+        if (params.connections == 0u || params.connections >= slots) {
+            for (uint s = params.vpl_begin; s < params.vpl_end; ++s) {
+                incoming += shade_from_vpl(vpls[s], x3, o3, n3, side3, wo3, m3, 0.0);
+            }
+        } else {
+            vec3 sum = vec3(0.0);
+            for (uint c = 0u; c < params.connections; ++c) {
+                uint pick = random_u31(params.seed, k, 0x636f6e6eu, j * 4096u + c) % slots;
+                sum += shade_from_vpl(vpls[params.vpl_begin + pick], x3, o3, n3, side3, wo3, m3, 0.0);
+            }
+            incoming += sum * (float(slots) / float(params.connections));
         }
         radiance += kd * incoming / float(samples);
     }

@@ -133,6 +133,10 @@ struct RenderArgs {
     /// bir: next-event samples per reverse VPL for its outgoing radiance.
     #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=1024))]
     light_samples: u32,
+    /// bir: standard VPLs each bounce from a reverse VPL connects to for its radiance (drawn
+    /// uniformly, weighted; 0: every one).
+    #[arg(long, default_value_t = 0)]
+    connections: u32,
     /// bir: candidates per kept VPL (the paper's resampling ratio r); 0 shades every
     /// candidate, no resampling.
     #[arg(long, default_value_t = 10)]
@@ -152,6 +156,10 @@ struct RenderArgs {
     /// measured contribution to what the camera sees (Segovia Section 4.1).
     #[arg(long)]
     light_cdf_off: bool,
+    /// bir --strategy both: keep the paper's fixed 1/2 side weights instead of weights that
+    /// follow each side's share of the camera power found in earlier batches.
+    #[arg(long)]
+    fixed_weights: bool,
     /// Seed of every random and quasi-random number: same seed, same device, same bits.
     #[arg(long, default_value_t = 0)]
     seed: u32,
@@ -482,11 +490,13 @@ fn render(options: &ContextOptions, args: RenderArgs) -> Result<()> {
             },
             pool: args.pool,
             light_samples: args.light_samples,
+            connections: args.connections,
             ratio: args.ratio,
             floor: args.floor,
             power_samples: args.power_samples,
             batch: args.batch,
             light_cdf: !args.light_cdf_off,
+            adaptive: !args.fixed_weights,
             pixels,
         }),
     };

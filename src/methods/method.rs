@@ -136,11 +136,13 @@ impl Method {
                 p.insert("strategy".into(), json!(s.strategy.name()));
                 p.insert("pool".into(), json!(s.pool));
                 p.insert("light_samples".into(), json!(s.light_samples));
+                p.insert("connections".into(), json!(s.connections));
                 p.insert("ratio".into(), json!(s.ratio));
                 p.insert("floor".into(), json!(s.floor));
                 p.insert("power_samples".into(), json!(s.power_samples));
                 p.insert("batch".into(), json!(s.batch));
                 p.insert("light_cdf".into(), json!(s.light_cdf));
+                p.insert("adaptive".into(), json!(s.adaptive));
                 p.insert(
                     "pixel_centres".into(),
                     json!(s.pixels == PixelSampling::Centres),
@@ -206,11 +208,13 @@ impl Method {
                     },
                     pool: reader.uint("pool", d.pool, 1, 1 << 16)?,
                     light_samples: reader.uint("light_samples", d.light_samples, 1, 1024)?,
+                    connections: reader.uint("connections", d.connections, 0, 1 << 20)?,
                     ratio: reader.uint("ratio", d.ratio, 0, 1 << 16)?,
                     floor: reader.non_negative("floor", d.floor)?,
                     power_samples: reader.uint("power_samples", d.power_samples, 1, 1024)?,
                     batch: reader.uint("batch", d.batch, 0, 1 << 20)?,
                     light_cdf: reader.flag("light_cdf", d.light_cdf)?,
+                    adaptive: reader.flag("adaptive", d.adaptive)?,
                     pixels: reader.pixels()?,
                 })
             }
@@ -330,11 +334,13 @@ impl<'a> Params<'a> {
                 "strategy",
                 "pool",
                 "light_samples",
+                "connections",
                 "ratio",
                 "floor",
                 "power_samples",
                 "batch",
                 "light_cdf",
+                "adaptive",
                 "pixel_centres",
             ],
             _ => &[
@@ -467,7 +473,7 @@ mod tests {
     fn bir_parameters_read_back() {
         let bir = Method::from_params(
             "bir",
-            &table("vpls = 64\nframes = 3\nstrategy = \"reverse\"\npool = 7\nlight_samples = 2\nratio = 0\nfloor = 0.5\npower_samples = 9\nbatch = 32\nlight_cdf = false"),
+            &table("vpls = 64\nframes = 3\nstrategy = \"reverse\"\npool = 7\nlight_samples = 2\nconnections = 3\nratio = 0\nfloor = 0.5\npower_samples = 9\nbatch = 32\nlight_cdf = false\nadaptive = false"),
         )
         .unwrap();
         let back: toml::Table = bir

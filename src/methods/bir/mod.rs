@@ -33,7 +33,7 @@ use crate::scene::gpu::GpuScene;
 use crate::scene::Scene;
 
 use light_cdf::LightCdf;
-use resample::{Candidates, EstimateVplPower, ResampleBuffers, ResampleVpls};
+use resample::{Candidates, EstimateVplPower, ResampleBuffers, ResampleVpls, UpdateSideWeights};
 use reverse::{ShadeReverseVpls, TraceReverseVpls};
 
 /// Which VPLs a frame shades.
@@ -63,8 +63,12 @@ pub struct BirSettings {
     pub strategy: Strategy,
     /// Camera points per frame the reverse VPLs start from (Eq. 7's M).
     pub pool: u32,
-    /// Next-event samples per reverse VPL for its radiance.
+    /// Next-event samples per reverse VPL for its radiance (and bounces to x3).
     pub light_samples: u32,
+    /// Standard VPLs each x3 connects to (drawn uniformly, weighted; 0: all of them, the
+    /// default: in the Cornell box 16 drawn connections raised relMSE about 9x, as a nearby
+    /// VPL drawn with weight slots / 16 is a spike).
+    pub connections: u32,
     /// Candidates per kept VPL (the paper's r); 0 shades every candidate (no resampling).
     pub ratio: u32,
     /// The CDF's uniform floor, as a fraction of the mean candidate power (Fig. 3).
@@ -77,6 +81,9 @@ pub struct BirSettings {
     /// Start light paths by each light's measured contribution to the camera (Section 4.1)
     /// instead of by its power.
     pub light_cdf: bool,
+    /// `both` with resampling: side weights that follow the sides' shares of the camera power
+    /// found in earlier batches (update_side_weights.comp) instead of the paper's fixed 1/2.
+    pub adaptive: bool,
     pub pixels: PixelSampling,
 }
 
@@ -89,11 +96,13 @@ impl Default for BirSettings {
             strategy: Strategy::Both,
             pool: 50,
             light_samples: 4,
+            connections: 0,
             ratio: 10,
             floor: 0.1,
             power_samples: 5,
             batch: 0,
             light_cdf: true,
+            adaptive: true,
             pixels: PixelSampling::Jittered,
         }
     }
@@ -158,8 +167,12 @@ pub struct Bir {
     shade_reverse: ShadeReverseVpls,
     power: EstimateVplPower,
     resample: ResampleVpls,
+    side_weights: UpdateSideWeights,
     gather: AccumulateVpls,
 }
+
+/// The smallest weight an adaptive side weight takes: neither side is ever dropped.
+pub const MIN_SIDE_WEIGHT: f32 = 0.1;
 
 /// Below this many light entries a camera-driven table cannot differ from the power-based one.
 const LIGHT_CDF_MIN_ENTRIES: usize = 2;
@@ -174,6 +187,7 @@ impl Bir {
             shade_reverse: ShadeReverseVpls::new(ctx)?,
             power: EstimateVplPower::new(ctx)?,
             resample: ResampleVpls::new(ctx)?,
+            side_weights: UpdateSideWeights::new(ctx)?,
             gather: AccumulateVpls::new(ctx)?,
         })
     }
@@ -217,7 +231,12 @@ impl Bir {
             0
         };
         let candidates = standard_count + split.reverse;
-        let resample_buffers = ResampleBuffers::new(ctx, candidates)?;
+        let resample_buffers = ResampleBuffers::new(
+            ctx,
+            candidates,
+            [split.standard_weight, split.reverse_weight],
+        )?;
+        let adaptive = resampling && settings.adaptive && settings.strategy == Strategy::Both;
         let kept: Buffer<Vpl> = Buffer::zeroed(
             ctx,
             "KeptVpls",
@@ -297,8 +316,14 @@ impl Bir {
                                 &vpls.vpls,
                                 slots.clone(),
                                 settings.light_samples,
+                                settings.connections,
                                 reverse_seed,
-                                split.reverse_weight,
+                                // Resampling applies the side weights itself.
+                                if resampling {
+                                    1.0
+                                } else {
+                                    split.reverse_weight
+                                },
                             )
                         })?;
                     }
@@ -315,7 +340,7 @@ impl Bir {
                                 &resample_buffers,
                                 settings.power_samples,
                                 power_seed,
-                                split.standard_weight,
+                                1.0,
                             )?;
                             self.power.record(
                                 cmd,
@@ -335,7 +360,6 @@ impl Bir {
                             standard: &vpls.vpls,
                             standard_begin: slots.start,
                             standard_count,
-                            standard_scale: split.standard_weight,
                             reverse: &reverse,
                         };
                         cmd.pass("resampling", |cmd| {
@@ -348,7 +372,16 @@ impl Bir {
                                 draws,
                                 settings.floor,
                                 power_seed,
-                            )
+                            )?;
+                            if adaptive {
+                                self.side_weights.record(
+                                    cmd,
+                                    &resample_buffers,
+                                    standard_count,
+                                    MIN_SIDE_WEIGHT,
+                                )?;
+                            }
+                            Ok(())
                         })?;
                     } else {
                         cmd.pass("vpl accumulation", |cmd| {
@@ -394,6 +427,10 @@ impl Bir {
             let all = (kept_counts[0] + kept_counts[1]).max(1) as f64;
             stats.push(("kept_standard_fraction".into(), kept_counts[0] as f64 / all));
             stats.push(("kept_reverse_fraction".into(), kept_counts[1] as f64 / all));
+            if adaptive {
+                let side = resample_buffers.side.read()?[0];
+                stats.push(("final_standard_weight".into(), side[0] as f64));
+            }
         }
         let sampling_rays =
             sampling_rays(&vpls.layout, &split, settings, standard_count, resampling);
@@ -477,7 +514,12 @@ fn sampling_rays(
     let r = split.reverse as f64;
     let k = settings.light_samples.max(1) as f64;
     let surface = (layout.slot_count - layout.surface_slots().start) as f64;
-    let reverse = r * (1.0 + settings.pool as f64) + r * k * (3.0 + surface);
+    let connections = if settings.connections == 0 {
+        surface
+    } else {
+        surface.min(settings.connections as f64)
+    };
+    let reverse = r * (1.0 + settings.pool as f64) + r * k * (3.0 + connections);
     let power = if resampling {
         (standard_count as f64 + r) * settings.power_samples as f64
     } else {

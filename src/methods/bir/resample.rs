@@ -32,9 +32,17 @@ struct ResampleParams {
     candidates: u32,
     standard: u32,
     standard_begin: u32,
-    standard_scale: f32,
+    unused: f32,
     floor_fraction: f32,
     seed: u32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct SideParams {
+    candidates: u32,
+    standard: u32,
+    min_weight: f32,
 }
 
 /// The per-batch buffers of the resampling: weights and their scan, two rows of `candidates`.
@@ -46,10 +54,13 @@ pub struct ResampleBuffers {
     pub scan: PrefixSum,
     /// Draws kept from the standard and the reverse side, over the whole render.
     pub stats: Buffer<u32>,
+    /// The sides' weights and running power sums (update_side_weights.comp).
+    pub side: Buffer<[f32; 4]>,
 }
 
 impl ResampleBuffers {
-    pub fn new(ctx: &Context, candidates: u32) -> GpuResult<Self> {
+    /// `weights`: the sides' starting weights (standard, reverse).
+    pub fn new(ctx: &Context, candidates: u32, weights: [f32; 2]) -> GpuResult<Self> {
         let n = 2 * candidates.max(1) as usize;
         Ok(ResampleBuffers {
             candidates: candidates.max(1),
@@ -58,6 +69,7 @@ impl ResampleBuffers {
             totals: Buffer::zeroed(ctx, "RowTotals", 2)?,
             scan: PrefixSum::new(ctx, candidates.max(1) as usize, 2)?,
             stats: Buffer::zeroed(ctx, "ResampleStats", 2)?,
+            side: Buffer::from_slice(ctx, "SideWeights", &[[weights[0], weights[1], 0.0, 0.0]])?,
         })
     }
 }
@@ -112,7 +124,6 @@ pub struct Candidates<'a> {
     pub standard: &'a Buffer<Vpl>,
     pub standard_begin: u32,
     pub standard_count: u32,
-    pub standard_scale: f32,
     pub reverse: &'a Buffer<Vpl>,
 }
 
@@ -147,6 +158,7 @@ impl ResampleVpls {
             bind("Scanned", &buffers.scanned),
             bind("RowTotals", &buffers.totals),
             bind("ResampleStats", &buffers.stats),
+            bind("SideWeights", &buffers.side),
         ];
         let params = ResampleParams {
             draws,
@@ -154,11 +166,40 @@ impl ResampleVpls {
             candidates: buffers.candidates,
             standard: candidates.standard_count,
             standard_begin: candidates.standard_begin,
-            standard_scale: candidates.standard_scale,
+            unused: 0.0,
             floor_fraction,
             seed,
         };
         self.0
             .dispatch(cmd, &bindings, &params, [draws.div_ceil(64), 1, 1])
+    }
+}
+
+/// glsl/update_side_weights.comp: after a batch, `both`'s side weights move toward the sides'
+/// shares of the camera power found so far, clamped to [min_weight, 1 - min_weight].
+pub struct UpdateSideWeights(Kernel);
+
+impl UpdateSideWeights {
+    pub fn new(ctx: &Context) -> GpuResult<Self> {
+        Ok(UpdateSideWeights(Kernel::new(ctx, "update_side_weights")?))
+    }
+
+    pub fn record<'a>(
+        &'a self,
+        cmd: &mut Commands<'a>,
+        buffers: &'a ResampleBuffers,
+        standard: u32,
+        min_weight: f32,
+    ) -> GpuResult<()> {
+        let bindings = vec![
+            bind("Scanned", &buffers.scanned),
+            bind("SideWeights", &buffers.side),
+        ];
+        let params = SideParams {
+            candidates: buffers.candidates,
+            standard,
+            min_weight,
+        };
+        self.0.dispatch(cmd, &bindings, &params, [1, 1, 1])
     }
 }

@@ -30,6 +30,7 @@ struct ShadeParams {
     vpl_end: u32,
     seed: u32,
     weight: f32,
+    connections: u32,
 }
 
 pub struct TraceReverseVpls(Kernel);
@@ -73,7 +74,8 @@ impl ShadeReverseVpls {
     }
 
     /// Sets each reverse VPL's power from its radiance, lit by `light_samples` next-event
-    /// samples and the standard VPL slots `slots` of `vpls`, times `weight`.
+    /// samples and `connections` of the standard VPL slots `slots` of `vpls` per bounce (0:
+    /// all), times `weight`.
     #[allow(clippy::too_many_arguments)]
     pub fn record<'a>(
         &'a self,
@@ -83,6 +85,7 @@ impl ShadeReverseVpls {
         vpls: &'a Buffer<Vpl>,
         slots: Range<u32>,
         light_samples: u32,
+        connections: u32,
         seed: u32,
         weight: f32,
     ) -> GpuResult<()> {
@@ -97,6 +100,7 @@ impl ShadeReverseVpls {
             vpl_end: slots.end,
             seed,
             weight,
+            connections,
         };
         self.0
             .dispatch(cmd, &bindings, &params, [count.div_ceil(64), 1, 1])
