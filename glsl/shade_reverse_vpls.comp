@@ -1,18 +1,17 @@
 #version 450
 // The outgoing radiance of bir's reverse VPLs (Segovia 06 Section 3.1), with the paper's
 // diffuse approximation L_o(x2) = Kd(x2) / pi * E(x2). As in the paper, "several paths are
-// traced from a reverse VPL" and "standard VPLs are used instead of light paths": E(x2) is
-// estimated, for each light path length exactly once, by
-//   - light -> x2: next-event estimation at x2 (K samples);
-//   - light -> x3 -> x2: K cosine-distributed directions from x2 to x3, next-event estimation
-//     at x3 (one sample each), the full BSDF at x3;
-//   - light -> ... -> v -> x3 -> x2: the same x3 connected to `connections` standard VPLs
-//     of the frame drawn uniformly (with replacement) from its surface slots, each weighted by
-//     slots / connections (one shadow ray each; all of them when connections is 0).
-// Extending to x3 matters where standard VPLs starve near x2 but not one bounce further (the
-// U office: x2 by room B's door, x3 in the corridor, the standard VPLs in room A); connecting
-// x2 to standard VPLs directly as well would count those path lengths twice. A reverse VPL on
-// a Phong surface loses its glossy reflection (the paper's approximation, kept: a named bias on
+// traced from a reverse VPL" and "standard VPLs are used instead of light paths": K paths
+// leave x2 (cosine-distributed, then by the BSDF) for `depth` vertices x3, x4, ...; every
+// light path length is counted exactly once:
+//   - light -> x2, light -> x3 -> x2, ...: next-event estimation at x2 (K samples) and at
+//     every path vertex (one sample each), the full BSDF at the path vertices;
+//   - light -> ... -> v -> x_last -> ... -> x2: the path's last vertex connected to the
+//     frame's standard VPLs v (surface VPLs; `connections` of them drawn uniformly and
+//     weighted, or all; one shadow ray each).
+// Going a few vertices on matters where standard VPLs starve near x2 but not further away
+// (the U office: x2 by room B's door, the standard VPLs in room A). A reverse VPL on a Phong
+// surface loses its glossy reflection (the paper's approximation, kept: a named bias on
 // glossy scenes). The VPL's power becomes pi L_o weight / (R p(x2)): as an area-kind VPL
 // (cosine emitter, power / pi per unit of G) it adds f(x) L_o G V weight / (R p(x2)) at a
 // shading point x, one term of Eq. 6's estimator.
@@ -40,7 +39,8 @@ layout(push_constant) uniform ShadeParams {
     uint vpl_end;
     uint seed;
     float weight;        // bir's share of the reverse side (1/2 when both sides are shaded)
-    uint connections;    // standard VPLs per x3 (0: every one)
+    uint connections;    // standard VPLs per path end (0: every one)
+    uint depth;          // path vertices after x2
 } params;
 
 // One next-event sample at x (offset already) with material m seen from wo: f cos L / pdf.
@@ -81,37 +81,59 @@ void main() {
     for (uint j = 0u; j < samples; ++j) {
         radiance += next_event(x, n, side, n, m, k, 8u * j) / float(samples);
     }
-    // light -> x3 -> x2 and light -> ... -> v -> x3 -> x2: x3 by cosine sampling, whose pdf
-    // cancels Kd / pi cos to Kd.
+    // The paths from x2: cosine-distributed first (its pdf cancels Kd / pi cos to Kd).
     for (uint j = 0u; j < samples; ++j) {
-        vec2 u = vec2(random(params.seed, k, 0x73686164u, 8u * j + 4u),
-                      random(params.seed, k, 0x73686164u, 8u * j + 5u));
+        uint dim = 64u * (j + 1u);
+        vec2 u = vec2(random(params.seed, k, 0x73686164u, dim),
+                      random(params.seed, k, 0x73686164u, dim + 1u));
         vec3 w = to_world(sample_cosine_hemisphere(u), n);
-        RayHit hit;
-        if (dot(w, side) <= 0.0 || !trace_closest(x, w, infinity(), hit)) continue;
-        vec3 x3 = x + hit.t * w;
-        vec3 ng3 = shading_triangles[hit.triangle].geometric_normal.xyz;
-        vec3 wo3 = -w;
-        vec3 side3 = dot(wo3, ng3) >= 0.0 ? ng3 : -ng3;
-        vec3 ns3 = shading_normal(hit.triangle, hit.barycentrics);
-        vec3 n3 = dot(ns3, side3) >= 0.0 ? ns3 : -ns3;
-        vec3 o3 = offset_origin(x3, side3);
-        Material m3 = materials[triangle_material(hit.triangle)];
-        vec3 incoming = next_event(o3, n3, side3, wo3, m3, k, 8u * j + 6u);
-        uint slots = params.vpl_end - params.vpl_begin;
-        if (params.connections == 0u || params.connections >= slots) {
-            for (uint s = params.vpl_begin; s < params.vpl_end; ++s) {
-                incoming += shade_from_vpl(vpls[s], x3, o3, n3, side3, wo3, m3, 0.0);
+        if (dot(w, side) <= 0.0) continue;
+        vec3 beta = kd;
+        vec3 origin = x;
+        vec3 incoming = vec3(0.0);
+        for (uint d = 1u; d <= params.depth; ++d) {
+            RayHit hit;
+            if (!trace_closest(origin, w, infinity(), hit)) break;
+            vec3 xd = origin + hit.t * w;
+            vec3 ngd = shading_triangles[hit.triangle].geometric_normal.xyz;
+            vec3 wod = -w;
+            vec3 sided = dot(wod, ngd) >= 0.0 ? ngd : -ngd;
+            vec3 nsd = shading_normal(hit.triangle, hit.barycentrics);
+            vec3 nd = dot(nsd, sided) >= 0.0 ? nsd : -nsd;
+            vec3 od = offset_origin(xd, sided);
+            Material md = materials[triangle_material(hit.triangle)];
+            incoming += beta * next_event(od, nd, sided, wod, md, k, dim + 2u + 8u * d);
+            if (d == params.depth) {
+                uint slots = params.vpl_end - params.vpl_begin;
+                vec3 sum = vec3(0.0);
+                if (params.connections == 0u || params.connections >= slots) {
+                    for (uint s = params.vpl_begin; s < params.vpl_end; ++s) {
+                        sum += shade_from_vpl(vpls[s], xd, od, nd, sided, wod, md, 0.0);
+                    }
+                } else {
+                    for (uint c = 0u; c < params.connections; ++c) {
+                        uint pick = random_u31(params.seed, k, 0x636f6e6eu, j * 4096u + c) % slots;
+                        sum += shade_from_vpl(vpls[params.vpl_begin + pick], xd, od, nd, sided,
+                                              wod, md, 0.0);
+                    }
+                    sum *= float(slots) / float(params.connections);
+                }
+                incoming += beta * sum;
+                break;
             }
-        } else {
-            vec3 sum = vec3(0.0);
-            for (uint c = 0u; c < params.connections; ++c) {
-                uint pick = random_u31(params.seed, k, 0x636f6e6eu, j * 4096u + c) % slots;
-                sum += shade_from_vpl(vpls[params.vpl_begin + pick], x3, o3, n3, side3, wo3, m3, 0.0);
-            }
-            incoming += sum * (float(slots) / float(params.connections));
+            vec3 ub = vec3(random(params.seed, k, 0x73686164u, dim + 6u + 8u * d),
+                           random(params.seed, k, 0x73686164u, dim + 7u + 8u * d),
+                           random(params.seed, k, 0x73686164u, dim + 8u + 8u * d));
+            vec3 wi;
+            if (!bsdf_sample(md, nd, wod, ub, wi)) break;
+            float pdf = bsdf_pdf(md, nd, wod, wi);
+            float cos_i = dot(wi, nd);
+            if (pdf <= 0.0 || cos_i <= 0.0 || dot(wi, sided) <= 0.0) break;
+            beta *= bsdf_eval(md, nd, wod, wi) * (cos_i / pdf);
+            origin = od;
+            w = wi;
         }
-        radiance += kd * incoming / float(samples);
+        radiance += incoming / float(samples);
     }
 
     v.power.rgb = radiance * (PI * params.weight / (float(params.count) * v.power.w));

@@ -137,6 +137,10 @@ struct RenderArgs {
     /// uniformly, weighted; 0: every one).
     #[arg(long, default_value_t = 0)]
     connections: u32,
+    /// bir: vertices the paths from a reverse VPL go on for (next-event estimation at each)
+    /// before they connect to the standard VPLs.
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..=64))]
+    depth: u32,
     /// bir: candidates per kept VPL (the paper's resampling ratio r); 0 shades every
     /// candidate, no resampling.
     #[arg(long, default_value_t = 10)]
@@ -491,6 +495,7 @@ fn render(options: &ContextOptions, args: RenderArgs) -> Result<()> {
             pool: args.pool,
             light_samples: args.light_samples,
             connections: args.connections,
+            depth: args.depth,
             ratio: args.ratio,
             floor: args.floor,
             power_samples: args.power_samples,

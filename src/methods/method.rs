@@ -137,6 +137,7 @@ impl Method {
                 p.insert("pool".into(), json!(s.pool));
                 p.insert("light_samples".into(), json!(s.light_samples));
                 p.insert("connections".into(), json!(s.connections));
+                p.insert("depth".into(), json!(s.depth));
                 p.insert("ratio".into(), json!(s.ratio));
                 p.insert("floor".into(), json!(s.floor));
                 p.insert("power_samples".into(), json!(s.power_samples));
@@ -209,6 +210,7 @@ impl Method {
                     pool: reader.uint("pool", d.pool, 1, 1 << 16)?,
                     light_samples: reader.uint("light_samples", d.light_samples, 1, 1024)?,
                     connections: reader.uint("connections", d.connections, 0, 1 << 20)?,
+                    depth: reader.uint("depth", d.depth, 1, 64)?,
                     ratio: reader.uint("ratio", d.ratio, 0, 1 << 16)?,
                     floor: reader.non_negative("floor", d.floor)?,
                     power_samples: reader.uint("power_samples", d.power_samples, 1, 1024)?,
@@ -335,6 +337,7 @@ impl<'a> Params<'a> {
                 "pool",
                 "light_samples",
                 "connections",
+                "depth",
                 "ratio",
                 "floor",
                 "power_samples",
@@ -473,7 +476,7 @@ mod tests {
     fn bir_parameters_read_back() {
         let bir = Method::from_params(
             "bir",
-            &table("vpls = 64\nframes = 3\nstrategy = \"reverse\"\npool = 7\nlight_samples = 2\nconnections = 3\nratio = 0\nfloor = 0.5\npower_samples = 9\nbatch = 32\nlight_cdf = false\nadaptive = false"),
+            &table("vpls = 64\nframes = 3\nstrategy = \"reverse\"\npool = 7\nlight_samples = 2\nconnections = 3\ndepth = 5\nratio = 0\nfloor = 0.5\npower_samples = 9\nbatch = 32\nlight_cdf = false\nadaptive = false"),
         )
         .unwrap();
         let back: toml::Table = bir

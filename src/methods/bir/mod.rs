@@ -69,6 +69,9 @@ pub struct BirSettings {
     /// default: in the Cornell box 16 drawn connections raised relMSE about 9x, as a nearby
     /// VPL drawn with weight slots / 16 is a spike).
     pub connections: u32,
+    /// Vertices the paths from a reverse VPL go on for before they connect to the standard
+    /// VPLs (next-event estimation at each).
+    pub depth: u32,
     /// Candidates per kept VPL (the paper's r); 0 shades every candidate (no resampling).
     pub ratio: u32,
     /// The CDF's uniform floor, as a fraction of the mean candidate power (Fig. 3).
@@ -97,6 +100,7 @@ impl Default for BirSettings {
             pool: 50,
             light_samples: 4,
             connections: 0,
+            depth: 3,
             ratio: 10,
             floor: 0.1,
             power_samples: 5,
@@ -317,6 +321,7 @@ impl Bir {
                                 slots.clone(),
                                 settings.light_samples,
                                 settings.connections,
+                                settings.depth,
                                 reverse_seed,
                                 // Resampling applies the side weights itself.
                                 if resampling {
@@ -519,7 +524,8 @@ fn sampling_rays(
     } else {
         surface.min(settings.connections as f64)
     };
-    let reverse = r * (1.0 + settings.pool as f64) + r * k * (3.0 + connections);
+    let depth = settings.depth.max(1) as f64;
+    let reverse = r * (1.0 + settings.pool as f64) + r * k * (1.0 + 2.0 * depth + connections);
     let power = if resampling {
         (standard_count as f64 + r) * settings.power_samples as f64
     } else {

@@ -31,6 +31,7 @@ struct ShadeParams {
     seed: u32,
     weight: f32,
     connections: u32,
+    depth: u32,
 }
 
 pub struct TraceReverseVpls(Kernel);
@@ -86,6 +87,7 @@ impl ShadeReverseVpls {
         slots: Range<u32>,
         light_samples: u32,
         connections: u32,
+        depth: u32,
         seed: u32,
         weight: f32,
     ) -> GpuResult<()> {
@@ -101,6 +103,7 @@ impl ShadeReverseVpls {
             seed,
             weight,
             connections,
+            depth: depth.max(1),
         };
         self.0
             .dispatch(cmd, &bindings, &params, [count.div_ceil(64), 1, 1])
