@@ -145,9 +145,10 @@ struct RenderArgs {
     /// candidate, no resampling.
     #[arg(long, default_value_t = 10)]
     ratio: u32,
-    /// bir: the resampling CDF's uniform floor, a fraction of the mean candidate power
-    /// (0: none, which darkens the image where powers are underestimated: Segovia Fig. 3).
-    #[arg(long, default_value_t = 0.1)]
+    /// bir: the resampling CDF's uniform floor, a fraction of the mean candidate power (1:
+    /// half the draws uniform over the candidates; 0: none, which darkens the image where
+    /// powers are underestimated: Segovia Fig. 3).
+    #[arg(long, default_value_t = 1.0)]
     floor: f32,
     /// bir: camera points per candidate for its power estimate.
     #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..=1024))]

@@ -74,7 +74,10 @@ pub struct BirSettings {
     pub depth: u32,
     /// Candidates per kept VPL (the paper's r); 0 shades every candidate (no resampling).
     pub ratio: u32,
-    /// The CDF's uniform floor, as a fraction of the mean candidate power (Fig. 3).
+    /// The CDF's uniform floor, as a fraction of the mean candidate power (Fig. 3). The
+    /// default 1 makes the CDF half uniform over the non-empty candidates (a defensive
+    /// mixture): no drawn VPL weighs more than twice the mean. In the cells test scene
+    /// (tests/bir.rs) 0.1 kept the mean at a standard error of 4.8%, 0.5 at 1.2%, 1 at 0.9%.
     pub floor: f32,
     /// Camera points per candidate for its power estimate (the paper's fast M = 5).
     pub power_samples: u32,
@@ -102,7 +105,7 @@ impl Default for BirSettings {
             connections: 0,
             depth: 3,
             ratio: 10,
-            floor: 0.1,
+            floor: 1.0,
             power_samples: 5,
             batch: 0,
             light_cdf: true,
