@@ -41,14 +41,9 @@ void main() {
     bool inside = pixel.x < scene.size.x && pixel.y < scene.size.y;
     uint index = inside ? pixel.y * scene.size.x + pixel.x : 0u;
     GBufferTexel g = gbuffer[index];
-    bool shading = inside && g.position.w >= 0.0;
-
+    vec3 wo, side, n;
+    bool shading = gbuffer_surface(g, wo, side, n) && inside;
     vec3 x = g.position.xyz;
-    vec3 wo = -g.direction.xyz;
-    vec3 ng = g.geometric_normal.xyz;
-    vec3 side = dot(wo, ng) >= 0.0 ? ng : -ng;
-    vec3 ns = g.shading_normal.xyz;
-    vec3 n = dot(ns, side) >= 0.0 ? ns : -ns;
     vec3 origin = offset_origin(x, side);
     Material m = materials[shading ? floatBitsToUint(g.shading_normal.w) : 0u];
 

@@ -74,13 +74,9 @@ void main() {
     uint pixel = hash4(params.seed, s, 0x6c636466u, 99u) % params.pixels;
     GBufferTexel g = gbuffer[pixel];
     float value = 0.0;
-    if (g.position.w >= 0.0) {
+    vec3 wo, side, n;
+    if (gbuffer_surface(g, wo, side, n)) {
         LightEntry e = light_entries[l];
-        vec3 wo = -g.direction.xyz;
-        vec3 ng = g.geometric_normal.xyz;
-        vec3 side = dot(wo, ng) >= 0.0 ? ng : -ng;
-        vec3 ns = g.shading_normal.xyz;
-        vec3 n = dot(ns, side) >= 0.0 ? ns : -ns;
         vec3 x = offset_origin(g.position.xyz, side);
         Material m = materials[floatBitsToUint(g.shading_normal.w)];
         value = luminance(direct_from(e, l, s, x, n, side, wo, m));

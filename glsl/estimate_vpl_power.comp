@@ -48,13 +48,9 @@ void main() {
     for (uint m = 0u; m < params.samples; ++m) {
         uint pixel = hash4(params.seed, c, m, 0x706f7772u) % params.pixels;
         GBufferTexel g = gbuffer[pixel];
-        if (g.position.w < 0.0) continue;
+        vec3 wo, side, n;
+        if (!gbuffer_surface(g, wo, side, n)) continue;
         vec3 x = g.position.xyz;
-        vec3 wo = -g.direction.xyz;
-        vec3 ng = g.geometric_normal.xyz;
-        vec3 side = dot(wo, ng) >= 0.0 ? ng : -ng;
-        vec3 ns = g.shading_normal.xyz;
-        vec3 n = dot(ns, side) >= 0.0 ? ns : -ns;
         Material mat = materials[floatBitsToUint(g.shading_normal.w)];
         sum += luminance(shade_from_vpl(v, x, offset_origin(x, side), n, side, wo, mat, 0.0));
     }

@@ -41,12 +41,8 @@ bool pool_point(uint m, out vec3 x, out vec3 n, out vec3 side) {
     uint pixel = pcg_hash(params.seed ^ pcg_hash(m + 0x9e3779b9u)) % params.pixels;
     GBufferTexel g = gbuffer[pixel];
     x = g.position.xyz;
-    vec3 wo = -g.direction.xyz;
-    vec3 ng = g.geometric_normal.xyz;
-    side = dot(wo, ng) >= 0.0 ? ng : -ng;
-    vec3 ns = g.shading_normal.xyz;
-    n = dot(ns, side) >= 0.0 ? ns : -ns;
-    return g.position.w >= 0.0;
+    vec3 wo;
+    return gbuffer_surface(g, wo, side, n);
 }
 
 void main() {

@@ -16,4 +16,16 @@ layout(set = 0, binding = 10, std430) writeonly buffer GBuffer { GBufferTexel gb
 layout(set = 0, binding = 10, std430) readonly buffer GBuffer { GBufferTexel gbuffer[]; };
 #endif
 
+// The surface of a texel as the shading side sees it: wo toward the camera, the geometric
+// normal `side` and the shading normal `n` both flipped onto wo's side. False when the camera
+// ray missed.
+bool gbuffer_surface(GBufferTexel g, out vec3 wo, out vec3 side, out vec3 n) {
+    wo = -g.direction.xyz;
+    vec3 ng = g.geometric_normal.xyz;
+    side = dot(wo, ng) >= 0.0 ? ng : -ng;
+    vec3 ns = g.shading_normal.xyz;
+    n = dot(ns, side) >= 0.0 ? ns : -ns;
+    return g.position.w >= 0.0;
+}
+
 #endif
