@@ -3,31 +3,18 @@
 mod common;
 
 use irad::gpu::Context;
-use irad::image::Image;
 use irad::methods::bir::{Bir, BirSettings, Strategy};
 use irad::methods::reference::{Reference, ReferenceSettings};
 use irad::scene::gpu::GpuScene;
 use irad::scene::Scene;
 
-use common::with_gpu;
+use common::{luminance_mean, mean_and_stderr, with_gpu};
 
 fn small_cornell(size: u32) -> Scene {
     let mut scene = irad::scene::default_scene();
     scene.camera.width = size;
     scene.camera.height = size;
     scene
-}
-
-fn luminance_mean(image: &Image) -> f64 {
-    let m = image.mean();
-    0.2126 * m[0] + 0.7152 * m[1] + 0.0722 * m[2]
-}
-
-fn mean_and_stderr(values: &[f64]) -> (f64, f64) {
-    let n = values.len() as f64;
-    let mean = values.iter().sum::<f64>() / n;
-    let var = values.iter().map(|m| (m - mean).powi(2)).sum::<f64>() / (n - 1.0);
-    (mean, (var / n).sqrt())
 }
 
 fn reference_mean(ctx: &Context, scene: &Scene, spp: u32) -> f64 {

@@ -15,7 +15,7 @@ use irad::scene::gpu::GpuScene;
 use irad::scene::{Light, Scene};
 
 use common::shapes::*;
-use common::with_gpu;
+use common::{luminance_mean, mean_and_stderr, with_gpu};
 
 /// A closed sphere of albedo 0.5 everywhere, lit by a point light inside: every walk stays
 /// inside, so exactly floor(0.5^j N) paths reach vertex j.
@@ -86,18 +86,6 @@ fn ir(ctx: &Context, scene: &Scene, settings: &IrSettings) -> Image {
         .unwrap();
     assert_eq!(out.nonfinite_estimates, 0);
     out.image
-}
-
-fn luminance_mean(image: &Image) -> f64 {
-    let m = image.mean();
-    0.2126 * m[0] + 0.7152 * m[1] + 0.0722 * m[2]
-}
-
-fn mean_and_stderr(values: &[f64]) -> (f64, f64) {
-    let n = values.len() as f64;
-    let mean = values.iter().sum::<f64>() / n;
-    let var = values.iter().map(|m| (m - mean).powi(2)).sum::<f64>() / (n - 1.0);
-    (mean, (var / n).sqrt())
 }
 
 /// (a) Unclamped ir converges to the reference: the mean over 16 seeds is within 1%. (d) So

@@ -3,6 +3,7 @@
 
 pub mod accumulation;
 pub mod bir;
+pub mod direct;
 pub mod gbuffer;
 pub mod ir;
 pub mod method;

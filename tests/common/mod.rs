@@ -39,3 +39,17 @@ pub fn with_gpu(test: impl FnOnce(&Context)) {
         messages.join("\n")
     );
 }
+
+/// The image's mean luminance (Rec. 709 weights).
+pub fn luminance_mean(image: &irad::image::Image) -> f64 {
+    let m = image.mean();
+    0.2126 * m[0] + 0.7152 * m[1] + 0.0722 * m[2]
+}
+
+/// Mean and standard error of the mean of per-seed values.
+pub fn mean_and_stderr(values: &[f64]) -> (f64, f64) {
+    let n = values.len() as f64;
+    let mean = values.iter().sum::<f64>() / n;
+    let var = values.iter().map(|m| (m - mean).powi(2)).sum::<f64>() / (n - 1.0);
+    (mean, (var / n).sqrt())
+}

@@ -21,11 +21,11 @@ use thiserror::Error;
 
 use crate::gpu::{Buffer, Context, GpuError};
 use crate::methods::accumulation::Accumulation;
-use crate::methods::gbuffer::{GBuffer, PixelSampling, WriteGBuffer};
+use crate::methods::direct::GBufferAndDirectLight;
+use crate::methods::gbuffer::{GBuffer, PixelSampling};
 use crate::methods::ir::gather::AccumulateVpls;
 use crate::methods::ir::schedule::{mean_albedo, Absorption, Schedule};
 use crate::methods::ir::walk::{TraceVpls, Vpl, VplBuffers};
-use crate::methods::paths::TracePaths;
 use crate::methods::progressive;
 use crate::methods::RenderOutput;
 use crate::sampling::pcg;
@@ -167,8 +167,7 @@ impl Split {
 }
 
 pub struct Bir {
-    gbuffer: WriteGBuffer,
-    paths: TracePaths,
+    direct: GBufferAndDirectLight,
     walk: TraceVpls,
     trace_reverse: TraceReverseVpls,
     shade_reverse: ShadeReverseVpls,
@@ -187,8 +186,7 @@ const LIGHT_CDF_MIN_ENTRIES: usize = 2;
 impl Bir {
     pub fn new(ctx: &Context) -> Result<Self, GpuError> {
         Ok(Bir {
-            gbuffer: WriteGBuffer::new(ctx)?,
-            paths: TracePaths::new(ctx)?,
+            direct: GBufferAndDirectLight::new(ctx)?,
             walk: TraceVpls::new(ctx)?,
             trace_reverse: TraceReverseVpls::new(ctx)?,
             shade_reverse: ShadeReverseVpls::new(ctx)?,
@@ -265,28 +263,16 @@ impl Bir {
             frames,
             &accumulation,
             |cmd, frame| {
-                cmd.pass("gbuffer", |cmd| {
-                    self.gbuffer.record(
-                        cmd,
-                        gpu_scene,
-                        &gbuffer,
-                        frame,
-                        settings.seed,
-                        settings.pixels,
-                    )
-                })?;
-                cmd.pass("direct light", |cmd| {
-                    self.paths.record(
-                        cmd,
-                        gpu_scene,
-                        &gbuffer,
-                        &accumulation,
-                        frame,
-                        settings.seed,
-                        1,
-                        u32::MAX,
-                    )
-                })?;
+                self.direct.record(
+                    cmd,
+                    gpu_scene,
+                    &gbuffer,
+                    &accumulation,
+                    frame,
+                    settings.seed,
+                    settings.pixels,
+                    1,
+                )?;
                 // Once per render, on the first frame's G-buffer: the table only steers which
                 // lights start paths (each walk divides by the probability it used), so it
                 // need not change per frame, and lavapipe pays per dispatch.

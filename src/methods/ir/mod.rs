@@ -14,8 +14,8 @@ use thiserror::Error;
 
 use crate::gpu::{Buffer, Context, GpuError};
 use crate::methods::accumulation::Accumulation;
-use crate::methods::gbuffer::{GBuffer, PixelSampling, WriteGBuffer};
-use crate::methods::paths::TracePaths;
+use crate::methods::direct::GBufferAndDirectLight;
+use crate::methods::gbuffer::{GBuffer, PixelSampling};
 use crate::methods::progressive;
 use crate::methods::RenderOutput;
 use crate::sampling::pcg;
@@ -74,8 +74,7 @@ pub enum IrError {
 }
 
 pub struct InstantRadiosity {
-    gbuffer: WriteGBuffer,
-    paths: TracePaths,
+    direct: GBufferAndDirectLight,
     walk: TraceVpls,
     gather: AccumulateVpls,
     filter: FilterInterleaved,
@@ -84,8 +83,7 @@ pub struct InstantRadiosity {
 impl InstantRadiosity {
     pub fn new(ctx: &Context) -> Result<Self, GpuError> {
         Ok(InstantRadiosity {
-            gbuffer: WriteGBuffer::new(ctx)?,
-            paths: TracePaths::new(ctx)?,
+            direct: GBufferAndDirectLight::new(ctx)?,
             walk: TraceVpls::new(ctx)?,
             gather: AccumulateVpls::new(ctx)?,
             filter: FilterInterleaved::new(ctx)?,
@@ -136,28 +134,16 @@ impl InstantRadiosity {
             frames,
             &accumulation,
             |cmd, frame| {
-                cmd.pass("gbuffer", |cmd| {
-                    self.gbuffer.record(
-                        cmd,
-                        gpu_scene,
-                        &gbuffer,
-                        frame,
-                        settings.seed,
-                        settings.pixels,
-                    )
-                })?;
-                cmd.pass("direct light", |cmd| {
-                    self.paths.record(
-                        cmd,
-                        gpu_scene,
-                        &gbuffer,
-                        &accumulation,
-                        frame,
-                        settings.seed,
-                        direct_depth,
-                        u32::MAX,
-                    )
-                })?;
+                self.direct.record(
+                    cmd,
+                    gpu_scene,
+                    &gbuffer,
+                    &accumulation,
+                    frame,
+                    settings.seed,
+                    settings.pixels,
+                    direct_depth,
+                )?;
                 let walk_seed = pcg::hash(&[settings.seed, frame, 0x76706c73]);
                 cmd.pass("vpl walk", |cmd| {
                     self.walk.record(cmd, gpu_scene, &vpls, walk_seed, None)

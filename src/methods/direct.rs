@@ -1,0 +1,56 @@
+//! The start of every many-light method's frame: the G-buffer pass, then the paths kernel at
+//! `max_depth` 1 (emission seen plus next-event estimation and BSDF sampling, MIS-combined:
+//! the same direct light as the reference) or 0 (emission only, when the VPLs carry direct
+//! light too), so methods differ only in how they estimate indirect light.
+
+use crate::gpu::{Commands, Context, GpuResult};
+use crate::scene::gpu::GpuScene;
+
+use super::accumulation::Accumulation;
+use super::gbuffer::{GBuffer, PixelSampling, WriteGBuffer};
+use super::paths::TracePaths;
+
+pub struct GBufferAndDirectLight {
+    gbuffer: WriteGBuffer,
+    paths: TracePaths,
+}
+
+impl GBufferAndDirectLight {
+    pub fn new(ctx: &Context) -> GpuResult<Self> {
+        Ok(GBufferAndDirectLight {
+            gbuffer: WriteGBuffer::new(ctx)?,
+            paths: TracePaths::new(ctx)?,
+        })
+    }
+
+    /// Records the passes "gbuffer" and "direct light" of `frame`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn record<'a>(
+        &'a self,
+        cmd: &mut Commands<'a>,
+        scene: &'a GpuScene,
+        gbuffer: &'a GBuffer,
+        accumulation: &'a Accumulation,
+        frame: u32,
+        seed: u32,
+        pixels: PixelSampling,
+        max_depth: u32,
+    ) -> GpuResult<()> {
+        cmd.pass("gbuffer", |cmd| {
+            self.gbuffer
+                .record(cmd, scene, gbuffer, frame, seed, pixels)
+        })?;
+        cmd.pass("direct light", |cmd| {
+            self.paths.record(
+                cmd,
+                scene,
+                gbuffer,
+                accumulation,
+                frame,
+                seed,
+                max_depth,
+                u32::MAX,
+            )
+        })
+    }
+}
