@@ -187,16 +187,7 @@ fn prepare_scene(
     let scene = &suite_scene.scene;
     let gpu_scene =
         GpuScene::upload(ctx, scene).map_err(|e| format!("uploading the scene: {e}"))?;
-    let key = references::ReferenceKey::new(scene, &suite_scene.reference);
-    let cached = references::lookup(&options.cache, &key).is_some();
-    if cached {
-        on(Event::Reference {
-            scene: &scene.name,
-            done: 1,
-            total: 1,
-            cached,
-        });
-    }
+    // Progress comes only while rendering; a cache hit is reported once it is known.
     let reference = references::get_or_render(
         ctx,
         renderers,
@@ -209,11 +200,19 @@ fn prepare_scene(
                 scene: &scene.name,
                 done,
                 total,
-                cached,
+                cached: false,
             })
         },
     )
     .map_err(|e| format!("{e:#}"))?;
+    if reference.reused {
+        on(Event::Reference {
+            scene: &scene.name,
+            done: 1,
+            total: 1,
+            cached: true,
+        });
+    }
     let image_name = format!("images/{}.reference.png", file::file_safe(&scene.name));
     let thumb = preview::downscale(
         &reference.image,
