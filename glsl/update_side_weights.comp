@@ -1,37 +1,60 @@
 #version 450
 // bir's side weights for `both` (an irad addition to Segovia 06): the image is a_s times the
-// standard side's estimate plus a_r times the reverse side's, a_s + a_r = 1. Any fixed
-// weights keep it unbiased; the paper's plain union is a_s = a_r = 1/2, which where one side
-// starves (the U office's standard VPLs, the halogen office's reverse ones) shows that side's
-// typical, far too dark realisations at half weight. So after each batch the weights move
-// toward the sides' shares of the power they have brought to the camera so far (running sums
-// of the power estimates), clamped to [min_weight, 1 - min_weight] so neither side is ever
-// dropped; a batch only uses weights set from earlier batches, whose random numbers are
-// independent of its own, so each batch stays unbiased.
+// standard side's estimate plus a_r times the reverse side's, a_s + a_r = 1. Any weights fixed
+// before a batch's random numbers are drawn keep it unbiased; the paper's plain union is
+// a_s = a_r = 1/2, which where one side starves (the U office's standard VPLs, which rarely
+// pass the door; the halogen office's reverse VPLs, which rarely land in the lit pool) shows
+// that side's heavy tail at half weight.
+//
+// Both sides' candidates estimate the same total camera power: T_s, the sum of the standard
+// candidates' power estimates, and T_r, the reverse ones'. A starving side is one whose batch
+// totals are usually far below the other's (its mean rests on rare huge ones), so after each
+// batch this kernel adds the batch's standard share T_s / (T_s + T_r) to a running mean over
+// the batches so far and sets a_s to that mean share (a typical batch's, where the share of the
+// summed powers would follow the rare huge batches back to 1/2), clamped to
+// [min_weight, 1 - min_weight] so neither side is ever dropped. A running variance
+// per side (inverse-variance weights) was tried first and fails exactly there: before the rare
+// hit arrives, the starving side's near-zero totals look like low variance. A batch only uses
+// weights set from earlier batches, whose random numbers are independent of its own.
+//
+// SideWeights: [0] = (a_s, a_r, sum of the shares, batches with a share).
 
 #extension GL_GOOGLE_include_directive : require
 
-layout(local_size_x = 1, local_size_y = 1, local_size_z = 1) in;
+layout(local_size_x = 256, local_size_y = 1, local_size_z = 1) in;
 
-layout(set = 0, binding = 19, std430) readonly buffer Scanned { float scanned[]; };
+layout(set = 0, binding = 17, std430) readonly buffer Weights { float weights[]; };
 layout(set = 0, binding = 24, std430) buffer SideWeights { vec4 side; };
 
 layout(push_constant) uniform SideParams {
     uint candidates;
-    uint standard;
+    uint standard;   // candidates [0, standard) are standard VPLs
     float min_weight;
 } params;
 
+shared vec2 partial[256];
+
 void main() {
-    float all = scanned[params.candidates - 1u];
-    float standard_sum = params.standard > 0u ? scanned[params.standard - 1u] : 0.0;
-    float reverse_sum = max(all - standard_sum, 0.0);
+    uint t = gl_LocalInvocationID.x;
+    vec2 sums = vec2(0.0);  // T_s, T_r
+    for (uint c = t; c < params.candidates; c += 256u) {
+        if (c < params.standard) sums.x += weights[c];
+        else sums.y += weights[c];
+    }
+    partial[t] = sums;
+    barrier();
+    for (uint stride = 128u; stride > 0u; stride >>= 1u) {
+        if (t < stride) partial[t] += partial[t + stride];
+        barrier();
+    }
+    if (t != 0u) return;
     vec4 s = side;
-    s.z += standard_sum;
-    s.w += reverse_sum;
-    float sum = s.z + s.w;
-    if (sum > 0.0) {
-        float a = clamp(s.z / sum, params.min_weight, 1.0 - params.min_weight);
+    vec2 total = partial[0];
+    float all = total.x + total.y;
+    if (all > 0.0 && !isinf(all)) {
+        s.z += total.x / all;
+        s.w += 1.0;
+        float a = clamp(s.z / s.w, params.min_weight, 1.0 - params.min_weight);
         s.x = a;
         s.y = 1.0 - a;
     }

@@ -54,7 +54,8 @@ pub struct ResampleBuffers {
     pub scan: PrefixSum,
     /// Draws kept from the standard and the reverse side, over the whole render.
     pub stats: Buffer<u32>,
-    /// The sides' weights and running power sums (update_side_weights.comp).
+    /// The sides' weights and the running sum of the batches' standard shares
+    /// (update_side_weights.comp).
     pub side: Buffer<[f32; 4]>,
 }
 
@@ -69,7 +70,11 @@ impl ResampleBuffers {
             totals: Buffer::zeroed(ctx, "RowTotals", 2)?,
             scan: PrefixSum::new(ctx, candidates.max(1) as usize, 2)?,
             stats: Buffer::zeroed(ctx, "ResampleStats", 2)?,
-            side: Buffer::from_slice(ctx, "SideWeights", &[[weights[0], weights[1], 0.0, 0.0]])?,
+            side: Buffer::from_slice(
+                ctx,
+                "SideWeights",
+                &[[weights[0], weights[1], 0.0, 0.0]],
+            )?,
         })
     }
 }
@@ -175,8 +180,9 @@ impl ResampleVpls {
     }
 }
 
-/// glsl/update_side_weights.comp: after a batch, `both`'s side weights move toward the sides'
-/// shares of the camera power found so far, clamped to [min_weight, 1 - min_weight].
+/// glsl/update_side_weights.comp: after a batch, `both`'s standard weight becomes the mean over
+/// the batches so far of the standard side's share of the batch's camera power, clamped to
+/// [min_weight, 1 - min_weight].
 pub struct UpdateSideWeights(Kernel);
 
 impl UpdateSideWeights {
@@ -192,7 +198,7 @@ impl UpdateSideWeights {
         min_weight: f32,
     ) -> GpuResult<()> {
         let bindings = vec![
-            bind("Scanned", &buffers.scanned),
+            bind("Weights", &buffers.weights),
             bind("SideWeights", &buffers.side),
         ];
         let params = SideParams {
