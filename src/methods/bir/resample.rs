@@ -70,11 +70,7 @@ impl ResampleBuffers {
             totals: Buffer::zeroed(ctx, "RowTotals", 2)?,
             scan: PrefixSum::new(ctx, candidates.max(1) as usize, 2)?,
             stats: Buffer::zeroed(ctx, "ResampleStats", 2)?,
-            side: Buffer::from_slice(
-                ctx,
-                "SideWeights",
-                &[[weights[0], weights[1], 0.0, 0.0]],
-            )?,
+            side: Buffer::from_slice(ctx, "SideWeights", &[[weights[0], weights[1], 0.0, 0.0]])?,
         })
     }
 }
