@@ -162,7 +162,7 @@ struct RenderArgs {
     #[arg(long)]
     light_cdf_off: bool,
     /// bir --strategy both: keep the paper's fixed 1/2 side weights instead of weights that
-    /// follow each side's mean share of the camera power of earlier batches.
+    /// follow how often each side brought more camera power in earlier batches.
     #[arg(long)]
     fixed_weights: bool,
     /// Seed of every random and quasi-random number: same seed, same device, same bits.

@@ -87,10 +87,10 @@ pub struct BirSettings {
     /// Start light paths by each light's measured contribution to the camera (Section 4.1)
     /// instead of by its power.
     pub light_cdf: bool,
-    /// `both` with resampling: side weights set from earlier batches by the standard side's
-    /// mean share of each batch's camera power (update_side_weights.comp), so a side whose
-    /// batches usually bring far less than the other's (a starving one) weighs less, instead
-    /// of the paper's fixed 1/2.
+    /// `both` with resampling: the standard side's weight is the fraction of earlier batches in
+    /// which it brought more camera power than the reverse side (update_side_weights.comp), so
+    /// a side whose batches usually bring less (a starving one) weighs less, instead of the
+    /// paper's fixed 1/2.
     pub adaptive: bool,
     pub pixels: PixelSampling,
 }

@@ -54,7 +54,7 @@ pub struct ResampleBuffers {
     pub scan: PrefixSum,
     /// Draws kept from the standard and the reverse side, over the whole render.
     pub stats: Buffer<u32>,
-    /// The sides' weights and the running sum of the batches' standard shares
+    /// The sides' weights, the batches the standard side won and the batches counted
     /// (update_side_weights.comp).
     pub side: Buffer<[f32; 4]>,
 }
@@ -176,9 +176,9 @@ impl ResampleVpls {
     }
 }
 
-/// glsl/update_side_weights.comp: after a batch, `both`'s standard weight becomes the mean over
-/// the batches so far of the standard side's share of the batch's camera power, clamped to
-/// [min_weight, 1 - min_weight].
+/// glsl/update_side_weights.comp: after a batch, `both`'s standard weight becomes the fraction
+/// of the batches so far in which the standard candidates brought more camera power than the
+/// reverse ones, clamped to [min_weight, 1 - min_weight].
 pub struct UpdateSideWeights(Kernel);
 
 impl UpdateSideWeights {
