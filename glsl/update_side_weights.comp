@@ -16,7 +16,7 @@
 // Tried first and measured worse: the share of the summed powers (follows the rare huge
 // batches back to 1/2), the mean per-batch share (the halogen office's half-starved reverse
 // side still brings a third of a typical batch, and at a third of the weight its dark typical
-// renders darkened the image by 18%), and inverse-variance weights (before the rare hit
+// renders darkened the image by 18% in two renders), and inverse-variance weights (before the rare hit
 // arrives, the starving side's near-zero totals look like low variance). A batch only uses
 // weights set from earlier batches, whose random numbers are independent of its own.
 //
@@ -24,9 +24,10 @@
 
 #extension GL_GOOGLE_include_directive : require
 
-layout(local_size_x = 256, local_size_y = 1, local_size_z = 1) in;
+layout(local_size_x = 1, local_size_y = 1, local_size_z = 1) in;
 
-layout(set = 0, binding = 17, std430) readonly buffer Weights { float weights[]; };
+// The inclusive prefix sums of the batch's power estimates (standard candidates first).
+layout(set = 0, binding = 19, std430) readonly buffer Scanned { float scanned[]; };
 layout(set = 0, binding = 24, std430) buffer SideWeights { vec4 side; };
 
 layout(push_constant) uniform SideParams {
@@ -35,27 +36,14 @@ layout(push_constant) uniform SideParams {
     float min_weight;
 } params;
 
-shared vec2 partial[256];
-
 void main() {
-    uint t = gl_LocalInvocationID.x;
-    vec2 sums = vec2(0.0);  // T_s, T_r
-    for (uint c = t; c < params.candidates; c += 256u) {
-        if (c < params.standard) sums.x += weights[c];
-        else sums.y += weights[c];
-    }
-    partial[t] = sums;
-    barrier();
-    for (uint stride = 128u; stride > 0u; stride >>= 1u) {
-        if (t < stride) partial[t] += partial[t + stride];
-        barrier();
-    }
-    if (t != 0u) return;
+    float all = scanned[params.candidates - 1u];
+    float standard_total = params.standard > 0u ? scanned[params.standard - 1u] : 0.0;
+    float reverse_total = max(all - standard_total, 0.0);
     vec4 s = side;
-    vec2 total = partial[0];
-    float all = total.x + total.y;
     if (all > 0.0 && !isinf(all)) {
-        s.z += total.x > total.y ? 1.0 : (total.x == total.y ? 0.5 : 0.0);
+        s.z += standard_total > reverse_total ? 1.0
+             : (standard_total == reverse_total ? 0.5 : 0.0);
         s.w += 1.0;
         float a = clamp(s.z / s.w, params.min_weight, 1.0 - params.min_weight);
         s.x = a;

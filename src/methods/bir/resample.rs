@@ -194,7 +194,7 @@ impl UpdateSideWeights {
         min_weight: f32,
     ) -> GpuResult<()> {
         let bindings = vec![
-            bind("Weights", &buffers.weights),
+            bind("Scanned", &buffers.scanned),
             bind("SideWeights", &buffers.side),
         ];
         let params = SideParams {
