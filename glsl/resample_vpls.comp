@@ -4,12 +4,13 @@
 // their estimated power to the camera times their side's weight (SideWeights) plus a uniform
 // floor, q_c = (a_c w_c + delta n_c) / W', W' = sum a w + delta K, K the non-empty
 // candidates, delta = floor * sum a w / K (1 when no candidate has power): every VPL that can
-// contribute keeps a non-zero probability (the paper's Fig. 3). Systematic sampling: draw k takes the candidate whose cumulative interval
-// holds (k + xi) W' / N', one xi per batch, so candidate c is drawn N' q_c times in
-// expectation; each draw is a VPL of power P_c / (N' q_c), the paper's "density times CDF
-// weight, energy times the count chosen", and the sum over draws is an unbiased estimate of
-// the sum over candidates. Needs the inclusive prefix sums of both rows (Scanned) and their
-// totals.
+// contribute keeps a non-zero probability (the paper's Fig. 3). Systematic sampling: draw k
+// takes the candidate whose cumulative interval holds (k + xi) W' / N', one xi per batch, so
+// candidate c is drawn N' q_c times in expectation; each draw is a VPL of power
+// a_c P_c / (N' q_c), a_c its weight (its side's, or 1 for a standard VPL no reverse VPL
+// could reach), the paper's "density times CDF weight, energy times the count chosen", and
+// the sum over draws is an unbiased estimate of the weighted sum over candidates. Needs the
+// inclusive prefix sums of both rows (Scanned) and their totals.
 
 #extension GL_GOOGLE_include_directive : require
 
@@ -84,14 +85,16 @@ void main() {
         return;
     }
     Vpl v;
-    float scale = a / (float(params.draws) * q);
     if (c < params.standard) {
         v = vpls[params.standard_begin + c];
+        // No reverse VPL could land where find_uncovered_vpls.comp marked: weight 1. The draw
+        // probability q need not follow the weight; any q > 0 keeps the draw unbiased.
+        if (v.incident.w > 0.5) a = 1.0;
         atomicAdd(kept_standard, 1u);
     } else {
         v = reverse_vpls[c - params.standard];
         atomicAdd(kept_reverse, 1u);
     }
-    v.power.rgb *= scale;
+    v.power.rgb *= a / (float(params.draws) * q);
     kept[params.kept_offset + k] = v;
 }

@@ -10,10 +10,11 @@
 // with n_m = R / M samples per pool point, and dividing by R times this mean is its balance
 // heuristic: the density is exact, not an estimate, so 1 / p(x2) carries no Jensen bias (the
 // paper estimates Eq. 7 with fresh camera samples, which is biased for small M; a departure).
-// What remains is support: a surface no pool point sees gets no reverse VPL this frame.
+// What remains is support: a surface no pool point sees gets no reverse VPL this batch;
+// find_uncovered_vpls.comp gives the standard VPLs there the full weight under `both`.
 //
-// Numbers: PCG keyed by (seed, k, dimension); dimensions 0-1 the direction. The pool's pixel m
-// is pcg(seed, m) mod the pixel count.
+// Numbers: PCG keyed by (seed, k, dimension); dimensions 0-1 the direction. The pool:
+// reverse_pool.glsl.
 
 #extension GL_GOOGLE_include_directive : require
 
@@ -27,6 +28,7 @@ layout(local_size_x = 64, local_size_y = 1, local_size_z = 1) in;
 #include "gbuffer.glsl"
 #include "vpl.glsl"
 #include "reverse_vpl.glsl"
+#include "reverse_pool.glsl"
 
 layout(push_constant) uniform ReverseParams {
     uint count;   // R reverse VPLs
@@ -34,16 +36,6 @@ layout(push_constant) uniform ReverseParams {
     uint seed;
     uint pixels;  // G-buffer texels
 } params;
-
-// A pool point: position, shading normal and geometric normal on the camera's side; false
-// when its camera ray missed the scene.
-bool pool_point(uint m, out vec3 x, out vec3 n, out vec3 side) {
-    uint pixel = pcg_hash(params.seed ^ pcg_hash(m + 0x9e3779b9u)) % params.pixels;
-    GBufferTexel g = gbuffer[pixel];
-    x = g.position.xyz;
-    vec3 wo;
-    return gbuffer_surface(g, wo, side, n);
-}
 
 void main() {
     uint k = gl_GlobalInvocationID.x;
@@ -55,7 +47,7 @@ void main() {
     v.incident = vec4(0.0);
 
     vec3 x1, n1, side1;
-    if (!pool_point(k % params.pool, x1, n1, side1)) {
+    if (!pool_point(params.seed, params.pixels, k % params.pool, x1, n1, side1)) {
         reverse_vpls[k] = v;
         return;
     }
@@ -74,24 +66,8 @@ void main() {
     vec3 origin2 = offset_origin(x2, side2);
 
     // Eq. 7 over the pool.
-    float density = 0.0;
-    for (uint m = 0u; m < params.pool; ++m) {
-        vec3 xm, nm, sidem;
-        if (!pool_point(m, xm, nm, sidem)) continue;
-        vec3 d = x2 - xm;
-        float dist2 = dot(d, d);
-        if (dist2 <= 0.0) continue;
-        vec3 wm = d * inversesqrt(dist2);
-        float cos1 = dot(nm, wm);
-        float cos2 = abs(dot(ng2, wm));
-        if (cos1 <= 0.0 || dot(sidem, wm) <= 0.0 || cos2 <= 0.0) continue;
-        // Visible from the same side the VPL emits on.
-        if (dot(side2, -wm) <= 0.0) continue;
-        vec3 om = offset_origin(xm, sidem);
-        if (trace_any(om, origin2 - om, 0.9999)) continue;
-        density += cos1 * INV_PI * cos2 / dist2;
-    }
-    density /= float(params.pool);
+    float density =
+        pool_density(params.seed, params.pixels, params.pool, x2, ng2, side2, origin2, false);
     if (!(density > 0.0)) {
         reverse_vpls[k] = v;
         return;

@@ -21,7 +21,9 @@ struct Vpl {
 // A kernel that defines VPL_NO_BUFFER gets the layout only (every declared buffer must be
 // bound).
 #ifndef VPL_NO_BUFFER
-#ifdef VPL_WRITE
+#if defined(VPL_READ_WRITE)
+layout(set = 0, binding = 13, std430) buffer Vpls { Vpl vpls[]; };
+#elif defined(VPL_WRITE)
 layout(set = 0, binding = 13, std430) writeonly buffer Vpls { Vpl vpls[]; };
 #else
 layout(set = 0, binding = 13, std430) readonly buffer Vpls { Vpl vpls[]; };

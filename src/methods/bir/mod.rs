@@ -34,7 +34,7 @@ use crate::scene::Scene;
 
 use light_cdf::LightCdf;
 use resample::{Candidates, EstimateVplPower, ResampleBuffers, ResampleVpls, UpdateSideWeights};
-use reverse::{ShadeReverseVpls, TraceReverseVpls};
+use reverse::{FindUncoveredVpls, ShadeReverseVpls, TraceReverseVpls};
 
 /// Which VPLs a frame shades.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -173,6 +173,7 @@ pub struct Bir {
     walk: TraceVpls,
     trace_reverse: TraceReverseVpls,
     shade_reverse: ShadeReverseVpls,
+    find_uncovered: FindUncoveredVpls,
     power: EstimateVplPower,
     resample: ResampleVpls,
     side_weights: UpdateSideWeights,
@@ -192,6 +193,7 @@ impl Bir {
             walk: TraceVpls::new(ctx)?,
             trace_reverse: TraceReverseVpls::new(ctx)?,
             shade_reverse: ShadeReverseVpls::new(ctx)?,
+            find_uncovered: FindUncoveredVpls::new(ctx)?,
             power: EstimateVplPower::new(ctx)?,
             resample: ResampleVpls::new(ctx)?,
             side_weights: UpdateSideWeights::new(ctx)?,
@@ -322,6 +324,26 @@ impl Bir {
                                 },
                             )
                         })?;
+                        // After the radiance pass, which connects to their unscaled power.
+                        if standard_count > 0 {
+                            cmd.pass("uncovered vpls", |cmd| {
+                                self.find_uncovered.record(
+                                    cmd,
+                                    gpu_scene,
+                                    &gbuffer,
+                                    &vpls.vpls,
+                                    slots.clone(),
+                                    settings.pool,
+                                    reverse_seed,
+                                    // Without resampling the gather weighs them a_s.
+                                    if resampling {
+                                        1.0
+                                    } else {
+                                        1.0 / split.standard_weight
+                                    },
+                                )
+                            })?;
+                        }
                     }
                     if resampling {
                         cmd.pass("vpl power", |cmd| {
@@ -497,8 +519,8 @@ impl Bir {
 
 /// Rays the sampling pass casts per batch, at most (every slot and sample assumed alive): the
 /// walk's closest hits, the reverse VPLs' trace and Eq. 7 shadow rays, their radiance (next
-/// events at x2 and x3, the x3 trace, one shadow ray per standard VPL), and the power
-/// estimates' shadow rays.
+/// events at x2 and x3, the x3 trace, one shadow ray per standard VPL), the coverage test of
+/// the standard VPLs, and the power estimates' shadow rays.
 fn sampling_rays(
     layout: &Schedule,
     split: &Split,
@@ -517,10 +539,16 @@ fn sampling_rays(
     };
     let depth = settings.depth.max(1) as f64;
     let reverse = r * (1.0 + settings.pool as f64) + r * k * (1.0 + 2.0 * depth + connections);
+    // find_uncovered_vpls.comp under `both`: at most M per standard VPL.
+    let coverage = if r > 0.0 {
+        standard_count as f64 * settings.pool as f64
+    } else {
+        0.0
+    };
     let power = if resampling {
         (standard_count as f64 + r) * settings.power_samples as f64
     } else {
         0.0
     };
-    walk + reverse + power
+    walk + reverse + coverage + power
 }
