@@ -13,7 +13,8 @@
 // stills, where only paths i < N_j = floor(rho^j N) reach vertex j and a vertex-j VPL carries
 // 1 / N_j of the path's throughput (Keller's compensation N / N_j with weight 1 / N); or
 // Russian roulette for animation, each vertex surviving with probability rho (pseudo-random,
-// as Keller says it must be), every path keeping a slot at every vertex.
+// as Keller says it must be), every path keeping a slot at every vertex. Where N_j reaches 0
+// the paths still alive go on by roulette (irad's tail, unbiased where Keller's walk stops).
 
 #extension GL_GOOGLE_include_directive : require
 
@@ -29,7 +30,8 @@ layout(local_size_x = 64, local_size_y = 1, local_size_z = 1) in;
 #include "vpl.glsl"
 
 // Per vertex j: x = N_j (paths that reach it), y = first VPL slot of vertex j, z = 1 when
-// Russian roulette decides survival instead (then N_j = N), w = unused.
+// Russian roulette decides survival instead (then N_j = N, or in fractional absorption's
+// tail the paths still alive at its last vertex), w = 1 in that tail.
 layout(set = 0, binding = 14, std430) readonly buffer VplSchedule { uvec4 schedule[]; };
 
 layout(push_constant) uniform WalkParams {
@@ -150,12 +152,18 @@ void main() {
         float pdf = bsdf_pdf(m, n, wo, wi);
         float cos_i = dot(wi, n);
         if (pdf <= 0.0 || cos_i <= 0.0 || dot(wi, side) <= 0.0) break;
-        beta *= bsdf_eval(m, n, wo, wi) * (cos_i / pdf);
+        vec3 scatter = bsdf_eval(m, n, wo, wi) * (cos_i / pdf);
+        beta *= scatter;
         // Fractional absorption: the next vertex's compensation N_j / N_{j+1} is applied
-        // through the slot weight 1 / N_{j+1}; roulette divides by the survival probability.
+        // through the slot weight 1 / N_{j+1}; roulette divides by the survival probability:
+        // Keller's rho, or in fractional absorption's tail (level.w = 1) the scattering
+        // weight's largest channel, so the surviving throughput stays bounded.
         if (roulette) {
-            if (random(params.seed, path, 0x72722121u, vertex) >= params.survival) break;
-            beta /= params.survival;
+            float survival = level.w != 0u
+                ? clamp(max(max(scatter.r, scatter.g), scatter.b), 0.05, 1.0)
+                : params.survival;
+            if (random(params.seed, path, 0x72722121u, vertex) >= survival) break;
+            beta /= survival;
         }
         origin = offset_origin(p, side);
         direction = wi;

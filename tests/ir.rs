@@ -18,7 +18,8 @@ use common::shapes::*;
 use common::{luminance_mean, mean_and_stderr, with_gpu};
 
 /// A closed sphere of albedo 0.5 everywhere, lit by a point light inside: every walk stays
-/// inside, so exactly floor(0.5^j N) paths reach vertex j.
+/// inside, so exactly floor(0.5^j N) paths reach vertex j, and past the last (N_j = 1) that
+/// path goes on by roulette.
 #[test]
 fn walk_reproduces_kellers_survivor_counts() {
     with_gpu(|ctx| {
@@ -43,16 +44,25 @@ fn walk_reproduces_kellers_survivor_counts() {
         walk.record(&mut cmd, &gpu, &buffers, 3, None).unwrap();
         cmd.submit_and_wait().unwrap();
         let vpls = buffers.vpls.read().unwrap();
-        for (j, level) in schedule.levels.iter().enumerate() {
-            let (count, offset) = (level[0] as usize, level[1] as usize);
-            let expected = (0.5f64.powi(j as i32) * n as f64).floor() as usize;
-            assert_eq!(count, expected, "schedule at vertex {j}");
-            let alive = vpls[offset..offset + count]
+        let alive_at = |level: &[u32; 4]| {
+            vpls[level[1] as usize..(level[1] + level[0]) as usize]
                 .iter()
                 .filter(|v| v.kind() != VPL_NONE)
-                .count();
-            assert_eq!(alive, expected, "VPLs at vertex {j}");
+                .count()
+        };
+        let fractional = schedule.levels.iter().take_while(|l| l[3] == 0).count();
+        assert_eq!(fractional, 10);
+        for (j, level) in schedule.levels[..fractional].iter().enumerate() {
+            let expected = (0.5f64.powi(j as i32) * n as f64).floor() as usize;
+            assert_eq!(level[0] as usize, expected, "schedule at vertex {j}");
+            assert_eq!(alive_at(level), expected, "VPLs at vertex {j}");
         }
+        // The roulette tail: the last path reaches its first vertex surely, then each next one
+        // with probability 1/2 (the wall's albedo), and once dead stays dead.
+        let tail: Vec<usize> = schedule.levels[fractional..].iter().map(alive_at).collect();
+        assert_eq!(tail.len(), 10);
+        assert_eq!(tail[0], 1, "the tail's first vertex");
+        assert!(tail.windows(2).all(|w| w[1] <= w[0]), "tail survivors {tail:?}");
     });
 }
 

@@ -2,7 +2,8 @@
 //! paths reach each vertex and where each vertex's VPL slots start. Fractional absorption
 //! (stills): N_j = floor(rho^j N) paths reach vertex j, rho the scene's mean reflectivity, and
 //! a vertex-j VPL carries 1 / N_j of its path's throughput. Russian roulette (animation): every
-//! path keeps a slot at every vertex and survives each with probability rho.
+//! path keeps a slot at every vertex and survives each with probability rho. Past the vertex
+//! where N_j reaches 0, the last paths go on by roulette (irad's tail; see `Schedule::new`).
 
 use crate::sampling::environment::luminance;
 use crate::scene::Scene;
@@ -16,11 +17,14 @@ pub enum Absorption {
 /// Most vertices per path (light vertex included): a cap for rho close to 1, where
 /// floor(rho^j N) stays positive for very long.
 pub const MAX_VERTICES: usize = 128;
+/// Fractional absorption's roulette tail ends where rho^j falls below this.
+pub const TAIL_CUTOFF: f64 = 1e-6;
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct Schedule {
     pub path_count: u32,
-    /// Per vertex: paths that reach it, first slot, 1 under roulette, 0.
+    /// Per vertex: paths that reach it, first slot, 1 under roulette, 1 in fractional
+    /// absorption's roulette tail.
     pub levels: Vec<[u32; 4]>,
     pub slot_count: u32,
     pub mean_albedo: f64,
@@ -44,6 +48,21 @@ impl Schedule {
             offset += count.min(n);
             if absorption == Absorption::Roulette && mean_albedo.powi(j as i32 + 1) < 1e-4 {
                 break;
+            }
+        }
+        // Keller's N_j reaches 0 at some vertex J and the walk would end there, losing every
+        // longer path (15% of the U office's image lies past 10 bounces). irad continues the
+        // N_{J-1} paths still alive by Russian roulette, so a vertex-j VPL still carries
+        // 1 / N_{J-1} of an unbiased throughput, until rho^j < TAIL_CUTOFF. The tail's survival
+        // follows the path's throughput (w = 1 marks it; trace_vpls.comp), not Keller's fixed
+        // rho, whose 1 / rho^k weights made the tail's VPLs spikes.
+        if absorption == Absorption::Fractional && mean_albedo > 0.0 {
+            let alive = levels.last().map_or(0, |l| l[0]);
+            let mut j = levels.len();
+            while alive > 0 && j < MAX_VERTICES && mean_albedo.powi(j as i32) >= TAIL_CUTOFF {
+                levels.push([alive, offset, 1, 1]);
+                offset += alive;
+                j += 1;
             }
         }
         Schedule {
@@ -85,11 +104,23 @@ mod tests {
     #[test]
     fn fractional_counts_are_floor_rho_j_n() {
         let s = Schedule::new(1000, 0.5, Absorption::Fractional);
-        let counts: Vec<u32> = s.levels.iter().map(|l| l[0]).collect();
+        let counts: Vec<u32> = s.levels.iter().map(|l| l[0]).take(10).collect();
         assert_eq!(counts, vec![1000, 500, 250, 125, 62, 31, 15, 7, 3, 1]);
+        assert!(s.levels[..10].iter().all(|l| l[2] == 0));
         assert_eq!(s.levels[2][1], 1500);
-        assert_eq!(s.slot_count, counts.iter().sum::<u32>());
+        assert_eq!(s.slot_count, s.levels.iter().map(|l| l[0]).sum::<u32>());
         assert_eq!(s.surface_slots(), 1000..s.slot_count);
+    }
+
+    /// Past N_j = 0 the last path goes on by roulette until rho^j < TAIL_CUTOFF (0.5^19 is
+    /// the last at or above 1e-6), the tail marked in w.
+    #[test]
+    fn fractional_paths_go_on_by_roulette_where_n_j_reaches_zero() {
+        let s = Schedule::new(1000, 0.5, Absorption::Fractional);
+        let tail = &s.levels[10..];
+        assert_eq!(tail.len(), 10);
+        assert!(tail.iter().all(|l| l[0] == 1 && l[2] == 1 && l[3] == 1));
+        assert_eq!(tail[0][1], 1994);
     }
 
     #[test]
