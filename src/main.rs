@@ -108,8 +108,9 @@ struct RenderArgs {
     /// VPLs). bir: VPLs per frame, standard and reverse together.
     #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(1..=1 << 20))]
     vpls: u32,
-    /// ir: fractional absorption, floor(rho^j N) paths reach vertex j (Keller's, for stills),
-    /// or Russian roulette (for animation).
+    /// ir: fractional absorption, floor(rho^j N) paths reach vertex j (Keller's, for stills;
+    /// where that reaches 0 the last paths go on by Russian roulette, so no path length is
+    /// lost), or Russian roulette at every vertex (for animation).
     #[arg(long, value_enum, default_value_t = AbsorptionArg::Fractional)]
     absorption: AbsorptionArg,
     /// ir: clamp the geometry term cos cos / d^2 at this value (Keller's weak singularity):

@@ -90,7 +90,8 @@ fn every_strategy_matches_the_reference_mean_in_the_cornell_box() {
 /// light high over it. Each VPL lights only its own cell, a sixteenth of the image, so the
 /// power estimate from 5 camera points is zero for most of them: a CDF without the uniform
 /// floor never draws those and the image darkens (measured: 22%); with the default floor the
-/// mean stays, within 3% at a standard error under 1.2%.
+/// mean stays, within 3% at a standard error under 1.2% (measured 0.997, standard error 0.011;
+/// 0.981 before `both` gave weight 1 to the standard VPLs no camera pool point reaches).
 fn cells() -> Scene {
     use common::shapes::*;
     use glam::Vec3;
