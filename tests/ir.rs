@@ -62,7 +62,10 @@ fn walk_reproduces_kellers_survivor_counts() {
         let tail: Vec<usize> = schedule.levels[fractional..].iter().map(alive_at).collect();
         assert_eq!(tail.len(), 10);
         assert_eq!(tail[0], 1, "the tail's first vertex");
-        assert!(tail.windows(2).all(|w| w[1] <= w[0]), "tail survivors {tail:?}");
+        assert!(
+            tail.windows(2).all(|w| w[1] <= w[0]),
+            "tail survivors {tail:?}"
+        );
     });
 }
 
