@@ -1,6 +1,6 @@
 #version 450
 // Reverse VPLs (Segovia 06 Section 3.1): the ends x2 of length-2 camera paths. A pool of M
-// camera points x1 (G-buffer texels at pseudo-random pixels, the same pool for the frame) is
+// camera points x1 (G-buffer texels at pseudo-random pixels, the same pool for the batch) is
 // drawn; reverse VPL k starts from pool point k mod M, leaves it in a cosine-distributed
 // direction about its shading normal on the camera's side, and ends at the first hit x2.
 //
