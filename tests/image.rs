@@ -7,7 +7,9 @@ use std::fs::File;
 use std::io::BufReader;
 use std::path::PathBuf;
 
-use irad::image::metrics::{self, compare, variance_across_seeds, MetricsError};
+use irad::image::metrics::{
+    self, compare, rel_mse_against_split_reference, variance_across_seeds, MetricsError,
+};
 use irad::image::sidecar::{self, PassRecord, RenderRecord};
 use irad::image::{exr, png, tonemap, Image};
 
@@ -612,4 +614,42 @@ fn write_all_creates_folders_and_three_files() {
         PathBuf::from("x.exr")
     );
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn split_reference_rel_mse_takes_out_the_references_noise() {
+    // Two references 0.9 and 1.1 around a converged 1.0: an exact image scores
+    // (0 - 0.01) / 1.01, below zero by the references' own variance; relMSE against their
+    // mean alone would be 0.
+    let x = image(1, 1, &[gray(1.0)]);
+    let a = image(1, 1, &[gray(0.9)]);
+    let b = image(1, 1, &[gray(1.1)]);
+    assert_close(
+        rel_mse_against_split_reference(&x, &a, &b).unwrap(),
+        -0.01 / 1.01,
+        1e-7, // 0.9 and 1.1 are f32
+        "exact image",
+    );
+    // An image 0.5 off: (0.25 - 0.01) / 1.01.
+    let x = image(1, 1, &[gray(1.5)]);
+    assert_close(
+        rel_mse_against_split_reference(&x, &a, &b).unwrap(),
+        0.24 / 1.01,
+        1e-7,
+        "off by 0.5",
+    );
+    // Equal references reduce it to compare's relMSE.
+    let r = image(2, 1, &[gray(0.3), [0.1, 0.2, 0.4]]);
+    let x = image(2, 1, &[gray(0.5), [0.0, 0.3, 0.2]]);
+    assert_close(
+        rel_mse_against_split_reference(&x, &r, &r).unwrap(),
+        compare(&x, &r).unwrap().rel_mse,
+        1e-12,
+        "equal references",
+    );
+    let small = image(1, 1, &[gray(1.0)]);
+    assert!(matches!(
+        rel_mse_against_split_reference(&small, &r, &r),
+        Err(MetricsError::SizeMismatch { .. })
+    ));
 }

@@ -168,6 +168,43 @@ pub fn compare(x: &Image, r: &Image) -> Result<Metrics, MetricsError> {
     })
 }
 
+/// relMSE against a reference known only through two independent renders `a` and `b` (same
+/// method, different seeds), with the reference's own noise taken out: per pixel and channel
+/// ((x - r)^2 - (a - b)^2 / 4) / (r^2 + 0.01) with r = (a + b) / 2, averaged. (a - b)^2 / 4 is
+/// an unbiased estimate of the variance of r, so the result estimates relMSE against the
+/// converged image (up to the normalization's use of r), and can be slightly negative when x
+/// is closer to it than the references are to each other. Used where an estimator's error is
+/// near the error of any affordable reference.
+pub fn rel_mse_against_split_reference(
+    x: &Image,
+    a: &Image,
+    b: &Image,
+) -> Result<f64, MetricsError> {
+    check(x, "image under test")?;
+    for r in [a, b] {
+        check(r, "reference")?;
+        if (x.width, x.height) != (r.width, r.height) {
+            return Err(MetricsError::SizeMismatch {
+                test: (x.width, x.height),
+                reference: (r.width, r.height),
+            });
+        }
+        let count = count_non_finite(r);
+        if count > 0 {
+            return Err(MetricsError::NonFiniteReference { count });
+        }
+    }
+    let mut sum = 0.0f64;
+    for ((px, pa), pb) in x.pixels.iter().zip(&a.pixels).zip(&b.pixels) {
+        for c in 0..3 {
+            let (x, a, b) = (px[c] as f64, pa[c] as f64, pb[c] as f64);
+            let r = 0.5 * (a + b);
+            sum += ((x - r).powi(2) - 0.25 * (a - b).powi(2)) / (r * r + REL_MSE_EPSILON);
+        }
+    }
+    Ok(sum / (3 * x.pixels.len()) as f64)
+}
+
 /// Variance across seeds: for each pixel and channel the unbiased sample variance (divided by
 /// K - 1) of its K values, one per image, averaged over pixels and channels. NaN when any
 /// value is non-finite (check `nan_inf` of [`compare`] first).
