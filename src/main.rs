@@ -9,6 +9,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 
 use irad::bench::scan as scan_bench;
 use irad::gpu::{self, Context, ContextOptions, DeviceInfo, DeviceSelector, Validation};
+use irad::methods::bundles::{BundlesSettings, Strategy as BundlesStrategy};
 use irad::methods::gbuffer::PixelSampling;
 use irad::methods::ir::schedule::Absorption;
 use irad::methods::ir::{DirectLight, IrSettings};
@@ -101,7 +102,7 @@ struct RenderArgs {
     /// Samples per pixel (reference: one path per pixel per frame).
     #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..))]
     spp: u32,
-    /// ir, bir: frames, each with a fresh VPL set and fresh subpixel positions.
+    /// ir, bir, bundles: frames, each with a fresh VPL set and fresh subpixel positions.
     #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..))]
     frames: u32,
     /// ir: paths started on the lights per frame (Keller's N; about N / (1 - mean albedo)
@@ -125,9 +126,25 @@ struct RenderArgs {
     #[arg(long, value_enum, default_value_t = DirectArg::Nee)]
     direct: DirectArg,
     /// bir: which VPLs are shaded: standard (from the lights), reverse (from the camera) or
-    /// both at weight 1/2 each.
-    #[arg(long, value_enum, default_value_t = StrategyArg::Both)]
-    strategy: StrategyArg,
+    /// both [default]. bundles: which one-bounce paths: through the VPLs (vpl), through the
+    /// ray bundles (bundle), or both combined by MIS (mis) [default].
+    #[arg(long, value_enum)]
+    strategy: Option<StrategyArg>,
+    /// bundles: iterations per frame, each one VPL and one global ray bundle (the paper's 21).
+    #[arg(long, default_value_t = 21, value_parser = clap::value_parser!(u32).range(1..=65536))]
+    iterations: u32,
+    /// bundles: the MIS weights of the one-bounce paths: the balance heuristic (the paper's)
+    /// or the power heuristic (exponent 2).
+    #[arg(long, value_enum, default_value_t = HeuristicArg::Balance)]
+    heuristic: HeuristicArg,
+    /// bundles: shade the two-bounce paths (x0, x1, x2, x3) through the VPL-to-bundle-hit
+    /// edge (Tokuyoshi Eq. 7-8).
+    #[arg(long, value_enum, default_value_t = OnOff::On)]
+    two_bounce: OnOff,
+    /// bundles: clamp the two-bounce paths' x1-x2 geometry term cos cos / d^2 at this value
+    /// (the paper's clamp: a bias, recorded in the JSON); 0 leaves it unclamped.
+    #[arg(long, default_value_t = 10.0)]
+    two_bounce_clamp: f32,
     /// bir: camera points per frame the reverse VPLs start from (the M of Segovia's Eq. 7).
     #[arg(long, default_value_t = 50, value_parser = clap::value_parser!(u32).range(1..=65536))]
     pool: u32,
@@ -199,16 +216,37 @@ enum MethodArg {
     Ir,
     /// Bidirectional instant radiosity (Segovia 06): VPLs from the lights and from the camera.
     Bir,
+    /// Real-time bidirectional path tracing (Tokuyoshi 12): VPLs and global ray bundles
+    /// combined by MIS, for point and spot lights.
+    Bundles,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+enum StrategyArg {
+    /// bir: standard VPLs only (from the lights).
+    Standard,
+    /// bir: reverse VPLs only (ends of length-2 camera paths).
+    Reverse,
+    /// bir: both sides, resampled together.
+    Both,
+    /// bundles: one-bounce paths through the VPLs only.
+    Vpl,
+    /// bundles: one-bounce paths through the ray bundles only.
+    Bundle,
+    /// bundles: both, combined by multiple importance sampling.
+    Mis,
 }
 
 #[derive(Clone, Copy, clap::ValueEnum)]
-enum StrategyArg {
-    /// Standard VPLs only (from the lights).
-    Standard,
-    /// Reverse VPLs only (ends of length-2 camera paths).
-    Reverse,
-    /// Both sides, each at weight 1/2.
-    Both,
+enum HeuristicArg {
+    Balance,
+    Power,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+enum OnOff {
+    On,
+    Off,
 }
 
 #[derive(Clone, Copy, clap::ValueEnum)]
@@ -490,9 +528,10 @@ fn render(options: &ContextOptions, args: RenderArgs) -> Result<()> {
             frames: args.frames,
             seed: args.seed,
             strategy: match args.strategy {
-                StrategyArg::Standard => irad::methods::bir::Strategy::Standard,
-                StrategyArg::Reverse => irad::methods::bir::Strategy::Reverse,
-                StrategyArg::Both => irad::methods::bir::Strategy::Both,
+                Some(StrategyArg::Standard) => irad::methods::bir::Strategy::Standard,
+                Some(StrategyArg::Reverse) => irad::methods::bir::Strategy::Reverse,
+                Some(StrategyArg::Both) | None => irad::methods::bir::Strategy::Both,
+                Some(_) => bail!("--strategy: bir takes standard, reverse or both"),
             },
             pool: args.pool,
             light_samples: args.light_samples,
@@ -504,6 +543,32 @@ fn render(options: &ContextOptions, args: RenderArgs) -> Result<()> {
             batch: args.batch,
             light_cdf: !args.light_cdf_off,
             adaptive: !args.fixed_weights,
+            pixels,
+        }),
+        MethodArg::Bundles
+            if !(args.two_bounce_clamp.is_finite() && args.two_bounce_clamp >= 0.0) =>
+        {
+            bail!(
+                "--two-bounce-clamp {}: must be a finite number >= 0",
+                args.two_bounce_clamp
+            )
+        }
+        MethodArg::Bundles => Method::Bundles(BundlesSettings {
+            iterations: args.iterations,
+            frames: args.frames,
+            seed: args.seed,
+            strategy: match args.strategy {
+                Some(StrategyArg::Vpl) => BundlesStrategy::Vpl,
+                Some(StrategyArg::Bundle) => BundlesStrategy::Bundle,
+                Some(StrategyArg::Mis) | None => BundlesStrategy::Mis,
+                Some(_) => bail!("--strategy: bundles takes vpl, bundle or mis"),
+            },
+            beta: match args.heuristic {
+                HeuristicArg::Balance => 1.0,
+                HeuristicArg::Power => 2.0,
+            },
+            two_bounce: args.two_bounce == OnOff::On,
+            two_bounce_clamp: args.two_bounce_clamp,
             pixels,
         }),
     };

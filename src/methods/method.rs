@@ -12,6 +12,9 @@ use thiserror::Error;
 
 use crate::gpu::{Context, GpuError};
 use crate::methods::bir::{Bir, BirError, BirSettings, Strategy};
+use crate::methods::bundles::{
+    Bundles, BundlesError, BundlesSettings, Strategy as BundlesStrategy,
+};
 use crate::methods::gbuffer::PixelSampling;
 use crate::methods::ir::schedule::Absorption;
 use crate::methods::ir::{DirectLight, InstantRadiosity, IrError, IrSettings};
@@ -21,13 +24,14 @@ use crate::scene::gpu::GpuScene;
 use crate::scene::Scene;
 
 /// Every method irad has, by the name `--method` and suite files use.
-pub const METHOD_NAMES: &[&str] = &["reference", "ir", "bir"];
+pub const METHOD_NAMES: &[&str] = &["reference", "ir", "bir", "bundles"];
 
 #[derive(Clone, Debug, PartialEq)]
 pub enum Method {
     Reference(ReferenceSettings),
     Ir(IrSettings),
     Bir(BirSettings),
+    Bundles(BundlesSettings),
 }
 
 /// A parameter a method cannot take: `method: key = value: problem`.
@@ -50,6 +54,7 @@ impl Method {
             Method::Reference(_) => "reference",
             Method::Ir(_) => "ir",
             Method::Bir(_) => "bir",
+            Method::Bundles(_) => "bundles",
         }
     }
 
@@ -58,6 +63,7 @@ impl Method {
             Method::Reference(s) => s.seed,
             Method::Ir(s) => s.seed,
             Method::Bir(s) => s.seed,
+            Method::Bundles(s) => s.seed,
         }
     }
 
@@ -68,6 +74,7 @@ impl Method {
             Method::Reference(s) => s.seed = seed,
             Method::Ir(s) => s.seed = seed,
             Method::Bir(s) => s.seed = seed,
+            Method::Bundles(s) => s.seed = seed,
         }
         m
     }
@@ -78,6 +85,7 @@ impl Method {
             Method::Reference(s) => s.spp as u64,
             Method::Ir(s) => s.frames as u64,
             Method::Bir(s) => s.frames as u64,
+            Method::Bundles(s) => s.frames as u64,
         }
     }
 
@@ -88,6 +96,7 @@ impl Method {
             Method::Reference(s) => s.spp as f64,
             Method::Ir(s) => s.frames as f64 * s.paths as f64,
             Method::Bir(s) => s.frames as f64 * s.vpls as f64,
+            Method::Bundles(s) => s.frames as f64 * s.iterations as f64,
         }
     }
 
@@ -149,6 +158,24 @@ impl Method {
                     json!(s.pixels == PixelSampling::Centres),
                 );
             }
+            Method::Bundles(s) => {
+                p.insert("iterations".into(), json!(s.iterations));
+                p.insert("frames".into(), json!(s.frames));
+                p.insert("strategy".into(), json!(s.strategy.name()));
+                p.insert(
+                    "heuristic".into(),
+                    json!(if s.beta == 1.0 { "balance" } else { "power" }),
+                );
+                p.insert("two_bounce".into(), json!(s.two_bounce));
+                if s.two_bounce {
+                    // 0: unclamped (the clamp is a named, measured bias).
+                    p.insert("two_bounce_clamp".into(), json!(s.two_bounce_clamp));
+                }
+                p.insert(
+                    "pixel_centres".into(),
+                    json!(s.pixels == PixelSampling::Centres),
+                );
+            }
         }
         p
     }
@@ -157,7 +184,8 @@ impl Method {
     /// `irad render` with `-` written `_`: reference takes spp, max_depth, roulette_depth,
     /// pixel_centres, seed; ir takes vpls, frames, absorption, clamp, interleave, direct,
     /// pixel_centres, seed; bir takes vpls, frames, strategy, pool, light_samples, ratio,
-    /// floor, power_samples, batch, pixel_centres, seed.
+    /// floor, power_samples, batch, pixel_centres, seed; bundles takes iterations, frames,
+    /// strategy, heuristic, two_bounce, two_bounce_clamp, pixel_centres, seed.
     pub fn from_params(name: &str, params: &toml::Table) -> Result<Method, ParamError> {
         let mut reader = Params {
             method: name,
@@ -220,6 +248,29 @@ impl Method {
                     pixels: reader.pixels()?,
                 })
             }
+            "bundles" => {
+                let d = BundlesSettings::default();
+                Method::Bundles(BundlesSettings {
+                    iterations: reader.uint("iterations", d.iterations, 1, 1 << 16)?,
+                    frames: reader.uint("frames", d.frames, 1, u32::MAX)?,
+                    seed: reader.uint("seed", d.seed, 0, u32::MAX)?,
+                    strategy: match reader.choice("strategy", &["vpl", "bundle", "mis"])? {
+                        Some("vpl") => BundlesStrategy::Vpl,
+                        Some("bundle") => BundlesStrategy::Bundle,
+                        Some(_) => BundlesStrategy::Mis,
+                        None => d.strategy,
+                    },
+                    beta: match reader.choice("heuristic", &["balance", "power"])? {
+                        Some("power") => 2.0,
+                        Some(_) => 1.0,
+                        None => d.beta,
+                    },
+                    two_bounce: reader.flag("two_bounce", d.two_bounce)?,
+                    two_bounce_clamp: reader
+                        .non_negative("two_bounce_clamp", d.two_bounce_clamp)?,
+                    pixels: reader.pixels()?,
+                })
+            }
             _ => return Err(ParamError::UnknownMethod(name.to_string())),
         };
         reader.refuse_unknown()?;
@@ -238,6 +289,7 @@ impl Method {
                 .environment
                 .is_some()
                 .then(|| BirError::Environment.to_string()),
+            Method::Bundles(_) => Bundles::declines(scene).map(|e| e.to_string()),
         }
     }
 }
@@ -346,6 +398,16 @@ impl<'a> Params<'a> {
                 "adaptive",
                 "pixel_centres",
             ],
+            "bundles" => &[
+                "iterations",
+                "frames",
+                "seed",
+                "strategy",
+                "heuristic",
+                "two_bounce",
+                "two_bounce_clamp",
+                "pixel_centres",
+            ],
             _ => &[
                 "vpls",
                 "frames",
@@ -378,6 +440,7 @@ pub struct Renderers {
     reference: OnceCell<Reference>,
     ir: OnceCell<InstantRadiosity>,
     bir: OnceCell<Bir>,
+    bundles: OnceCell<Bundles>,
 }
 
 #[derive(Debug, Error)]
@@ -421,6 +484,15 @@ impl Renderers {
                     .map_err(|e| match e {
                         BirError::Environment => RunError::Declined(e.to_string()),
                         BirError::Gpu(g) => RunError::Gpu(g),
+                    })
+            }
+            Method::Bundles(settings) => {
+                let bundles = get_or_try_init(&self.bundles, || Bundles::new(ctx))?;
+                bundles
+                    .render(ctx, scene, gpu_scene, settings, progress)
+                    .map_err(|e| match e {
+                        BundlesError::Gpu(g) => RunError::Gpu(g),
+                        e => RunError::Declined(e.to_string()),
                     })
             }
         }
@@ -487,6 +559,33 @@ mod tests {
         assert_eq!(Method::from_params("bir", &back).unwrap(), bir);
         let e = Method::from_params("bir", &table("strategy = \"sideways\"")).unwrap_err();
         assert!(e.to_string().contains("strategy = \"sideways\""), "{e}");
+    }
+
+    #[test]
+    fn bundles_parameters_read_back() {
+        let bundles = Method::from_params(
+            "bundles",
+            &table("iterations = 5\nframes = 2\nstrategy = \"vpl\"\nheuristic = \"power\"\ntwo_bounce = true\ntwo_bounce_clamp = 3.5\npixel_centres = true"),
+        )
+        .unwrap();
+        let back: toml::Table = bundles
+            .parameters()
+            .into_iter()
+            .map(|(k, v)| (k, toml::Value::try_from(v).unwrap()))
+            .collect();
+        assert_eq!(Method::from_params("bundles", &back).unwrap(), bundles);
+        let e = Method::from_params("bundles", &table("strategy = \"both\"")).unwrap_err();
+        assert!(
+            e.to_string()
+                .contains("expected one of \"vpl\", \"bundle\", \"mis\""),
+            "{e}"
+        );
+        let e = Method::from_params("bundles", &table("vpls = 4")).unwrap_err();
+        assert!(
+            e.to_string()
+                .starts_with("bundles: vpls = 4: unknown parameter"),
+            "{e}"
+        );
     }
 
     #[test]

@@ -3,6 +3,7 @@
 
 pub mod accumulation;
 pub mod bir;
+pub mod bundles;
 pub mod direct;
 pub mod gbuffer;
 pub mod ir;

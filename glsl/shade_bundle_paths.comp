@@ -1,0 +1,163 @@
+#version 450
+// Tokuyoshi 12 Sections 4.2-4.3: indirect light at each G-buffer point x3 from the chunk's
+// iterations. One-bounce: the VPL path (x0, x1, x3) and the bundle path (x0, x2, x3), x2 the
+// point's bundle hit lit by next-event estimation from the iteration's light, combined by the
+// power heuristic with exponent beta (1: the balance heuristic, Eq. 6) over the area densities
+// of Eq. 4-5, p1 = p_e(w01) |cos| / d01^2 and p2 = p_r |cos| / d^2 (the light's selection
+// probability is common to both and cancels). Two-bounce: (x0, x1, x2, x3) through the edge
+// x1-x2 (Eq. 7-8; its geometry term optionally clamped, the paper's bias). Strategy 0 shades
+// the VPL paths alone, 1 the bundle paths alone (weight 1 each), 2 both with MIS. The frame's
+// estimate is the mean over its I iterations; each chunk adds its share.
+
+#extension GL_GOOGLE_include_directive : require
+
+layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
+
+#include "bvh.glsl"
+#include "scene.glsl"
+#include "sampling.glsl"
+#include "halton.glsl"
+#include "bsdf.glsl"
+#include "lights.glsl"
+#include "emission.glsl"
+#include "gbuffer.glsl"
+#include "radiance.glsl"
+#include "bundles.glsl"
+
+layout(push_constant) uniform ShadeParams {
+    uint first_iteration;  // k of the chunk's first iteration
+    uint first_index;      // its index i in the frame's light vertices
+    uint count;            // iterations in the chunk
+    uint per_frame;        // I
+    uint seed;
+    uint strategy;         // 0 vpl, 1 bundle, 2 mis
+    float beta;            // power heuristic exponent (1: balance)
+    float two_bounce;      // < 0: off; 0: unclamped; > 0: clamp of the x1-x2 geometry term
+} params;
+
+#define STRATEGY_VPL 0u
+#define STRATEGY_BUNDLE 1u
+#define STRATEGY_MIS 2u
+
+float mis_weight(float p_this, float p_other) {
+    if (params.strategy != STRATEGY_MIS) return 1.0;
+    if (params.beta == 1.0) return p_this / (p_this + p_other);
+    float a = pow(p_this, params.beta);
+    float b = pow(p_other, params.beta);
+    return a / (a + b);
+}
+
+bool any_positive(vec3 c) {
+    return max(max(c.r, c.g), c.b) > 0.0;
+}
+
+void main() {
+    uvec2 pixel = gl_GlobalInvocationID.xy;
+    if (pixel.x >= scene.size.x || pixel.y >= scene.size.y) return;
+    uint index = pixel.y * scene.size.x + pixel.x;
+    uint pixels = scene.size.x * scene.size.y;
+    GBufferTexel g = gbuffer[index];
+    vec3 wo3, side3, n3;
+    if (!gbuffer_surface(g, wo3, side3, n3)) return;
+    vec3 x3 = g.position.xyz;
+    vec3 origin3 = offset_origin(x3, side3);
+    Material m3 = materials[floatBitsToUint(g.shading_normal.w)];
+    const float p_r = 0.5 * INV_PI;
+
+    vec3 sum = vec3(0.0);
+    for (uint j = 0u; j < params.count; ++j) {
+        LightVertex lv = light_vertices[params.first_index + j];
+        if (lv.power.w <= 0.0) continue;
+        Light l = lights[floatBitsToUint(lv.light.w)];
+        vec3 x0 = lv.light.xyz;
+        bool has_x1 = lv.position.w > 0.0;
+        vec3 x1 = lv.position.xyz;
+        vec3 n1 = lv.normal.xyz;
+        vec3 side1 = lv.side.xyz;
+        vec3 w10 = normalize(x0 - x1);
+        Material m1 = materials[floatBitsToUint(lv.normal.w)];
+
+        // One bounce through the VPL x1.
+        if (has_x1 && params.strategy != STRATEGY_BUNDLE) {
+            vec3 d = x1 - x3;
+            float dist2 = dot(d, d);
+            vec3 w31 = d * inversesqrt(max(dist2, 1e-30));
+            float cos3 = dot(n3, w31);
+            float cos1 = -dot(n1, w31);
+            float cos1g = -dot(side1, w31);
+            if (dist2 > 0.0 && cos3 > 0.0 && dot(side3, w31) > 0.0 && cos1 > 0.0 && cos1g > 0.0) {
+                vec3 c = lv.power.rgb * bsdf_eval(m1, n1, w10, -w31) * bsdf_eval(m3, n3, wo3, w31)
+                         * (cos1 * cos3 / dist2);
+                if (any_positive(c)) {
+                    vec3 target = offset_origin(x1, side1);
+                    if (!trace_any(origin3, target - origin3, 0.9999)) {
+                        float p1 = lv.side.w;
+                        float p2 = p_r * cos1g / dist2;
+                        sum += c * mis_weight(p1, p2);
+                    }
+                }
+            }
+        }
+
+        // The VPL paths alone need no bundle hits (none were traced).
+        if (params.strategy == STRATEGY_VPL && params.two_bounce < 0.0) continue;
+        BundleHit h = bundle_hits[j * pixels + index];
+        if (h.position.w < 0.0) continue;
+        vec3 d = bundle_ray(bundle_direction(params.first_iteration + j, params.seed), side3);
+        float cos3 = dot(n3, d);
+        if (cos3 <= 0.0) continue;
+        vec3 f3 = bsdf_eval(m3, n3, wo3, d);
+        if (!any_positive(f3)) continue;
+        vec3 x2 = h.position.xyz;
+        float t = h.position.w;
+        uint tri = h.triangle.x;
+        vec3 ng2 = shading_triangles[tri].geometric_normal.xyz;
+        vec3 ns2 = shading_normal(tri, vec2(uintBitsToFloat(h.triangle.y),
+                                            uintBitsToFloat(h.triangle.z)));
+        vec3 side2 = dot(-d, ng2) >= 0.0 ? ng2 : -ng2;
+        vec3 n2 = dot(ns2, side2) >= 0.0 ? ns2 : -ns2;
+        Material m2 = materials[triangle_material(tri)];
+        vec3 origin2 = offset_origin(x2, side2);
+        float cos2g_3 = -dot(side2, d);  // at x2, toward x3
+
+        // One bounce through the bundle hit x2, lit by the iteration's light.
+        if (params.strategy != STRATEGY_VPL) {
+            vec3 e = x0 - x2;
+            float dist2 = dot(e, e);
+            vec3 w20 = e * inversesqrt(max(dist2, 1e-30));
+            float cos2 = dot(n2, w20);
+            float cos2g = dot(side2, w20);
+            if (dist2 > 0.0 && cos2 > 0.0 && cos2g > 0.0) {
+                float profile = emission_profile(l, -w20);
+                vec3 c = l.intensity.rgb * (profile * cos2 / (dist2 * lv.power.w * p_r))
+                         * bsdf_eval(m2, n2, -d, w20) * f3 * cos3;
+                if (any_positive(c) && !trace_any(origin2, x0 - origin2, 0.9999)) {
+                    float p1 = emission_pdf(l, -w20) * cos2g / dist2;
+                    float p2 = p_r * cos2g_3 / (t * t);
+                    sum += c * mis_weight(p2, p1);
+                }
+            }
+        }
+
+        // Two bounces: x0 -> x1 -> x2 -> x3, the only strategy that samples these paths.
+        if (params.two_bounce >= 0.0 && has_x1) {
+            vec3 e = x2 - x1;
+            float dist2 = dot(e, e);
+            vec3 w12 = e * inversesqrt(max(dist2, 1e-30));
+            float cos1 = dot(n1, w12);
+            float cos2 = -dot(n2, w12);
+            if (dist2 > 0.0 && cos1 > 0.0 && dot(side1, w12) > 0.0 && cos2 > 0.0 &&
+                -dot(side2, w12) > 0.0) {
+                float g12 = cos1 * cos2 / dist2;
+                if (params.two_bounce > 0.0) g12 = min(g12, params.two_bounce);
+                vec3 c = lv.power.rgb * bsdf_eval(m1, n1, w10, w12) * bsdf_eval(m2, n2, -d, -w12)
+                         * f3 * (g12 * cos3 / p_r);
+                if (any_positive(c)) {
+                    vec3 target = offset_origin(x1, side1);
+                    if (!trace_any(origin2, target - origin2, 0.9999)) sum += c;
+                }
+            }
+        }
+    }
+    accumulate_radiance(index, sum / float(params.per_frame));
+}

@@ -1,0 +1,244 @@
+//! Real-time bidirectional path tracing (Tokuyoshi 12), method `bundles`: per frame, the
+//! G-buffer and direct light by next-event estimation (exact for point and spot lights), then
+//! I iterations (the paper's 21), each with one VPL from the lights (light_vertices) and one
+//! global ray bundle from the visible points (ray_bundles), whose one-bounce paths are
+//! combined by MIS and whose two-bounce paths share the edge between the VPL and the bundle
+//! hit (paths). irad traces the bundles through the BVH where the paper rasterizes them into
+//! per-pixel linked lists: the same rays, exact visibility.
+
+pub mod light_vertices;
+pub mod paths;
+pub mod ray_bundles;
+
+use std::time::Instant;
+
+use thiserror::Error;
+
+use crate::gpu::{Buffer, Context, GpuError};
+use crate::methods::accumulation::Accumulation;
+use crate::methods::direct::GBufferAndDirectLight;
+use crate::methods::gbuffer::{GBuffer, PixelSampling};
+use crate::methods::progressive;
+use crate::methods::RenderOutput;
+use crate::sampling::pcg;
+use crate::scene::gpu::GpuScene;
+use crate::scene::Scene;
+
+use light_vertices::TraceLightVertices;
+use paths::{Chunk, ShadeBundlePaths};
+use ray_bundles::{BundleHit, TraceRayBundles};
+
+/// Which one-bounce paths are shaded.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Strategy {
+    /// Through the VPLs only (instant radiosity's one bounce).
+    Vpl,
+    /// Through the bundle hits only (one-bounce path tracing along shared directions).
+    Bundle,
+    /// Both, weighted by the power heuristic (Eq. 3-6).
+    Mis,
+}
+
+impl Strategy {
+    pub fn name(self) -> &'static str {
+        match self {
+            Strategy::Vpl => "vpl",
+            Strategy::Bundle => "bundle",
+            Strategy::Mis => "mis",
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BundlesSettings {
+    /// I: VPLs and bundles per frame (one of each per iteration).
+    pub iterations: u32,
+    pub frames: u32,
+    pub seed: u32,
+    pub strategy: Strategy,
+    /// The power heuristic's exponent: 1 is the balance heuristic (the paper's), 2 Veach's
+    /// power heuristic.
+    pub beta: f32,
+    /// Shade the two-bounce paths (x0, x1, x2, x3).
+    pub two_bounce: bool,
+    /// Clamp of their x1-x2 geometry term (the paper's named bias); 0 leaves it unclamped.
+    pub two_bounce_clamp: f32,
+    pub pixels: PixelSampling,
+}
+
+impl Default for BundlesSettings {
+    fn default() -> Self {
+        BundlesSettings {
+            iterations: 21,
+            frames: 16,
+            seed: 0,
+            strategy: Strategy::Mis,
+            beta: 1.0,
+            two_bounce: true,
+            two_bounce_clamp: 10.0,
+            pixels: PixelSampling::Jittered,
+        }
+    }
+}
+
+#[derive(Debug, Error)]
+pub enum BundlesError {
+    #[error("bundles does not support environment lights yet (use --method reference)")]
+    Environment,
+    #[error("bundles shades point and spot lights only (Tokuyoshi 12 Section 4: VPLs from point lights); this scene has {0} emissive triangles (use --method ir, bir or reference)")]
+    AreaLights(usize),
+    #[error(transparent)]
+    Gpu(#[from] GpuError),
+}
+
+/// Bundle hits kept at once: the iterations of a frame are traced and shaded in chunks that
+/// fit (a chunk is at least one iteration).
+const HIT_BYTES: usize = 64 << 20;
+
+/// Most chunks per frame, so a submission of 16 frames stays within the 512 timed passes.
+const MAX_CHUNKS: u32 = 12;
+
+pub struct Bundles {
+    direct: GBufferAndDirectLight,
+    light_vertices: TraceLightVertices,
+    ray_bundles: TraceRayBundles,
+    paths: ShadeBundlePaths,
+}
+
+impl Bundles {
+    pub fn new(ctx: &Context) -> Result<Self, GpuError> {
+        Ok(Bundles {
+            direct: GBufferAndDirectLight::new(ctx)?,
+            light_vertices: TraceLightVertices::new(ctx)?,
+            ray_bundles: TraceRayBundles::new(ctx)?,
+            paths: ShadeBundlePaths::new(ctx)?,
+        })
+    }
+
+    /// Why bundles cannot render `scene`, or None.
+    pub fn declines(scene: &Scene) -> Option<BundlesError> {
+        if scene.environment.is_some() {
+            return Some(BundlesError::Environment);
+        }
+        let emissive = scene
+            .triangles
+            .iter()
+            .filter(|t| scene.materials[t.material as usize].is_emissive())
+            .count();
+        (emissive > 0).then_some(BundlesError::AreaLights(emissive))
+    }
+
+    /// Iterations traced and shaded together at this pixel count.
+    pub fn chunk_size(iterations: u32, pixels: usize) -> u32 {
+        let fits = (HIT_BYTES / (pixels.max(1) * std::mem::size_of::<BundleHit>())) as u32;
+        fits.clamp(iterations.div_ceil(MAX_CHUNKS), iterations.max(1))
+    }
+
+    pub fn render(
+        &self,
+        ctx: &Context,
+        scene: &Scene,
+        gpu_scene: &GpuScene,
+        settings: &BundlesSettings,
+        progress: impl FnMut(u32, u32),
+    ) -> Result<RenderOutput, BundlesError> {
+        if let Some(e) = Self::declines(scene) {
+            return Err(e);
+        }
+        let start = Instant::now();
+        let gbuffer = GBuffer::new(ctx, gpu_scene)?;
+        let accumulation = Accumulation::new(ctx, gpu_scene.width, gpu_scene.height)?;
+        let per_frame = settings.iterations.max(1);
+        let chunk = Self::chunk_size(per_frame, gpu_scene.pixel_count());
+        let vertices = Buffer::zeroed(ctx, "LightVertices", per_frame as usize)?;
+        let hits = Buffer::zeroed(ctx, "BundleHits", chunk as usize * gpu_scene.pixel_count())?;
+        let seed = pcg::hash(&[settings.seed, 0x62756e64]);
+        let two_bounce = settings.two_bounce.then_some(settings.two_bounce_clamp);
+        // The VPL paths alone need no bundle hits (the shading kernel then reads none).
+        let trace_bundles = settings.strategy != Strategy::Vpl || settings.two_bounce;
+        let frames = settings.frames.max(1);
+        let passes = progressive::run(
+            ctx,
+            frames,
+            &accumulation,
+            |cmd, frame| {
+                self.direct.record(
+                    cmd,
+                    gpu_scene,
+                    &gbuffer,
+                    &accumulation,
+                    frame,
+                    settings.seed,
+                    settings.pixels,
+                    1,
+                )?;
+                let first = frame * per_frame;
+                cmd.pass("light vertices", |cmd| {
+                    self.light_vertices
+                        .record(cmd, gpu_scene, &vertices, first, seed)
+                })?;
+                let mut index = 0;
+                while index < per_frame {
+                    let count = chunk.min(per_frame - index);
+                    if trace_bundles {
+                        cmd.pass("ray bundles", |cmd| {
+                            self.ray_bundles.record(
+                                cmd,
+                                gpu_scene,
+                                &gbuffer,
+                                &hits,
+                                first + index,
+                                count,
+                                seed,
+                            )
+                        })?;
+                    }
+                    let c = Chunk {
+                        first_iteration: first + index,
+                        first_index: index,
+                        count,
+                        per_frame,
+                    };
+                    cmd.pass("bundle paths", |cmd| {
+                        self.paths.record(
+                            cmd,
+                            gpu_scene,
+                            &gbuffer,
+                            &vertices,
+                            &hits,
+                            &accumulation,
+                            &c,
+                            seed,
+                            settings.strategy,
+                            settings.beta,
+                            two_bounce,
+                        )
+                    })?;
+                    index += count;
+                }
+                Ok(())
+            },
+            progress,
+        )?;
+        let pixels = gpu_scene.pixel_count() as f64;
+        // Per iteration: the light vertex's ray, and per pixel the bundle ray and at most three
+        // shadow rays (to x1, from x2 to the light, and x1-x2 for two bounces).
+        let shadow_rays = match settings.strategy {
+            Strategy::Vpl | Strategy::Bundle => 1.0,
+            Strategy::Mis => 2.0,
+        } + if settings.two_bounce { 1.0 } else { 0.0 };
+        Ok(RenderOutput {
+            image: accumulation.resolve(frames),
+            passes,
+            wall_ms: start.elapsed().as_secs_f64() * 1e3,
+            nonfinite_estimates: accumulation.nonfinite_estimates()?,
+            stats: vec![
+                ("iterations_per_chunk".into(), chunk as f64),
+                (
+                    "rays_per_iteration_max".into(),
+                    1.0 + pixels * (1.0 + shadow_rays),
+                ),
+            ],
+        })
+    }
+}

@@ -1,0 +1,86 @@
+//! glsl/shade_bundle_paths.comp: the one- and two-bounce paths of each G-buffer point through
+//! the chunk's VPLs and bundle hits, MIS-combined (Tokuyoshi 12 Eq. 3-8), added into the
+//! accumulation.
+
+use bytemuck::{Pod, Zeroable};
+
+use crate::gpu::{bind, Buffer, Commands, Context, GpuResult, Kernel};
+use crate::methods::accumulation::Accumulation;
+use crate::methods::gbuffer::GBuffer;
+use crate::scene::gpu::GpuScene;
+
+use super::light_vertices::LightVertex;
+use super::ray_bundles::BundleHit;
+use super::Strategy;
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct ShadeParams {
+    first_iteration: u32,
+    first_index: u32,
+    count: u32,
+    per_frame: u32,
+    seed: u32,
+    strategy: u32,
+    beta: f32,
+    two_bounce: f32,
+}
+
+/// What one chunk of iterations shades.
+pub struct Chunk {
+    /// k of the chunk's first iteration.
+    pub first_iteration: u32,
+    /// Its index among the frame's light vertices.
+    pub first_index: u32,
+    pub count: u32,
+    /// Iterations per frame: each adds 1 / per_frame of its estimate.
+    pub per_frame: u32,
+}
+
+pub struct ShadeBundlePaths(Kernel);
+
+impl ShadeBundlePaths {
+    pub fn new(ctx: &Context) -> GpuResult<Self> {
+        Ok(ShadeBundlePaths(Kernel::new(ctx, "shade_bundle_paths")?))
+    }
+
+    /// `two_bounce`: None leaves the two-bounce paths out; Some(0) shades them unclamped,
+    /// Some(g) clamps their x1-x2 geometry term at g.
+    #[allow(clippy::too_many_arguments)]
+    pub fn record<'a>(
+        &'a self,
+        cmd: &mut Commands<'a>,
+        scene: &'a GpuScene,
+        gbuffer: &'a GBuffer,
+        vertices: &'a Buffer<LightVertex>,
+        hits: &'a Buffer<BundleHit>,
+        accumulation: &'a Accumulation,
+        chunk: &Chunk,
+        seed: u32,
+        strategy: Strategy,
+        beta: f32,
+        two_bounce: Option<f32>,
+    ) -> GpuResult<()> {
+        let mut bindings = scene.bindings();
+        bindings.push(bind("GBuffer", &gbuffer.texels));
+        bindings.extend(accumulation.bindings());
+        bindings.push(bind("LightVertices", vertices));
+        bindings.push(bind("BundleHits", hits));
+        let params = ShadeParams {
+            first_iteration: chunk.first_iteration,
+            first_index: chunk.first_index,
+            count: chunk.count,
+            per_frame: chunk.per_frame,
+            seed,
+            strategy: match strategy {
+                Strategy::Vpl => 0,
+                Strategy::Bundle => 1,
+                Strategy::Mis => 2,
+            },
+            beta,
+            two_bounce: two_bounce.map_or(-1.0, |g| g.max(0.0)),
+        };
+        self.0
+            .dispatch(cmd, &bindings, &params, scene.image_workgroups())
+    }
+}

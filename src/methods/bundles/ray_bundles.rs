@@ -1,0 +1,59 @@
+//! glsl/trace_ray_bundles.comp: global ray bundles (Tokuyoshi 12 Section 3.2) traced through
+//! the BVH: for each iteration of a chunk, every G-buffer point's first hit along the shared
+//! direction.
+
+use bytemuck::{Pod, Zeroable};
+use glam::Vec4;
+
+use crate::gpu::{bind, Buffer, Commands, Context, GpuResult, Kernel};
+use crate::methods::gbuffer::GBuffer;
+use crate::scene::gpu::GpuScene;
+
+/// One bundle ray's first hit as glsl/include/bundles.glsl lays it out.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct BundleHit {
+    /// x2; w: distance from x3, negative for none.
+    pub position: Vec4,
+    /// x: GPU triangle; y, z: barycentrics (f32 bits).
+    pub triangle: [u32; 4],
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct BundleParams {
+    first_iteration: u32,
+    seed: u32,
+}
+
+pub struct TraceRayBundles(Kernel);
+
+impl TraceRayBundles {
+    pub fn new(ctx: &Context) -> GpuResult<Self> {
+        Ok(TraceRayBundles(Kernel::new(ctx, "trace_ray_bundles")?))
+    }
+
+    /// Traces iterations first_iteration.. first_iteration + count into `hits` (count times
+    /// the pixel count entries, iteration-major).
+    #[allow(clippy::too_many_arguments)]
+    pub fn record<'a>(
+        &'a self,
+        cmd: &mut Commands<'a>,
+        scene: &'a GpuScene,
+        gbuffer: &'a GBuffer,
+        hits: &'a Buffer<BundleHit>,
+        first_iteration: u32,
+        count: u32,
+        seed: u32,
+    ) -> GpuResult<()> {
+        let mut bindings = scene.bindings();
+        bindings.push(bind("GBuffer", &gbuffer.texels));
+        bindings.push(bind("BundleHits", hits));
+        let [x, y, _] = scene.image_workgroups();
+        let params = BundleParams {
+            first_iteration,
+            seed,
+        };
+        self.0.dispatch(cmd, &bindings, &params, [x, y, count])
+    }
+}
