@@ -137,8 +137,8 @@ fn mis_beats_vpls_and_bundles_alone_in_the_corner() {
     with_gpu(|ctx| {
         let scene = scene("failure/corner-light", 32, 32);
         let gpu = GpuScene::upload(ctx, &scene).unwrap();
-        let a = reference(ctx, &gpu, 8192, 2, 11);
-        let b = reference(ctx, &gpu, 8192, 2, 12);
+        let a = reference(ctx, &gpu, 4096, 2, 11);
+        let b = reference(ctx, &gpu, 4096, 2, 12);
         let bundles = Bundles::new(ctx).unwrap();
         let error = |strategy: Strategy| {
             let base = BundlesSettings {
