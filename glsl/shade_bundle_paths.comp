@@ -16,7 +16,6 @@ layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 #include "bvh.glsl"
 #include "scene.glsl"
 #include "sampling.glsl"
-#include "halton.glsl"
 #include "bsdf.glsl"
 #include "lights.glsl"
 #include "emission.glsl"
@@ -25,11 +24,9 @@ layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 #include "bundles.glsl"
 
 layout(push_constant) uniform ShadeParams {
-    uint first_iteration;  // k of the chunk's first iteration
-    uint first_index;      // its index i in the frame's light vertices
+    uint first_index;      // the chunk's first iteration, as an index into LightVertices
     uint count;            // iterations in the chunk
     uint per_frame;        // I
-    uint seed;
     uint strategy;         // 0 vpl, 1 bundle, 2 mis
     float beta;            // power heuristic exponent (1: balance)
     float two_bounce;      // < 0: off; 0: unclamped; > 0: clamp of the x1-x2 geometry term
@@ -103,7 +100,7 @@ void main() {
         if (params.strategy == STRATEGY_VPL && params.two_bounce < 0.0) continue;
         BundleHit h = bundle_hits[j * pixels + index];
         if (h.position.w < 0.0) continue;
-        vec3 d = bundle_ray(bundle_direction(params.first_iteration + j, params.seed), side3);
+        vec3 d = bundle_ray(lv.bundle.xyz, side3);
         float cos3 = dot(n3, d);
         if (cos3 <= 0.0) continue;
         vec3 f3 = bsdf_eval(m3, n3, wo3, d);

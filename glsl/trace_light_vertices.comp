@@ -2,7 +2,8 @@
 // Tokuyoshi 12 Section 4.1: one VPL per iteration, from point and spot lights only. A light
 // chosen by power (P_l, lights.glsl's table), a direction leaving it with its emission pdf
 // (emission.glsl: 1 / (4 pi), or I(w) / integral of I for a spot), and the first surface the
-// ray hits: x1. One invocation per iteration of the frame; numbers in bundles.glsl.
+// ray hits: x1; with it the iteration's bundle direction, computed here once instead of per
+// pixel. One invocation per iteration of the frame; numbers in bundles.glsl.
 
 #extension GL_GOOGLE_include_directive : require
 
@@ -28,6 +29,8 @@ void main() {
     uint i = gl_GlobalInvocationID.x;
     if (i >= params.count) return;
     uint k = params.first_iteration + i;
+    float u[5];
+    for (uint d = 0u; d < 5u; ++d) u[d] = halton(d, k, params.seed);
 
     LightVertex v;
     v.light = vec4(0.0);
@@ -35,16 +38,19 @@ void main() {
     v.position = vec4(0.0);
     v.normal = vec4(0.0);
     v.side = vec4(0.0);
+    // w_k, uniform on the sphere.
+    float z = 1.0 - 2.0 * u[3];
+    float s = sqrt(max(0.0, 1.0 - z * z));
+    v.bundle = vec4(s * cos(2.0 * PI * u[4]), s * sin(2.0 * PI * u[4]), z, 0.0);
     if (scene.size.z == 0u) {
         light_vertices[i] = v;
         return;
     }
-    uint r = min(uint(bundle_number(0u, k, params.seed) * 2147483648.0), 0x7fffffffu);
+    uint r = min(uint(u[0] * 2147483648.0), 0x7fffffffu);
     LightEntry e = light_entries[select_light(r)];
     Light l = lights[e.index];
     vec3 x0 = l.position.xyz;
-    vec3 w = sample_emission(l, vec2(bundle_number(1u, k, params.seed),
-                                     bundle_number(2u, k, params.seed)));
+    vec3 w = sample_emission(l, vec2(u[1], u[2]));
     float pe = emission_pdf(l, w);
     v.light = vec4(x0, uintBitsToFloat(e.index));
     // I / p_e is the intensity's integral over the sphere whenever p_e follows I.

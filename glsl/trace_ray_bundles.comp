@@ -9,17 +9,14 @@
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 
 #define BUNDLES_WRITE_HITS
-#define BUNDLES_NO_LIGHT_VERTICES
 #include "bvh.glsl"
 #include "scene.glsl"
 #include "sampling.glsl"
-#include "halton.glsl"
 #include "gbuffer.glsl"
 #include "bundles.glsl"
 
 layout(push_constant) uniform BundleParams {
-    uint first_iteration;  // k of the chunk's first iteration
-    uint seed;
+    uint first_index;  // the chunk's first iteration, as an index into LightVertices
 } params;
 
 void main() {
@@ -35,8 +32,8 @@ void main() {
     GBufferTexel g = gbuffer[index];
     vec3 wo, side, n;
     if (gbuffer_surface(g, wo, side, n)) {
-        vec3 d = bundle_ray(bundle_direction(params.first_iteration + gl_GlobalInvocationID.z,
-                                             params.seed), side);
+        vec3 w = light_vertices[params.first_index + gl_GlobalInvocationID.z].bundle.xyz;
+        vec3 d = bundle_ray(w, side);
         vec3 origin = offset_origin(g.position.xyz, side);
         RayHit hit;
         if (trace_closest(origin, d, infinity(), hit)) {

@@ -1,5 +1,6 @@
 //! glsl/trace_light_vertices.comp: one VPL per iteration from a point or spot light sampled by
-//! its emission pdf (Tokuyoshi 12 Section 4.1), and the buffer of one frame's light vertices.
+//! its emission pdf (Tokuyoshi 12 Section 4.1) and the iteration's bundle direction, and the
+//! buffer of one frame's light vertices.
 
 use bytemuck::{Pod, Zeroable};
 use glam::Vec4;
@@ -20,6 +21,8 @@ pub struct LightVertex {
     pub normal: Vec4,
     /// w: the area density of x1, p_e |cos| / d^2.
     pub side: Vec4,
+    /// The iteration's bundle direction w_k.
+    pub bundle: Vec4,
 }
 
 #[repr(C)]

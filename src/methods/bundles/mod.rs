@@ -182,19 +182,11 @@ impl Bundles {
                     let count = chunk.min(per_frame - index);
                     if trace_bundles {
                         cmd.pass("ray bundles", |cmd| {
-                            self.ray_bundles.record(
-                                cmd,
-                                gpu_scene,
-                                &gbuffer,
-                                &hits,
-                                first + index,
-                                count,
-                                seed,
-                            )
+                            self.ray_bundles
+                                .record(cmd, gpu_scene, &gbuffer, &vertices, &hits, index, count)
                         })?;
                     }
                     let c = Chunk {
-                        first_iteration: first + index,
                         first_index: index,
                         count,
                         per_frame,
@@ -208,7 +200,6 @@ impl Bundles {
                             &hits,
                             &accumulation,
                             &c,
-                            seed,
                             settings.strategy,
                             settings.beta,
                             two_bounce,

@@ -16,11 +16,9 @@ use super::Strategy;
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
 struct ShadeParams {
-    first_iteration: u32,
     first_index: u32,
     count: u32,
     per_frame: u32,
-    seed: u32,
     strategy: u32,
     beta: f32,
     two_bounce: f32,
@@ -28,9 +26,7 @@ struct ShadeParams {
 
 /// What one chunk of iterations shades.
 pub struct Chunk {
-    /// k of the chunk's first iteration.
-    pub first_iteration: u32,
-    /// Its index among the frame's light vertices.
+    /// The chunk's first iteration, as an index among the frame's light vertices.
     pub first_index: u32,
     pub count: u32,
     /// Iterations per frame: each adds 1 / per_frame of its estimate.
@@ -56,7 +52,6 @@ impl ShadeBundlePaths {
         hits: &'a Buffer<BundleHit>,
         accumulation: &'a Accumulation,
         chunk: &Chunk,
-        seed: u32,
         strategy: Strategy,
         beta: f32,
         two_bounce: Option<f32>,
@@ -67,11 +62,9 @@ impl ShadeBundlePaths {
         bindings.push(bind("LightVertices", vertices));
         bindings.push(bind("BundleHits", hits));
         let params = ShadeParams {
-            first_iteration: chunk.first_iteration,
             first_index: chunk.first_index,
             count: chunk.count,
             per_frame: chunk.per_frame,
-            seed,
             strategy: match strategy {
                 Strategy::Vpl => 0,
                 Strategy::Bundle => 1,

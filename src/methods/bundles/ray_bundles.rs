@@ -9,6 +9,8 @@ use crate::gpu::{bind, Buffer, Commands, Context, GpuResult, Kernel};
 use crate::methods::gbuffer::GBuffer;
 use crate::scene::gpu::GpuScene;
 
+use super::light_vertices::LightVertex;
+
 /// One bundle ray's first hit as glsl/include/bundles.glsl lays it out.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
@@ -22,8 +24,7 @@ pub struct BundleHit {
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
 struct BundleParams {
-    first_iteration: u32,
-    seed: u32,
+    first_index: u32,
 }
 
 pub struct TraceRayBundles(Kernel);
@@ -33,27 +34,25 @@ impl TraceRayBundles {
         Ok(TraceRayBundles(Kernel::new(ctx, "trace_ray_bundles")?))
     }
 
-    /// Traces iterations first_iteration.. first_iteration + count into `hits` (count times
-    /// the pixel count entries, iteration-major).
+    /// Traces the bundles of `vertices[first_index..first_index + count]` into `hits` (count
+    /// times the pixel count entries, iteration-major).
     #[allow(clippy::too_many_arguments)]
     pub fn record<'a>(
         &'a self,
         cmd: &mut Commands<'a>,
         scene: &'a GpuScene,
         gbuffer: &'a GBuffer,
+        vertices: &'a Buffer<LightVertex>,
         hits: &'a Buffer<BundleHit>,
-        first_iteration: u32,
+        first_index: u32,
         count: u32,
-        seed: u32,
     ) -> GpuResult<()> {
         let mut bindings = scene.bindings();
         bindings.push(bind("GBuffer", &gbuffer.texels));
+        bindings.push(bind("LightVertices", vertices));
         bindings.push(bind("BundleHits", hits));
         let [x, y, _] = scene.image_workgroups();
-        let params = BundleParams {
-            first_iteration,
-            seed,
-        };
+        let params = BundleParams { first_index };
         self.0.dispatch(cmd, &bindings, &params, [x, y, count])
     }
 }
