@@ -22,6 +22,7 @@ layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 #include "gbuffer.glsl"
 #include "radiance.glsl"
 #include "bundles.glsl"
+#include "roughness_clamp.glsl"
 
 layout(push_constant) uniform ShadeParams {
     uint first_index;      // the chunk's first iteration, as an index into LightVertices
@@ -30,11 +31,17 @@ layout(push_constant) uniform ShadeParams {
     uint strategy;         // 0 vpl, 1 bundle, 2 mis
     float beta;            // power heuristic exponent (1: balance)
     float two_bounce;      // < 0: off; 0: unclamped; > 0: clamp of the x1-x2 geometry term
+    uint samples;          // N: iterations in the whole render (the sample count of Eq. 14-16)
+    uint suppression;      // glossy spike suppression of the one-bounce paths: 0 none,
+                           // 1 roughness clamping (Section 5), 2 plain contribution clamping
+    float suppression_parameter;  // roughness: m'; contribution: the largest channel allowed
 } params;
 
 #define STRATEGY_VPL 0u
 #define STRATEGY_BUNDLE 1u
 #define STRATEGY_MIS 2u
+#define SUPPRESS_ROUGHNESS 1u
+#define SUPPRESS_CONTRIBUTION 2u
 
 float mis_weight(float p_this, float p_other) {
     if (params.strategy != STRATEGY_MIS) return 1.0;
@@ -46,6 +53,25 @@ float mis_weight(float p_this, float p_other) {
 
 bool any_positive(vec3 c) {
     return max(max(c.r, c.g), c.b) > 0.0;
+}
+
+// Section 5.2: the solid-angle densities of the samples through x_j, Eq. 15-16: N times the
+// area density with which the strategies in use sample x_j (p1 + p2 under MIS), seen from x0
+// (dist0^2 / cos0 at x_j) and from x3 (dist3^2 / cos3).
+void edge_densities(float p_this, float p_other, float dist0_2, float cos0, float dist3_2,
+                    float cos3, out float d_j0, out float d_j3) {
+    float area = float(params.samples) *
+                 (params.strategy == STRATEGY_MIS ? p_this + p_other : p_this);
+    d_j0 = area * dist0_2 / cos0;
+    d_j3 = area * dist3_2 / cos3;
+}
+
+// Plain clamping (the baseline of Section 5): the largest channel of a path's weighted
+// contribution at most the parameter.
+vec3 clamp_contribution(vec3 c) {
+    if (params.suppression != SUPPRESS_CONTRIBUTION) return c;
+    float peak = max(max(c.r, c.g), c.b);
+    return peak > params.suppression_parameter ? c * (params.suppression_parameter / peak) : c;
 }
 
 void main() {
@@ -83,14 +109,24 @@ void main() {
             float cos1 = -dot(n1, w31);
             float cos1g = -dot(side1, w31);
             if (dist2 > 0.0 && cos3 > 0.0 && dot(side3, w31) > 0.0 && cos1 > 0.0 && cos1g > 0.0) {
-                vec3 c = lv.power.rgb * bsdf_eval(m1, n1, w10, -w31) * bsdf_eval(m3, n3, wo3, w31)
-                         * (cos1 * cos3 / dist2);
+                float p1 = lv.side.w;
+                float p2 = p_r * cos1g / dist2;
+                Material m1s = m1;
+                Material m3s = m3;
+                if (params.suppression == SUPPRESS_ROUGHNESS) {
+                    vec3 e = x0 - x1;
+                    float d_j0, d_j3;
+                    edge_densities(p1, p2, dot(e, e), dot(side1, w10), dist2, cos1g, d_j0, d_j3);
+                    float m_prime = params.suppression_parameter;
+                    m1s = clamp_roughness(m1, combine_densities(d_j0, d_j3), dot(n1, w10), m_prime);
+                    m3s = clamp_roughness(m3, d_j3, cos3, m_prime);
+                }
+                vec3 c = lv.power.rgb * bsdf_eval(m1s, n1, w10, -w31) *
+                         bsdf_eval(m3s, n3, wo3, w31) * (cos1 * cos3 / dist2);
                 if (any_positive(c)) {
                     vec3 target = offset_origin(x1, side1);
                     if (!trace_any(origin3, target - origin3, 0.9999)) {
-                        float p1 = lv.side.w;
-                        float p2 = p_r * cos1g / dist2;
-                        sum += c * mis_weight(p1, p2);
+                        sum += clamp_contribution(c * mis_weight(p1, p2));
                     }
                 }
             }
@@ -125,13 +161,22 @@ void main() {
             float cos2 = dot(n2, w20);
             float cos2g = dot(side2, w20);
             if (dist2 > 0.0 && cos2 > 0.0 && cos2g > 0.0) {
+                float p1 = emission_pdf(l, -w20) * cos2g / dist2;
+                float p2 = p_r * cos2g_3 / (t * t);
+                Material m2s = m2;
+                vec3 f3s = f3;
+                if (params.suppression == SUPPRESS_ROUGHNESS) {
+                    float d_j0, d_j3;
+                    edge_densities(p2, p1, dist2, cos2g, t * t, cos2g_3, d_j0, d_j3);
+                    float m_prime = params.suppression_parameter;
+                    m2s = clamp_roughness(m2, combine_densities(d_j0, d_j3), cos2, m_prime);
+                    f3s = bsdf_eval(clamp_roughness(m3, d_j3, cos3, m_prime), n3, wo3, d);
+                }
                 float profile = emission_profile(l, -w20);
                 vec3 c = l.intensity.rgb * (profile * cos2 / (dist2 * lv.power.w * p_r))
-                         * bsdf_eval(m2, n2, -d, w20) * f3 * cos3;
+                         * bsdf_eval(m2s, n2, -d, w20) * f3s * cos3;
                 if (any_positive(c) && !trace_any(origin2, x0 - origin2, 0.9999)) {
-                    float p1 = emission_pdf(l, -w20) * cos2g / dist2;
-                    float p2 = p_r * cos2g_3 / (t * t);
-                    sum += c * mis_weight(p2, p1);
+                    sum += clamp_contribution(c * mis_weight(p2, p1));
                 }
             }
         }

@@ -9,7 +9,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 
 use irad::bench::scan as scan_bench;
 use irad::gpu::{self, Context, ContextOptions, DeviceInfo, DeviceSelector, Validation};
-use irad::methods::bundles::{BundlesSettings, Strategy as BundlesStrategy};
+use irad::methods::bundles::{BundlesSettings, Strategy as BundlesStrategy, Suppression};
 use irad::methods::gbuffer::PixelSampling;
 use irad::methods::ir::schedule::Absorption;
 use irad::methods::ir::{DirectLight, IrSettings};
@@ -145,6 +145,17 @@ struct RenderArgs {
     /// (the paper's clamp: a bias, recorded in the JSON); 0 leaves it unclamped.
     #[arg(long, default_value_t = 10.0)]
     two_bounce_clamp: f32,
+    /// bundles: glossy spike suppression of the one-bounce paths (Tokuyoshi Section 5, each a
+    /// named bias): clamp the Phong exponent per sample by the density of samples around it
+    /// (roughness), clamp each path's contribution (clamp), or none.
+    #[arg(long, value_enum, default_value_t = GlossyArg::Roughness)]
+    glossy: GlossyArg,
+    /// bundles --glossy roughness: the paper's m' (neighbours per kernel; larger blurs more).
+    #[arg(long, default_value_t = 16.0)]
+    roughness_m: f32,
+    /// bundles --glossy clamp: the largest channel a path's contribution may have.
+    #[arg(long, default_value_t = 1.0)]
+    contribution_clamp: f32,
     /// bir: camera points per frame the reverse VPLs start from (the M of Segovia's Eq. 7).
     #[arg(long, default_value_t = 50, value_parser = clap::value_parser!(u32).range(1..=65536))]
     pool: u32,
@@ -241,6 +252,13 @@ enum StrategyArg {
 enum HeuristicArg {
     Balance,
     Power,
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum GlossyArg {
+    None,
+    Roughness,
+    Clamp,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -553,6 +571,18 @@ fn render(options: &ContextOptions, args: RenderArgs) -> Result<()> {
                 args.two_bounce_clamp
             )
         }
+        MethodArg::Bundles
+            if !(args.roughness_m.is_finite()
+                && args.roughness_m >= 0.0
+                && args.contribution_clamp.is_finite()
+                && args.contribution_clamp >= 0.0) =>
+        {
+            bail!(
+                "--roughness-m {} / --contribution-clamp {}: each must be a finite number >= 0",
+                args.roughness_m,
+                args.contribution_clamp
+            )
+        }
         MethodArg::Bundles => Method::Bundles(BundlesSettings {
             iterations: args.iterations,
             frames: args.frames,
@@ -569,6 +599,15 @@ fn render(options: &ContextOptions, args: RenderArgs) -> Result<()> {
             },
             two_bounce: args.two_bounce == OnOff::On,
             two_bounce_clamp: args.two_bounce_clamp,
+            suppression: match args.glossy {
+                GlossyArg::None => Suppression::None,
+                GlossyArg::Roughness => Suppression::Roughness {
+                    m_prime: args.roughness_m,
+                },
+                GlossyArg::Clamp => Suppression::Contribution {
+                    max: args.contribution_clamp,
+                },
+            },
             pixels,
         }),
     };

@@ -13,7 +13,7 @@ use thiserror::Error;
 use crate::gpu::{Context, GpuError};
 use crate::methods::bir::{Bir, BirError, BirSettings, Strategy};
 use crate::methods::bundles::{
-    Bundles, BundlesError, BundlesSettings, Strategy as BundlesStrategy,
+    Bundles, BundlesError, BundlesSettings, Strategy as BundlesStrategy, Suppression,
 };
 use crate::methods::gbuffer::PixelSampling;
 use crate::methods::ir::schedule::Absorption;
@@ -171,6 +171,16 @@ impl Method {
                     // 0: unclamped (the clamp is a named, measured bias).
                     p.insert("two_bounce_clamp".into(), json!(s.two_bounce_clamp));
                 }
+                p.insert("glossy".into(), json!(s.suppression.name()));
+                match s.suppression {
+                    Suppression::None => {}
+                    Suppression::Roughness { m_prime } => {
+                        p.insert("roughness_m".into(), json!(m_prime));
+                    }
+                    Suppression::Contribution { max } => {
+                        p.insert("contribution_clamp".into(), json!(max));
+                    }
+                }
                 p.insert(
                     "pixel_centres".into(),
                     json!(s.pixels == PixelSampling::Centres),
@@ -185,7 +195,8 @@ impl Method {
     /// pixel_centres, seed; ir takes vpls, frames, absorption, clamp, interleave, direct,
     /// pixel_centres, seed; bir takes vpls, frames, strategy, pool, light_samples, ratio,
     /// floor, power_samples, batch, pixel_centres, seed; bundles takes iterations, frames,
-    /// strategy, heuristic, two_bounce, two_bounce_clamp, pixel_centres, seed.
+    /// strategy, heuristic, two_bounce, two_bounce_clamp, glossy, roughness_m,
+    /// contribution_clamp, pixel_centres, seed.
     pub fn from_params(name: &str, params: &toml::Table) -> Result<Method, ParamError> {
         let mut reader = Params {
             method: name,
@@ -268,6 +279,19 @@ impl Method {
                     two_bounce: reader.flag("two_bounce", d.two_bounce)?,
                     two_bounce_clamp: reader
                         .non_negative("two_bounce_clamp", d.two_bounce_clamp)?,
+                    suppression: {
+                        let m_prime = reader.non_negative("roughness_m", 16.0)?;
+                        let max = reader.non_negative("contribution_clamp", 1.0)?;
+                        match reader.choice("glossy", &["none", "roughness", "clamp"])? {
+                            Some("none") => Suppression::None,
+                            Some("clamp") => Suppression::Contribution { max },
+                            Some(_) => Suppression::Roughness { m_prime },
+                            None => match d.suppression {
+                                Suppression::Roughness { .. } => Suppression::Roughness { m_prime },
+                                other => other,
+                            },
+                        }
+                    },
                     pixels: reader.pixels()?,
                 })
             }
@@ -406,6 +430,9 @@ impl<'a> Params<'a> {
                 "heuristic",
                 "two_bounce",
                 "two_bounce_clamp",
+                "glossy",
+                "roughness_m",
+                "contribution_clamp",
                 "pixel_centres",
             ],
             _ => &[
@@ -565,7 +592,7 @@ mod tests {
     fn bundles_parameters_read_back() {
         let bundles = Method::from_params(
             "bundles",
-            &table("iterations = 5\nframes = 2\nstrategy = \"vpl\"\nheuristic = \"power\"\ntwo_bounce = true\ntwo_bounce_clamp = 3.5\npixel_centres = true"),
+            &table("iterations = 5\nframes = 2\nstrategy = \"vpl\"\nheuristic = \"power\"\ntwo_bounce = true\ntwo_bounce_clamp = 3.5\nglossy = \"clamp\"\ncontribution_clamp = 2.5\npixel_centres = true"),
         )
         .unwrap();
         let back: toml::Table = bundles

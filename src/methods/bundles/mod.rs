@@ -49,6 +49,32 @@ impl Strategy {
     }
 }
 
+/// Glossy spike suppression of the one-bounce paths (Tokuyoshi 12 Section 5): each a named,
+/// measured bias.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Suppression {
+    None,
+    /// Clamp the Phong exponent per sample by the density of samples around it (Eq. 9-17),
+    /// with the paper's m' (16).
+    Roughness {
+        m_prime: f32,
+    },
+    /// Clamp each path's weighted contribution at this value (largest channel).
+    Contribution {
+        max: f32,
+    },
+}
+
+impl Suppression {
+    pub fn name(self) -> &'static str {
+        match self {
+            Suppression::None => "none",
+            Suppression::Roughness { .. } => "roughness",
+            Suppression::Contribution { .. } => "clamp",
+        }
+    }
+}
+
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BundlesSettings {
     /// I: VPLs and bundles per frame (one of each per iteration).
@@ -63,6 +89,7 @@ pub struct BundlesSettings {
     pub two_bounce: bool,
     /// Clamp of their x1-x2 geometry term (the paper's named bias); 0 leaves it unclamped.
     pub two_bounce_clamp: f32,
+    pub suppression: Suppression,
     pub pixels: PixelSampling,
 }
 
@@ -76,6 +103,7 @@ impl Default for BundlesSettings {
             beta: 1.0,
             two_bounce: true,
             two_bounce_clamp: 10.0,
+            suppression: Suppression::Roughness { m_prime: 16.0 },
             pixels: PixelSampling::Jittered,
         }
     }
@@ -190,6 +218,7 @@ impl Bundles {
                         first_index: index,
                         count,
                         per_frame,
+                        samples: per_frame * frames,
                     };
                     cmd.pass("bundle paths", |cmd| {
                         self.paths.record(
@@ -203,6 +232,7 @@ impl Bundles {
                             settings.strategy,
                             settings.beta,
                             two_bounce,
+                            settings.suppression,
                         )
                     })?;
                     index += count;

@@ -11,7 +11,7 @@ use crate::scene::gpu::GpuScene;
 
 use super::light_vertices::LightVertex;
 use super::ray_bundles::BundleHit;
-use super::Strategy;
+use super::{Strategy, Suppression};
 
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
@@ -22,6 +22,9 @@ struct ShadeParams {
     strategy: u32,
     beta: f32,
     two_bounce: f32,
+    samples: u32,
+    suppression: u32,
+    suppression_parameter: f32,
 }
 
 /// What one chunk of iterations shades.
@@ -31,6 +34,8 @@ pub struct Chunk {
     pub count: u32,
     /// Iterations per frame: each adds 1 / per_frame of its estimate.
     pub per_frame: u32,
+    /// Iterations in the whole render: the N of the sample densities (Section 5.2).
+    pub samples: u32,
 }
 
 pub struct ShadeBundlePaths(Kernel);
@@ -41,7 +46,8 @@ impl ShadeBundlePaths {
     }
 
     /// `two_bounce`: None leaves the two-bounce paths out; Some(0) shades them unclamped,
-    /// Some(g) clamps their x1-x2 geometry term at g.
+    /// Some(g) clamps their x1-x2 geometry term at g. `suppression` applies to the one-bounce
+    /// paths.
     #[allow(clippy::too_many_arguments)]
     pub fn record<'a>(
         &'a self,
@@ -55,6 +61,7 @@ impl ShadeBundlePaths {
         strategy: Strategy,
         beta: f32,
         two_bounce: Option<f32>,
+        suppression: Suppression,
     ) -> GpuResult<()> {
         let mut bindings = scene.bindings();
         bindings.push(bind("GBuffer", &gbuffer.texels));
@@ -72,6 +79,17 @@ impl ShadeBundlePaths {
             },
             beta,
             two_bounce: two_bounce.map_or(-1.0, |g| g.max(0.0)),
+            samples: chunk.samples,
+            suppression: match suppression {
+                Suppression::None => 0,
+                Suppression::Roughness { .. } => 1,
+                Suppression::Contribution { .. } => 2,
+            },
+            suppression_parameter: match suppression {
+                Suppression::None => 0.0,
+                Suppression::Roughness { m_prime } => m_prime,
+                Suppression::Contribution { max } => max,
+            },
         };
         self.0
             .dispatch(cmd, &bindings, &params, scene.image_workgroups())
