@@ -1,25 +1,29 @@
-//! bir's strategies across many seeds on one scene: the figures behind issue 6's U office
-//! comparison (standard-only against `both` and reverse-only at an equal VPL budget).
+//! Any method across many seeds on one scene: the image mean against the reference's, relMSE
+//! against a split reference, GPU time and the method's stats, averaged over seeds. The figures
+//! behind issue 6's U office comparison and issue 7's environment and roulette checks.
 //!
-//!   cargo run --release --example bir_strategies -- SCENE.toml WIDTHxHEIGHT SEEDS REF_SPP \
-//!       "strategy=both,vpls=256,frames=8" "strategy=standard,vpls=26,frames=8,ratio=0" ...
+//!   cargo run --release --example method_seeds -- SCENE.toml WIDTHxHEIGHT SEEDS REF_SPP \
+//!       REF_DEPTH "bir:strategy=both,vpls=256,frames=8" "bundles:directions=uniform" ...
 //!
-//! The reference is two path-traced renders of REF_SPP samples each (seeds 77 and 78), cached
-//! next to the scene as bir_strategies_ref_{77,78}_WxH_SPP.exr. Each configuration (comma-
-//! separated `key=value` over BirSettings: strategy, vpls, frames, ratio, floor, pool,
-//! power_samples, light_samples, depth, connections, batch, adaptive) renders with seeds
-//! 1000.. and prints the image mean relative to the reference's (mean and standard error over
-//! seeds), relMSE against the split reference (metrics::rel_mse_against_split_reference: the
-//! references' own noise taken out) as mean, median and max over seeds, and bir's stats
-//! averaged. Unclamped VPLs have an infinite-variance per-pixel estimator wherever a VPL can
-//! land arbitrarily close to a visible surface, so the mean of relMSE over seeds is dominated
-//! by its largest seed and the median is the stable figure of a typical render.
+//! The reference is two path-traced renders of REF_SPP samples each (seeds 77 and 78) with at
+//! most REF_DEPTH scattering events (1: direct light; 1024: all), at pixel centres when a
+//! configuration asks for `pixel_centres=true`, cached next to the scene as
+//! method_seeds_ref_{77,78}_WxH_SPP_dDEPTH[_centres].exr. Each configuration is METHOD:PARAMS,
+//! PARAMS comma-separated key=value pairs as in suite files (Method::from_params: numbers,
+//! true/false, or bare words for choices); it renders with seeds 1000.. and prints the image
+//! mean relative to the reference's (mean and standard error over seeds), relMSE against the
+//! split reference (metrics::rel_mse_against_split_reference: the references' own noise taken
+//! out) as mean, median and max over seeds, and the method's stats averaged. Unclamped VPLs have
+//! an infinite-variance per-pixel estimator wherever a VPL can land arbitrarily close to a
+//! visible surface, so the mean of relMSE over seeds is dominated by its largest seed and the
+//! median is the stable figure of a typical render.
 
 use std::path::{Path, PathBuf};
 
 use irad::gpu::{Context, ContextOptions, Validation};
 use irad::image::{exr, metrics, Image};
-use irad::methods::bir::{Bir, BirSettings, Strategy};
+use irad::methods::gbuffer::PixelSampling;
+use irad::methods::method::{Method, Renderers};
 use irad::methods::reference::{Reference, ReferenceSettings};
 use irad::scene::gpu::GpuScene;
 
@@ -34,41 +38,33 @@ fn mean_and_stderr(values: &[f64]) -> (f64, f64) {
     (mean, (var / n).sqrt())
 }
 
-fn settings(config: &str) -> Result<BirSettings, String> {
-    let mut s = BirSettings::default();
-    for kv in config.split(',').filter(|kv| !kv.is_empty()) {
+/// METHOD:key=value,... as a Method.
+fn method(config: &str) -> Result<Method, String> {
+    let (name, params) = config.split_once(':').unwrap_or((config, ""));
+    let mut table = toml::Table::new();
+    for kv in params.split(',').filter(|kv| !kv.is_empty()) {
         let (key, value) = kv
             .split_once('=')
             .ok_or_else(|| format!("`{kv}` in `{config}` is not key=value"))?;
-        let bad = |e: &dyn std::fmt::Display| format!("{key}={value}: {e}");
-        let int = || value.parse::<u32>().map_err(|e| bad(&e));
-        match key {
-            "strategy" => {
-                s.strategy = match value {
-                    "standard" => Strategy::Standard,
-                    "reverse" => Strategy::Reverse,
-                    "both" => Strategy::Both,
-                    _ => return Err(bad(&"expected standard, reverse or both")),
-                }
-            }
-            "vpls" => s.vpls = int()?,
-            "frames" => s.frames = int()?,
-            "ratio" => s.ratio = int()?,
-            "pool" => s.pool = int()?,
-            "power_samples" => s.power_samples = int()?,
-            "light_samples" => s.light_samples = int()?,
-            "depth" => s.depth = int()?,
-            "connections" => s.connections = int()?,
-            "batch" => s.batch = int()?,
-            "floor" => s.floor = value.parse().map_err(|e| bad(&e))?,
-            "adaptive" => s.adaptive = value == "1" || value == "true",
-            _ => return Err(format!("unknown key `{key}` in `{config}`")),
-        }
+        let parsed = format!("v = {value}")
+            .parse::<toml::Table>()
+            .ok()
+            .and_then(|mut t| t.remove("v"))
+            .unwrap_or_else(|| toml::Value::String(value.to_string()));
+        table.insert(key.to_string(), parsed);
     }
-    Ok(s)
+    Method::from_params(name, &table).map_err(|e| e.to_string())
 }
 
-fn reference(ctx: &Context, gpu: &GpuScene, path: &Path, spp: u32, seed: u32) -> Image {
+fn reference(
+    ctx: &Context,
+    gpu: &GpuScene,
+    path: &Path,
+    spp: u32,
+    max_depth: u32,
+    pixels: PixelSampling,
+    seed: u32,
+) -> Image {
     if let Ok(image) = exr::read(path) {
         return image;
     }
@@ -76,6 +72,8 @@ fn reference(ctx: &Context, gpu: &GpuScene, path: &Path, spp: u32, seed: u32) ->
     let settings = ReferenceSettings {
         spp,
         seed,
+        max_depth,
+        pixels,
         ..Default::default()
     };
     let out = Reference::new(ctx)
@@ -87,8 +85,10 @@ fn reference(ctx: &Context, gpu: &GpuScene, path: &Path, spp: u32, seed: u32) ->
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    if args.len() < 5 {
-        eprintln!("usage: bir_strategies SCENE.toml WIDTHxHEIGHT SEEDS REF_SPP CONFIG...");
+    if args.len() < 6 {
+        eprintln!(
+            "usage: method_seeds SCENE.toml WIDTHxHEIGHT SEEDS REF_SPP REF_DEPTH METHOD:PARAMS..."
+        );
         std::process::exit(2);
     }
     let scene_path = PathBuf::from(&args[0]);
@@ -96,12 +96,25 @@ fn main() {
         .split_once('x')
         .and_then(|(w, h)| Some((w.parse::<u32>().ok()?, h.parse::<u32>().ok()?)))
         .unwrap_or_else(|| panic!("size `{}`: expected WIDTHxHEIGHT", args[1]));
-    let seeds: u32 = args[2].parse().expect("SEEDS: a count");
+    let seeds: u32 = args[2]
+        .parse()
+        .ok()
+        .filter(|&n| n > 0)
+        .unwrap_or_else(|| panic!("SEEDS `{}`: expected a count of at least 1", args[2]));
     let ref_spp: u32 = args[3].parse().expect("REF_SPP: samples per pixel");
-    let configs: Vec<(String, BirSettings)> = args[4..]
+    let ref_depth: u32 = args[4].parse().expect("REF_DEPTH: most scattering events");
+    let configs: Vec<(String, Method)> = args[5..]
         .iter()
-        .map(|c| (c.clone(), settings(c).unwrap_or_else(|e| panic!("{e}"))))
+        .map(|c| (c.clone(), method(c).unwrap_or_else(|e| panic!("{e}"))))
         .collect();
+    let centres = configs
+        .iter()
+        .any(|(_, m)| m.parameters().get("pixel_centres") == Some(&serde_json::json!(true)));
+    let pixels = if centres {
+        PixelSampling::Centres
+    } else {
+        PixelSampling::Jittered
+    };
 
     let ctx = Context::new(&ContextOptions {
         device: None,
@@ -114,11 +127,12 @@ fn main() {
     let gpu = GpuScene::upload(&ctx, &scene).expect("scene upload");
     let cache = |seed: u32| {
         scene_path.with_file_name(format!(
-            "bir_strategies_ref_{seed}_{width}x{height}_{ref_spp}.exr"
+            "method_seeds_ref_{seed}_{width}x{height}_{ref_spp}_d{ref_depth}{}.exr",
+            if centres { "_centres" } else { "" }
         ))
     };
-    let a = reference(&ctx, &gpu, &cache(77), ref_spp, 77);
-    let b = reference(&ctx, &gpu, &cache(78), ref_spp, 78);
+    let a = reference(&ctx, &gpu, &cache(77), ref_spp, ref_depth, pixels, 77);
+    let b = reference(&ctx, &gpu, &cache(78), ref_spp, ref_depth, pixels, 78);
     let own = metrics::compare(&a, &b).unwrap().rel_mse / 4.0;
     let mut r = a.clone();
     for (p, q) in r.pixels.iter_mut().zip(&b.pixels) {
@@ -137,17 +151,13 @@ fn main() {
         scene_path.display(),
         metrics::rel_mse_against_split_reference(&black, &a, &b).unwrap()
     );
-    let bir = Bir::new(&ctx).expect("bir kernels");
+    let renderers = Renderers::default();
     for (name, base) in &configs {
         let (mut means, mut errors, mut gpu_ms) = (vec![], vec![], 0.0);
         let mut stats: Vec<(String, f64)> = vec![];
         for seed in 0..seeds {
-            let s = BirSettings {
-                seed: 1000 + seed,
-                ..*base
-            };
-            let out = bir
-                .render(&ctx, &scene, &gpu, &s, |_, _| {})
+            let out = renderers
+                .run(&ctx, &base.with_seed(1000 + seed), &scene, &gpu, |_, _| {})
                 .unwrap_or_else(|e| panic!("{name}: {e}"));
             means.push(luminance_mean(&out.image) / r_mean);
             errors.push(metrics::rel_mse_against_split_reference(&out.image, &a, &b).unwrap());
