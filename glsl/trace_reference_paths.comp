@@ -26,6 +26,8 @@ layout(push_constant) uniform PathParams {
     uint seed;
     uint max_depth;       // most scattering events per path (pbrt's maxdepth)
     uint roulette_depth;  // first bounce at which Russian roulette may end the path
+    uint environment;     // 0: the environment is seen by the camera only, not reflected (a
+                          // method that estimates its reflection itself: bundles)
 } params;
 
 const uint DIMENSIONS_PER_BOUNCE = 8u;
@@ -49,12 +51,23 @@ void main() {
     vec3 ng = g.geometric_normal.xyz;
     uint mat = floatBitsToUint(g.shading_normal.w);
 
+    // Lights next-event estimation draws from: all, or, with the environment left out, the
+    // entries before its own (the last), whose share of the table is `mass`.
+    uint entries = scene.size.z;
+    uint bound = 0x80000000u;
+    if (params.environment == 0u && scene.env.x > 0.0) {
+        entries -= 1u;
+        bound = entries == 0u ? 0u : light_entries[entries - 1u].upper;
+    }
+    float mass = float(bound) / 2147483648.0;
+
     vec3 L = vec3(0.0);
     vec3 beta = vec3(1.0);
     float bsdf_pdf_prev = 0.0;
 
     for (uint depth = 0u;; ++depth) {
         if (!found) {
+            if (depth > 0u && params.environment == 0u) break;
             vec3 le = env_radiance(dir);
             if (max_component(le) > 0.0) {
                 float w = depth == 0u ? 1.0 : power_heuristic(bsdf_pdf_prev, light_pdf_environment(dir));
@@ -65,7 +78,8 @@ void main() {
         Material m = materials[mat];
         vec3 wo = -dir;
         if (m.ke.w > 0.0 && dot(wo, ng) > 0.0) {
-            float w = depth == 0u ? 1.0 : power_heuristic(bsdf_pdf_prev, light_pdf_triangle(tri, dir, t));
+            float light_pdf = mass > 0.0 ? light_pdf_triangle(tri, dir, t) / mass : 0.0;
+            float w = depth == 0u ? 1.0 : power_heuristic(bsdf_pdf_prev, light_pdf);
             L += beta * m.ke.rgb * w;
         }
         if (depth >= params.max_depth) break;
@@ -81,7 +95,11 @@ void main() {
         uint r_texel = random_u31(params.seed, index, params.frame, dim + 7u);
         vec2 u_light = vec2(random(params.seed, index, params.frame, dim + 1u),
                             random(params.seed, index, params.frame, dim + 2u));
-        if (sample_light(p, r_select, r_texel, u_light, ls)) {
+        if (bound < 0x80000000u) {
+            // Rescaled below the bound (select_light_among keeps it among the first entries).
+            r_select = bound == 0u ? 0u : min(uint(float(r_select) * mass), bound - 1u);
+        }
+        if (sample_light_among(p, r_select, entries, mass, r_texel, u_light, ls)) {
             float cos_i = dot(ls.direction, n);
             if (cos_i > 0.0 && dot(ls.direction, side) > 0.0) {
                 vec3 f = bsdf_eval(m, n, wo, ls.direction);

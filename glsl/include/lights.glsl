@@ -18,14 +18,19 @@ struct LightSample {
     bool delta;
 };
 
-uint select_light(uint r) {
+// The entry among the first `count` whose range holds r (r below the count-th's lower bound).
+uint select_light_among(uint r, uint count) {
     uint lo = 0u;
-    uint hi = scene.size.z - 1u;
+    uint hi = count - 1u;
     while (lo < hi) {
         uint mid = (lo + hi) / 2u;
         if (r < light_entries[mid].upper) hi = mid; else lo = mid + 1u;
     }
     return lo;
+}
+
+uint select_light(uint r) {
+    return select_light_among(r, scene.size.z);
 }
 
 // pbrt-v4 SpotLight::I: smoothstep from cos(falloff) to cos(cone).
@@ -40,14 +45,18 @@ float spot_falloff(Light l, vec3 from_light) {
 // Samples a light for shading point p; false when the sample carries nothing (a triangle seen
 // from behind, zero pdf). The 31-bit integer r_select picks the light, r_texel the
 // environment's texel, u places the point on the chosen light; all independent.
-bool sample_light(vec3 p, uint r_select, uint r_texel, vec2 u, out LightSample s) {
+// sample_light_among draws from the first `count` entries only, r_select below the upper bound
+// of the last of them, whose share of the table is `mass` (the pdfs are divided by it).
+bool sample_light_among(vec3 p, uint r_select, uint count, float mass, uint r_texel, vec2 u,
+                        out LightSample s) {
     s.delta = false;
     s.radiance = vec3(0.0);
     s.pdf = 0.0;
     s.distance = 0.0;
     s.direction = vec3(0.0, 1.0, 0.0);
-    if (scene.size.z == 0u) return false;
-    LightEntry e = light_entries[select_light(r_select)];
+    if (count == 0u || !(mass > 0.0)) return false;
+    LightEntry e = light_entries[select_light_among(r_select, count)];
+    e.probability /= mass;
     if (e.kind == 0u) {
         EmitterTriangle t = emitter_triangles[e.index];
         vec2 b = sample_uniform_triangle(u);
@@ -82,6 +91,10 @@ bool sample_light(vec3 p, uint r_select, uint r_texel, vec2 u, out LightSample s
     s.pdf = e.probability;
     s.delta = true;
     return falloff > 0.0;
+}
+
+bool sample_light(vec3 p, uint r_select, uint r_texel, vec2 u, out LightSample s) {
+    return sample_light_among(p, r_select, scene.size.z, 1.0, r_texel, u, s);
 }
 
 // Solid-angle pdf with which sample_light picks the point hit at distance t along unit

@@ -23,7 +23,8 @@ impl GBufferAndDirectLight {
         })
     }
 
-    /// Records the passes "gbuffer" and "direct light" of `frame`.
+    /// Records the passes "gbuffer" and "direct light" of `frame`; `reflected_environment`
+    /// false leaves the environment's direct light out (bundles estimates it).
     #[allow(clippy::too_many_arguments)]
     pub fn record<'a>(
         &'a self,
@@ -35,6 +36,7 @@ impl GBufferAndDirectLight {
         seed: u32,
         pixels: PixelSampling,
         max_depth: u32,
+        reflected_environment: bool,
     ) -> GpuResult<()> {
         cmd.pass("gbuffer", |cmd| {
             self.gbuffer
@@ -50,6 +52,7 @@ impl GBufferAndDirectLight {
                 seed,
                 max_depth,
                 u32::MAX,
+                reflected_environment,
             )
         })
     }

@@ -2,7 +2,8 @@
 //! its estimate into the accumulation. The reference runs it with a deep `max_depth`; the
 //! many-light methods run it with `max_depth` 1 for direct light (emission plus next-event
 //! estimation and BSDF sampling, MIS-combined), so they differ only in indirect light, or 0
-//! for the emission the camera sees.
+//! for the emission the camera sees. `reflected_environment` false leaves the environment's
+//! light on surfaces out (the camera still sees the map) for a method that estimates it itself.
 
 use bytemuck::{Pod, Zeroable};
 
@@ -19,6 +20,7 @@ struct PathParams {
     seed: u32,
     max_depth: u32,
     roulette_depth: u32,
+    environment: u32,
 }
 
 pub struct TracePaths(Kernel);
@@ -39,6 +41,7 @@ impl TracePaths {
         seed: u32,
         max_depth: u32,
         roulette_depth: u32,
+        reflected_environment: bool,
     ) -> GpuResult<()> {
         let mut bindings = scene.bindings();
         bindings.push(bind("GBuffer", &gbuffer.texels));
@@ -48,6 +51,7 @@ impl TracePaths {
             seed,
             max_depth,
             roulette_depth,
+            environment: reflected_environment as u32,
         };
         self.0
             .dispatch(cmd, &bindings, &params, scene.image_workgroups())

@@ -84,6 +84,7 @@ impl Reference {
                         settings.seed,
                         settings.max_depth,
                         settings.roulette_depth,
+                        true,
                     )
                 })
             },

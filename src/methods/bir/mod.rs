@@ -276,6 +276,7 @@ impl Bir {
                     settings.seed,
                     settings.pixels,
                     1,
+                    true,
                 )?;
                 // Once per render, on the first frame's G-buffer: the table only steers which
                 // lights start paths (each walk divides by the probability it used), so it

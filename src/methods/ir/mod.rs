@@ -143,6 +143,7 @@ impl InstantRadiosity {
                     settings.seed,
                     settings.pixels,
                     direct_depth,
+                    true,
                 )?;
                 let walk_seed = pcg::hash(&[settings.seed, frame, 0x76706c73]);
                 cmd.pass("vpl walk", |cmd| {
