@@ -1,9 +1,13 @@
 #version 450
-// Tokuyoshi 12 Section 4.1: one VPL per iteration, from point and spot lights only. A light
-// chosen by power (P_l, lights.glsl's table), a direction leaving it with its emission pdf
-// (emission.glsl: 1 / (4 pi), or I(w) / integral of I for a spot), and the first surface the
-// ray hits: x1; with it the iteration's bundle direction, computed here once instead of per
-// pixel. One invocation per iteration of the frame; numbers in bundles.glsl.
+// Tokuyoshi 12 Section 4.1: the iteration's VPLs, from point and spot lights only, and its
+// global ray bundle's direction (computed here once instead of per pixel). Light selection:
+// one VPL from every light (the paper's default), or, for many lights, one light chosen by
+// power (Russian roulette, LightEntries' table restricted to the point and spot lights, which
+// come first in it). Each VPL leaves its light with the emission pdf (emission.glsl: 1 / (4 pi),
+// or I(w) / integral of I for a spot) and lands on x1, the first surface its ray hits. The
+// bundle direction is drawn from bundle_directions.glsl's density and stored with its p_r in
+// every slot of the iteration. One invocation per (iteration, light slot) of the frame;
+// numbers in bundles.glsl.
 
 #extension GL_GOOGLE_include_directive : require
 
@@ -18,45 +22,68 @@ layout(local_size_x = 64, local_size_y = 1, local_size_z = 1) in;
 #include "lights.glsl"
 #include "emission.glsl"
 #include "bundles.glsl"
+#include "bundle_directions.glsl"
 
 layout(push_constant) uniform LightVertexParams {
     uint first_iteration;  // k of this frame's first iteration
     uint count;            // iterations per frame (I)
     uint seed;
+    uint lights;           // point and spot light entries, LightEntries' first
+    uint slots;            // light vertices per iteration: `lights` (every light) or 1 (roulette)
+    uint directions;       // BUNDLE_DIRECTIONS_UNIFORM or _ENVIRONMENT
 } params;
 
 void main() {
-    uint i = gl_GlobalInvocationID.x;
+    uint slot = gl_GlobalInvocationID.x;
+    uint slots = max(params.slots, 1u);
+    uint i = slot / slots;
+    uint v = slot % slots;
     if (i >= params.count) return;
     uint k = params.first_iteration + i;
-    float u[5];
-    for (uint d = 0u; d < 5u; ++d) u[d] = halton(d, k, params.seed);
+    float u[7];
+    for (uint d = 0u; d < 7u; ++d) u[d] = halton(d, k, params.seed);
 
-    LightVertex v;
-    v.light = vec4(0.0);
-    v.power = vec4(0.0);
-    v.position = vec4(0.0);
-    v.normal = vec4(0.0);
-    v.side = vec4(0.0);
-    // w_k, uniform on the sphere.
-    float z = 1.0 - 2.0 * u[3];
-    float s = sqrt(max(0.0, 1.0 - z * z));
-    v.bundle = vec4(s * cos(2.0 * PI * u[4]), s * sin(2.0 * PI * u[4]), z, 0.0);
-    if (scene.size.z == 0u) {
-        light_vertices[i] = v;
+    LightVertex lv;
+    lv.light = vec4(0.0);
+    lv.power = vec4(0.0);
+    lv.position = vec4(0.0);
+    lv.normal = vec4(0.0);
+    lv.side = vec4(0.0);
+    float p_r;
+    vec3 w_k = sample_bundle_direction(params.directions, vec4(u[3], u[4], u[5], u[6]), p_r);
+    lv.bundle = vec4(w_k, p_r);
+    if (params.lights == 0u) {
+        light_vertices[slot] = lv;
         return;
     }
-    uint r = min(uint(u[0] * 2147483648.0), 0x7fffffffu);
-    LightEntry e = light_entries[select_light(r)];
+    uint entry;
+    float probability;
+    if (params.slots > 1u || params.lights == 1u) {
+        entry = v;
+        probability = 1.0;
+    } else {
+        // Roulette: r uniform below the last point or spot light's upper bound (none when
+        // the table's rounding left the lights no range next to the environment).
+        uint bound = light_entries[params.lights - 1u].upper;
+        if (bound == 0u) {
+            light_vertices[slot] = lv;
+            return;
+        }
+        uint r = min(uint(u[0] * float(bound)), bound - 1u);
+        entry = select_light_among(r, params.lights);
+        uint below = entry == 0u ? 0u : light_entries[entry - 1u].upper;
+        probability = float(light_entries[entry].upper - below) / float(bound);
+    }
+    LightEntry e = light_entries[entry];
     Light l = lights[e.index];
     vec3 x0 = l.position.xyz;
     vec3 w = sample_emission(l, vec2(u[1], u[2]));
     float pe = emission_pdf(l, w);
-    v.light = vec4(x0, uintBitsToFloat(e.index));
+    lv.light = vec4(x0, uintBitsToFloat(e.index));
     // I / p_e is the intensity's integral over the sphere whenever p_e follows I.
-    v.power = vec4(pe > 0.0 ? l.intensity.rgb * (emission_profile(l, w) / (pe * e.probability))
-                            : vec3(0.0),
-                   e.probability);
+    lv.power = vec4(pe > 0.0 ? l.intensity.rgb * (emission_profile(l, w) / (pe * probability))
+                             : vec3(0.0),
+                    probability);
     RayHit hit;
     if (pe > 0.0 && trace_closest(x0, w, infinity(), hit)) {
         vec3 x1 = x0 + hit.t * w;
@@ -64,9 +91,9 @@ void main() {
         vec3 ns = shading_normal(hit.triangle, hit.barycentrics);
         vec3 side = dot(-w, ng) >= 0.0 ? ng : -ng;
         vec3 n = dot(ns, side) >= 0.0 ? ns : -ns;
-        v.position = vec4(x1, 1.0);
-        v.normal = vec4(n, uintBitsToFloat(triangle_material(hit.triangle)));
-        v.side = vec4(side, pe * dot(side, -w) / (hit.t * hit.t));
+        lv.position = vec4(x1, 1.0);
+        lv.normal = vec4(n, uintBitsToFloat(triangle_material(hit.triangle)));
+        lv.side = vec4(side, pe * dot(side, -w) / (hit.t * hit.t));
     }
-    light_vertices[i] = v;
+    light_vertices[slot] = lv;
 }

@@ -16,7 +16,8 @@ layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 #include "bundles.glsl"
 
 layout(push_constant) uniform BundleParams {
-    uint first_index;  // the chunk's first iteration, as an index into LightVertices
+    uint first_index;  // the chunk's first iteration of the frame
+    uint slots;        // light vertices per iteration
 } params;
 
 void main() {
@@ -32,7 +33,7 @@ void main() {
     GBufferTexel g = gbuffer[index];
     vec3 wo, side, n;
     if (gbuffer_surface(g, wo, side, n)) {
-        vec3 w = light_vertices[params.first_index + gl_GlobalInvocationID.z].bundle.xyz;
+        vec3 w = light_vertices[(params.first_index + gl_GlobalInvocationID.z) * params.slots].bundle.xyz;
         vec3 d = bundle_ray(w, side);
         vec3 origin = offset_origin(g.position.xyz, side);
         RayHit hit;

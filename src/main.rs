@@ -9,6 +9,8 @@ use indicatif::{ProgressBar, ProgressStyle};
 
 use irad::bench::scan as scan_bench;
 use irad::gpu::{self, Context, ContextOptions, DeviceInfo, DeviceSelector, Validation};
+use irad::methods::bundles::directions::DirectionDensity;
+use irad::methods::bundles::light_vertices::LightSelection;
 use irad::methods::bundles::{BundlesSettings, Strategy as BundlesStrategy, Suppression};
 use irad::methods::gbuffer::PixelSampling;
 use irad::methods::ir::schedule::Absorption;
@@ -156,6 +158,21 @@ struct RenderArgs {
     /// bundles --glossy clamp: the largest channel a path's contribution may have.
     #[arg(long, default_value_t = 1.0)]
     contribution_clamp: f32,
+    /// bundles: the lights each iteration's VPLs leave from: one VPL from every point and spot
+    /// light (all, the paper's default), or one light chosen by power (roulette, for many
+    /// lights; Tokuyoshi Section 4.1).
+    #[arg(long, value_enum, default_value_t = LightsArg::All)]
+    lights: LightsArg,
+    /// bundles: the density of the bundle directions: uniform on the sphere, or, in a scene
+    /// with an environment map, Tokuyoshi's Eq. 2 (Le(w) + Le(-w) + 2 Lo), which importance
+    /// samples the map's direct light (the default there).
+    #[arg(long, value_enum, default_value_t = DirectionsArg::Environment)]
+    directions: DirectionsArg,
+    /// bundles --directions environment: Eq. 2's offset Lo (luminance) for the indirect light
+    /// the map does not show [default: 0 when the map is the only light, else the map's mean
+    /// luminance].
+    #[arg(long)]
+    env_offset: Option<f32>,
     /// bir: camera points per frame the reverse VPLs start from (the M of Segovia's Eq. 7).
     #[arg(long, default_value_t = 50, value_parser = clap::value_parser!(u32).range(1..=65536))]
     pool: u32,
@@ -259,6 +276,18 @@ enum GlossyArg {
     None,
     Roughness,
     Clamp,
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum LightsArg {
+    All,
+    Roulette,
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum DirectionsArg {
+    Uniform,
+    Environment,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -583,6 +612,16 @@ fn render(options: &ContextOptions, args: RenderArgs) -> Result<()> {
                 args.contribution_clamp
             )
         }
+        MethodArg::Bundles
+            if args
+                .env_offset
+                .is_some_and(|o| !(o.is_finite() && o >= 0.0)) =>
+        {
+            bail!(
+                "--env-offset {}: must be a finite number >= 0",
+                args.env_offset.unwrap_or_default()
+            )
+        }
         MethodArg::Bundles => Method::Bundles(BundlesSettings {
             iterations: args.iterations,
             frames: args.frames,
@@ -608,6 +647,15 @@ fn render(options: &ContextOptions, args: RenderArgs) -> Result<()> {
                     max: args.contribution_clamp,
                 },
             },
+            lights: match args.lights {
+                LightsArg::All => LightSelection::All,
+                LightsArg::Roulette => LightSelection::Roulette,
+            },
+            directions: match args.directions {
+                DirectionsArg::Uniform => DirectionDensity::Uniform,
+                DirectionsArg::Environment => DirectionDensity::Environment,
+            },
+            env_offset: args.env_offset,
             pixels,
         }),
     };

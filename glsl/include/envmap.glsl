@@ -19,6 +19,12 @@ uint env_texel_index(vec3 d) {
     return j * w + i;
 }
 
+// Solid angle of any texel in row j: (2 pi / W) (cos theta_top - cos theta_bottom).
+float env_texel_solid_angle(uint j) {
+    float h = float(scene.env_size.y);
+    return 2.0 * PI / float(scene.env_size.x) * (cos(PI * float(j) / h) - cos(PI * float(j + 1u) / h));
+}
+
 vec3 env_radiance(vec3 d) {
     if (scene.env_size.z == 0u) return vec3(0.0);
     return env_texels[env_texel_index(d)].rgb;

@@ -12,6 +12,8 @@ use thiserror::Error;
 
 use crate::gpu::{Context, GpuError};
 use crate::methods::bir::{Bir, BirError, BirSettings, Strategy};
+use crate::methods::bundles::directions::DirectionDensity;
+use crate::methods::bundles::light_vertices::LightSelection;
 use crate::methods::bundles::{
     Bundles, BundlesError, BundlesSettings, Strategy as BundlesStrategy, Suppression,
 };
@@ -181,6 +183,11 @@ impl Method {
                         p.insert("contribution_clamp".into(), json!(max));
                     }
                 }
+                p.insert("lights".into(), json!(s.lights.name()));
+                p.insert("directions".into(), json!(s.directions.name()));
+                if let Some(offset) = s.env_offset {
+                    p.insert("env_offset".into(), json!(offset));
+                }
                 p.insert(
                     "pixel_centres".into(),
                     json!(s.pixels == PixelSampling::Centres),
@@ -196,7 +203,7 @@ impl Method {
     /// pixel_centres, seed; bir takes vpls, frames, strategy, pool, light_samples, ratio,
     /// floor, power_samples, batch, pixel_centres, seed; bundles takes iterations, frames,
     /// strategy, heuristic, two_bounce, two_bounce_clamp, glossy, roughness_m,
-    /// contribution_clamp, pixel_centres, seed.
+    /// contribution_clamp, lights, directions, env_offset, pixel_centres, seed.
     pub fn from_params(name: &str, params: &toml::Table) -> Result<Method, ParamError> {
         let mut reader = Params {
             method: name,
@@ -291,6 +298,20 @@ impl Method {
                                 other => other,
                             },
                         }
+                    },
+                    lights: match reader.choice("lights", &["all", "roulette"])? {
+                        Some("roulette") => LightSelection::Roulette,
+                        Some(_) => LightSelection::All,
+                        None => d.lights,
+                    },
+                    directions: match reader.choice("directions", &["uniform", "environment"])? {
+                        Some("uniform") => DirectionDensity::Uniform,
+                        Some(_) => DirectionDensity::Environment,
+                        None => d.directions,
+                    },
+                    env_offset: match reader.params.contains_key("env_offset") {
+                        true => Some(reader.non_negative("env_offset", 0.0)?),
+                        false => d.env_offset,
                     },
                     pixels: reader.pixels()?,
                 })
@@ -433,6 +454,9 @@ impl<'a> Params<'a> {
                 "glossy",
                 "roughness_m",
                 "contribution_clamp",
+                "lights",
+                "directions",
+                "env_offset",
                 "pixel_centres",
             ],
             _ => &[
@@ -592,7 +616,7 @@ mod tests {
     fn bundles_parameters_read_back() {
         let bundles = Method::from_params(
             "bundles",
-            &table("iterations = 5\nframes = 2\nstrategy = \"vpl\"\nheuristic = \"power\"\ntwo_bounce = true\ntwo_bounce_clamp = 3.5\nglossy = \"clamp\"\ncontribution_clamp = 2.5\npixel_centres = true"),
+            &table("iterations = 5\nframes = 2\nstrategy = \"vpl\"\nheuristic = \"power\"\ntwo_bounce = true\ntwo_bounce_clamp = 3.5\nglossy = \"clamp\"\ncontribution_clamp = 2.5\nlights = \"roulette\"\ndirections = \"uniform\"\nenv_offset = 0.25\npixel_centres = true"),
         )
         .unwrap();
         let back: toml::Table = bundles

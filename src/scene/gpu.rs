@@ -99,6 +99,8 @@ pub struct GpuScene {
     pub env_cdf: Buffer<u32>,
     pub constants: Buffer<SceneConstants>,
     pub light_table: LightTable,
+    /// The environment map's texels across and down, when the scene has one.
+    pub environment_size: Option<[u32; 2]>,
     pub width: u32,
     pub height: u32,
     pub triangle_count: usize,
@@ -322,6 +324,7 @@ impl GpuScene {
                 entries,
                 environment_probability,
             },
+            environment_size: (env_size[2] != 0).then_some([env_size[0], env_size[1]]),
             width: cam.width,
             height: cam.height,
             triangle_count: scene.triangles.len(),

@@ -1,11 +1,15 @@
 //! Real-time bidirectional path tracing (Tokuyoshi 12), method `bundles`: per frame, the
-//! G-buffer and direct light by next-event estimation (exact for point and spot lights), then
-//! I iterations (the paper's 21), each with one VPL from the lights (light_vertices) and one
-//! global ray bundle from the visible points (ray_bundles), whose one-bounce paths are
-//! combined by MIS and whose two-bounce paths share the edge between the VPL and the bundle
-//! hit (paths). irad traces the bundles through the BVH where the paper rasterizes them into
-//! per-pixel linked lists: the same rays, exact visibility.
+//! G-buffer and direct light of the point and spot lights by next-event estimation (as the
+//! reference: one light per sample, the environment's entry left out),
+//! then I iterations (the paper's 21), each with one VPL per light, or from one light by
+//! Russian roulette (light_vertices), and one global ray bundle from the visible points
+//! (ray_bundles, directions drawn by directions), whose escaping rays estimate the
+//! environment map's direct light, whose one-bounce paths are combined with the VPLs' by MIS
+//! and whose two-bounce paths share the edge between a VPL and the bundle hit (paths). irad
+//! traces the bundles through the BVH where the paper rasterizes them into per-pixel linked
+//! lists: the same rays, exact visibility.
 
+pub mod directions;
 pub mod light_vertices;
 pub mod paths;
 pub mod ray_bundles;
@@ -20,12 +24,14 @@ use crate::methods::direct::GBufferAndDirectLight;
 use crate::methods::gbuffer::{GBuffer, PixelSampling};
 use crate::methods::progressive;
 use crate::methods::RenderOutput;
+use crate::sampling::environment::sampling_weights;
 use crate::sampling::pcg;
 use crate::scene::gpu::GpuScene;
 use crate::scene::Scene;
 
-use light_vertices::TraceLightVertices;
-use paths::{Chunk, ShadeBundlePaths};
+use directions::{BundleDirections, DirectionDensity};
+use light_vertices::{FrameLightVertices, LightSelection, TraceLightVertices};
+use paths::{Chunk, ShadeBundlePaths, Shading};
 use ray_bundles::{BundleHit, TraceRayBundles};
 
 /// Which one-bounce paths are shaded.
@@ -90,6 +96,13 @@ pub struct BundlesSettings {
     /// Clamp of their x1-x2 geometry term (the paper's named bias); 0 leaves it unclamped.
     pub two_bounce_clamp: f32,
     pub suppression: Suppression,
+    /// Which lights each iteration's VPLs leave from.
+    pub lights: LightSelection,
+    /// The bundles' direction density: Environment (Eq. 2) applies to scenes with a map.
+    pub directions: DirectionDensity,
+    /// Eq. 2's Lo (luminance); None: 0 when the map is the only light, else the map's mean
+    /// luminance, so bundle rays still cover the directions the map leaves dark.
+    pub env_offset: Option<f32>,
     pub pixels: PixelSampling,
 }
 
@@ -104,6 +117,9 @@ impl Default for BundlesSettings {
             two_bounce: true,
             two_bounce_clamp: 10.0,
             suppression: Suppression::Roughness { m_prime: 16.0 },
+            lights: LightSelection::All,
+            directions: DirectionDensity::Environment,
+            env_offset: None,
             pixels: PixelSampling::Jittered,
         }
     }
@@ -111,8 +127,6 @@ impl Default for BundlesSettings {
 
 #[derive(Debug, Error)]
 pub enum BundlesError {
-    #[error("bundles does not support environment lights yet (use --method reference)")]
-    Environment,
     #[error("bundles shades point and spot lights only (Tokuyoshi 12 Section 4: VPLs from point lights); this scene has {0} emissive triangles (use --method ir, bir or reference)")]
     AreaLights(usize),
     #[error(transparent)]
@@ -145,15 +159,25 @@ impl Bundles {
 
     /// Why bundles cannot render `scene`, or None.
     pub fn declines(scene: &Scene) -> Option<BundlesError> {
-        if scene.environment.is_some() {
-            return Some(BundlesError::Environment);
-        }
         let emissive = scene
             .triangles
             .iter()
             .filter(|t| scene.materials[t.material as usize].is_emissive())
             .count();
         (emissive > 0).then_some(BundlesError::AreaLights(emissive))
+    }
+
+    /// Eq. 2's Lo when none is given: 0 when the map is the only light (its direct light is
+    /// all the bundles carry), else the map's mean luminance over the sphere, so every bundle
+    /// direction keeps at least half the uniform density for the lights' indirect paths.
+    pub fn default_env_offset(scene: &Scene) -> f32 {
+        match &scene.environment {
+            Some(env) if !scene.lights.is_empty() => {
+                let total: f64 = sampling_weights(env).iter().sum();
+                (total / (4.0 * std::f64::consts::PI)) as f32
+            }
+            _ => 0.0,
+        }
     }
 
     /// Iterations traced and shaded together at this pixel count.
@@ -178,12 +202,24 @@ impl Bundles {
         let accumulation = Accumulation::new(ctx, gpu_scene.width, gpu_scene.height)?;
         let per_frame = settings.iterations.max(1);
         let chunk = Self::chunk_size(per_frame, gpu_scene.pixel_count());
-        let vertices = Buffer::zeroed(ctx, "LightVertices", per_frame as usize)?;
+        let vertices = FrameLightVertices::new(ctx, gpu_scene, per_frame, settings.lights)?;
+        let offset = settings
+            .env_offset
+            .unwrap_or_else(|| Self::default_env_offset(scene));
+        let directions = BundleDirections::new(ctx, gpu_scene, settings.directions, offset)?;
         let hits = Buffer::zeroed(ctx, "BundleHits", chunk as usize * gpu_scene.pixel_count())?;
         let seed = pcg::hash(&[settings.seed, 0x62756e64]);
-        let two_bounce = settings.two_bounce.then_some(settings.two_bounce_clamp);
+        let environment = gpu_scene.environment_size.is_some();
+        let shading = Shading {
+            strategy: settings.strategy,
+            beta: settings.beta,
+            two_bounce: settings.two_bounce.then_some(settings.two_bounce_clamp),
+            suppression: settings.suppression,
+            environment,
+        };
         // The VPL paths alone need no bundle hits (the shading kernel then reads none).
-        let trace_bundles = settings.strategy != Strategy::Vpl || settings.two_bounce;
+        let trace_bundles =
+            settings.strategy != Strategy::Vpl || settings.two_bounce || environment;
         let frames = settings.frames.max(1);
         let passes = progressive::run(
             ctx,
@@ -199,11 +235,15 @@ impl Bundles {
                     settings.seed,
                     settings.pixels,
                     1,
+                    false,
                 )?;
+                if environment && directions.density() == DirectionDensity::Environment {
+                    cmd.pass("bundle directions", |cmd| directions.record(cmd, gpu_scene))?;
+                }
                 let first = frame * per_frame;
                 cmd.pass("light vertices", |cmd| {
                     self.light_vertices
-                        .record(cmd, gpu_scene, &vertices, first, seed)
+                        .record(cmd, gpu_scene, &vertices, &directions, first, seed)
                 })?;
                 let mut index = 0;
                 while index < per_frame {
@@ -219,6 +259,7 @@ impl Bundles {
                         count,
                         per_frame,
                         samples: per_frame * frames,
+                        traced: trace_bundles,
                     };
                     cmd.pass("bundle paths", |cmd| {
                         self.paths.record(
@@ -226,13 +267,11 @@ impl Bundles {
                             gpu_scene,
                             &gbuffer,
                             &vertices,
+                            &directions,
                             &hits,
                             &accumulation,
                             &c,
-                            settings.strategy,
-                            settings.beta,
-                            two_bounce,
-                            settings.suppression,
+                            &shading,
                         )
                     })?;
                     index += count;
@@ -242,8 +281,10 @@ impl Bundles {
             progress,
         )?;
         let pixels = gpu_scene.pixel_count() as f64;
-        // Per iteration: the light vertex's ray, and per pixel the bundle ray and at most three
-        // shadow rays (to x1, from x2 to the light, and x1-x2 for two bounces).
+        // Per iteration: each light vertex's ray, and per pixel the bundle ray and, per light
+        // vertex, at most three shadow rays (to x1, from x2 to the light, and x1-x2 for two
+        // bounces).
+        let slots = vertices.slots as f64;
         let shadow_rays = match settings.strategy {
             Strategy::Vpl | Strategy::Bundle => 1.0,
             Strategy::Mis => 2.0,
@@ -255,9 +296,11 @@ impl Bundles {
             nonfinite_estimates: accumulation.nonfinite_estimates()?,
             stats: vec![
                 ("iterations_per_chunk".into(), chunk as f64),
+                ("light_vertices_per_iteration".into(), slots),
+                ("bundle_env_offset".into(), offset as f64),
                 (
                     "rays_per_iteration_max".into(),
-                    1.0 + pixels * (1.0 + shadow_rays),
+                    slots + pixels * (1.0 + slots * shadow_rays),
                 ),
             ],
         })

@@ -1,6 +1,6 @@
-//! glsl/shade_bundle_paths.comp: the one- and two-bounce paths of each G-buffer point through
-//! the chunk's VPLs and bundle hits, MIS-combined (Tokuyoshi 12 Eq. 3-8), added into the
-//! accumulation.
+//! glsl/shade_bundle_paths.comp: the environment's direct light through each G-buffer point's
+//! bundle rays, and its one- and two-bounce paths through the chunk's VPLs and bundle hits,
+//! MIS-combined (Tokuyoshi 12 Eq. 3-8), added into the accumulation.
 
 use bytemuck::{Pod, Zeroable};
 
@@ -9,7 +9,8 @@ use crate::methods::accumulation::Accumulation;
 use crate::methods::gbuffer::GBuffer;
 use crate::scene::gpu::GpuScene;
 
-use super::light_vertices::LightVertex;
+use super::directions::BundleDirections;
+use super::light_vertices::FrameLightVertices;
 use super::ray_bundles::BundleHit;
 use super::{Strategy, Suppression};
 
@@ -25,17 +26,36 @@ struct ShadeParams {
     samples: u32,
     suppression: u32,
     suppression_parameter: f32,
+    slots: u32,
+    directions: u32,
+    environment: u32,
+    trace_bundles: u32,
 }
 
 /// What one chunk of iterations shades.
 pub struct Chunk {
-    /// The chunk's first iteration, as an index among the frame's light vertices.
+    /// The chunk's first iteration of the frame.
     pub first_index: u32,
     pub count: u32,
     /// Iterations per frame: each adds 1 / per_frame of its estimate.
     pub per_frame: u32,
     /// Iterations in the whole render: the N of the sample densities (Section 5.2).
     pub samples: u32,
+    /// Whether the chunk's bundle hits were traced (not for the VPL paths alone).
+    pub traced: bool,
+}
+
+/// Which paths the shading adds, besides the one-bounce paths of `strategy`.
+pub struct Shading {
+    pub strategy: Strategy,
+    pub beta: f32,
+    /// None leaves the two-bounce paths out; Some(0) shades them unclamped, Some(g) clamps
+    /// their x1-x2 geometry term at g.
+    pub two_bounce: Option<f32>,
+    /// Applies to the one-bounce paths and the environment's direct light.
+    pub suppression: Suppression,
+    /// The environment's direct light through the bundles.
+    pub environment: bool,
 }
 
 pub struct ShadeBundlePaths(Kernel);
@@ -45,40 +65,37 @@ impl ShadeBundlePaths {
         Ok(ShadeBundlePaths(Kernel::new(ctx, "shade_bundle_paths")?))
     }
 
-    /// `two_bounce`: None leaves the two-bounce paths out; Some(0) shades them unclamped,
-    /// Some(g) clamps their x1-x2 geometry term at g. `suppression` applies to the one-bounce
-    /// paths.
     #[allow(clippy::too_many_arguments)]
     pub fn record<'a>(
         &'a self,
         cmd: &mut Commands<'a>,
         scene: &'a GpuScene,
         gbuffer: &'a GBuffer,
-        vertices: &'a Buffer<LightVertex>,
+        vertices: &'a FrameLightVertices,
+        directions: &'a BundleDirections,
         hits: &'a Buffer<BundleHit>,
         accumulation: &'a Accumulation,
         chunk: &Chunk,
-        strategy: Strategy,
-        beta: f32,
-        two_bounce: Option<f32>,
-        suppression: Suppression,
+        shading: &Shading,
     ) -> GpuResult<()> {
         let mut bindings = scene.bindings();
         bindings.push(bind("GBuffer", &gbuffer.texels));
         bindings.extend(accumulation.bindings());
-        bindings.push(bind("LightVertices", vertices));
+        bindings.push(bind("LightVertices", &vertices.buffer));
         bindings.push(bind("BundleHits", hits));
+        bindings.extend(directions.bindings());
+        let suppression = shading.suppression;
         let params = ShadeParams {
             first_index: chunk.first_index,
             count: chunk.count,
             per_frame: chunk.per_frame,
-            strategy: match strategy {
+            strategy: match shading.strategy {
                 Strategy::Vpl => 0,
                 Strategy::Bundle => 1,
                 Strategy::Mis => 2,
             },
-            beta,
-            two_bounce: two_bounce.map_or(-1.0, |g| g.max(0.0)),
+            beta: shading.beta,
+            two_bounce: shading.two_bounce.map_or(-1.0, |g| g.max(0.0)),
             samples: chunk.samples,
             suppression: match suppression {
                 Suppression::None => 0,
@@ -90,6 +107,10 @@ impl ShadeBundlePaths {
                 Suppression::Roughness { m_prime } => m_prime,
                 Suppression::Contribution { max } => max,
             },
+            slots: vertices.slots,
+            directions: directions.mode_code(),
+            environment: shading.environment as u32,
+            trace_bundles: chunk.traced as u32,
         };
         self.0
             .dispatch(cmd, &bindings, &params, scene.image_workgroups())

@@ -9,7 +9,7 @@ use crate::gpu::{bind, Buffer, Commands, Context, GpuResult, Kernel};
 use crate::methods::gbuffer::GBuffer;
 use crate::scene::gpu::GpuScene;
 
-use super::light_vertices::LightVertex;
+use super::light_vertices::FrameLightVertices;
 
 /// One bundle ray's first hit as glsl/include/bundles.glsl lays it out.
 #[repr(C)]
@@ -25,6 +25,7 @@ pub struct BundleHit {
 #[derive(Clone, Copy, Pod, Zeroable)]
 struct BundleParams {
     first_index: u32,
+    slots: u32,
 }
 
 pub struct TraceRayBundles(Kernel);
@@ -34,25 +35,28 @@ impl TraceRayBundles {
         Ok(TraceRayBundles(Kernel::new(ctx, "trace_ray_bundles")?))
     }
 
-    /// Traces the bundles of `vertices[first_index..first_index + count]` into `hits` (count
-    /// times the pixel count entries, iteration-major).
+    /// Traces the bundles of the frame's iterations `first_index..first_index + count` into
+    /// `hits` (count times the pixel count entries, iteration-major).
     #[allow(clippy::too_many_arguments)]
     pub fn record<'a>(
         &'a self,
         cmd: &mut Commands<'a>,
         scene: &'a GpuScene,
         gbuffer: &'a GBuffer,
-        vertices: &'a Buffer<LightVertex>,
+        vertices: &'a FrameLightVertices,
         hits: &'a Buffer<BundleHit>,
         first_index: u32,
         count: u32,
     ) -> GpuResult<()> {
         let mut bindings = scene.bindings();
         bindings.push(bind("GBuffer", &gbuffer.texels));
-        bindings.push(bind("LightVertices", vertices));
+        bindings.push(bind("LightVertices", &vertices.buffer));
         bindings.push(bind("BundleHits", hits));
         let [x, y, _] = scene.image_workgroups();
-        let params = BundleParams { first_index };
+        let params = BundleParams {
+            first_index,
+            slots: vertices.slots,
+        };
         self.0.dispatch(cmd, &bindings, &params, [x, y, count])
     }
 }
