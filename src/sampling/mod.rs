@@ -1,5 +1,6 @@
 //! CPU mirrors of the GPU samplers and tables, for tests and self-checks.
 
+pub mod cubemap;
 pub mod distribution;
 pub mod environment;
 pub mod pcg;
