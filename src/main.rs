@@ -12,6 +12,7 @@ use irad::gpu::{self, Context, ContextOptions, DeviceInfo, DeviceSelector, Valid
 use irad::methods::bundles::directions::DirectionDensity;
 use irad::methods::bundles::light_vertices::LightSelection;
 use irad::methods::bundles::{BundlesSettings, Strategy as BundlesStrategy, Suppression};
+use irad::methods::envmap::{EnvSettings, Strategy as EnvStrategy};
 use irad::methods::gbuffer::PixelSampling;
 use irad::methods::ir::schedule::Absorption;
 use irad::methods::ir::{DirectLight, IrSettings};
@@ -101,10 +102,12 @@ struct RenderArgs {
     /// Rendering method.
     #[arg(long, value_enum, default_value_t = MethodArg::Reference)]
     method: MethodArg,
-    /// Samples per pixel (reference: one path per pixel per frame).
+    /// Samples per pixel (reference: one path per pixel per frame; env: N_s per frame, light
+    /// and BRDF samples together).
     #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..))]
     spp: u32,
-    /// ir, bir, bundles: frames, each with a fresh VPL set and fresh subpixel positions.
+    /// ir, bir, bundles, env: frames, each with fresh VPLs (light samples for env) and fresh
+    /// subpixel positions.
     #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..))]
     frames: u32,
     /// ir: paths started on the lights per frame (Keller's N; about N / (1 - mean albedo)
@@ -129,9 +132,14 @@ struct RenderArgs {
     direct: DirectArg,
     /// bir: which VPLs are shaded: standard (from the lights), reverse (from the camera) or
     /// both [default]. bundles: which one-bounce paths: through the VPLs (vpl), through the
-    /// ray bundles (bundle), or both combined by MIS (mis) [default].
+    /// ray bundles (bundle), or both combined by MIS (mis) [default]. env: how the map's light
+    /// is sampled: dynamic [default], uniform-faces, brdf or cosine.
     #[arg(long, value_enum)]
     strategy: Option<StrategyArg>,
+    /// env: texels along a side of each face of the cube map that drives the light samples
+    /// (rebuilt from the scene's map every frame).
+    #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(1..=4096))]
+    face_resolution: u32,
     /// bundles: iterations per frame, each one VPL and one global ray bundle (the paper's 21).
     #[arg(long, default_value_t = 21, value_parser = clap::value_parser!(u32).range(1..=65536))]
     iterations: u32,
@@ -247,6 +255,8 @@ enum MethodArg {
     /// Real-time bidirectional path tracing (Tokuyoshi 12): VPLs and global ray bundles
     /// combined by MIS, for point and spot lights.
     Bundles,
+    /// Environment-map direct light with per-pixel dynamic cube-map sampling (Lu 14 ch. 3).
+    Env,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -263,6 +273,14 @@ enum StrategyArg {
     Bundle,
     /// bundles: both, combined by multiple importance sampling.
     Mis,
+    /// env: per-pixel face shares, fractional counts, MIS with BRDF sampling (Lu 14 ch. 3).
+    Dynamic,
+    /// env: the same with every face getting 1/6 of the light samples.
+    UniformFaces,
+    /// env: BRDF sampling only.
+    Brdf,
+    /// env: cosine-weighted hemisphere sampling only.
+    Cosine,
 }
 
 #[derive(Clone, Copy, clap::ValueEnum)]
@@ -656,6 +674,20 @@ fn render(options: &ContextOptions, args: RenderArgs) -> Result<()> {
                 DirectionsArg::Environment => DirectionDensity::Environment,
             },
             env_offset: args.env_offset,
+            pixels,
+        }),
+        MethodArg::Env => Method::Env(EnvSettings {
+            spp: args.spp,
+            frames: args.frames,
+            seed: args.seed,
+            strategy: match args.strategy {
+                Some(StrategyArg::Dynamic) | None => EnvStrategy::Dynamic,
+                Some(StrategyArg::UniformFaces) => EnvStrategy::UniformFaces,
+                Some(StrategyArg::Brdf) => EnvStrategy::Brdf,
+                Some(StrategyArg::Cosine) => EnvStrategy::Cosine,
+                Some(_) => bail!("--strategy: env takes dynamic, uniform-faces, brdf or cosine"),
+            },
+            face_resolution: args.face_resolution,
             pixels,
         }),
     };

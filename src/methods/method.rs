@@ -17,6 +17,7 @@ use crate::methods::bundles::light_vertices::LightSelection;
 use crate::methods::bundles::{
     Bundles, BundlesError, BundlesSettings, Strategy as BundlesStrategy, Suppression,
 };
+use crate::methods::envmap::{Env, EnvError, EnvSettings, Strategy as EnvStrategy};
 use crate::methods::gbuffer::PixelSampling;
 use crate::methods::ir::schedule::Absorption;
 use crate::methods::ir::{DirectLight, InstantRadiosity, IrError, IrSettings};
@@ -26,7 +27,7 @@ use crate::scene::gpu::GpuScene;
 use crate::scene::Scene;
 
 /// Every method irad has, by the name `--method` and suite files use.
-pub const METHOD_NAMES: &[&str] = &["reference", "ir", "bir", "bundles"];
+pub const METHOD_NAMES: &[&str] = &["reference", "ir", "bir", "bundles", "env"];
 
 #[derive(Clone, Debug, PartialEq)]
 pub enum Method {
@@ -34,6 +35,7 @@ pub enum Method {
     Ir(IrSettings),
     Bir(BirSettings),
     Bundles(BundlesSettings),
+    Env(EnvSettings),
 }
 
 /// A parameter a method cannot take: `method: key = value: problem`.
@@ -57,6 +59,7 @@ impl Method {
             Method::Ir(_) => "ir",
             Method::Bir(_) => "bir",
             Method::Bundles(_) => "bundles",
+            Method::Env(_) => "env",
         }
     }
 
@@ -66,6 +69,7 @@ impl Method {
             Method::Ir(s) => s.seed,
             Method::Bir(s) => s.seed,
             Method::Bundles(s) => s.seed,
+            Method::Env(s) => s.seed,
         }
     }
 
@@ -77,6 +81,7 @@ impl Method {
             Method::Ir(s) => s.seed = seed,
             Method::Bir(s) => s.seed = seed,
             Method::Bundles(s) => s.seed = seed,
+            Method::Env(s) => s.seed = seed,
         }
         m
     }
@@ -88,6 +93,7 @@ impl Method {
             Method::Ir(s) => s.frames as u64,
             Method::Bir(s) => s.frames as u64,
             Method::Bundles(s) => s.frames as u64,
+            Method::Env(s) => s.frames as u64,
         }
     }
 
@@ -99,6 +105,7 @@ impl Method {
             Method::Ir(s) => s.frames as f64 * s.paths as f64,
             Method::Bir(s) => s.frames as f64 * s.vpls as f64,
             Method::Bundles(s) => s.frames as f64 * s.iterations as f64,
+            Method::Env(s) => s.frames as f64 * s.spp as f64,
         }
     }
 
@@ -193,6 +200,16 @@ impl Method {
                     json!(s.pixels == PixelSampling::Centres),
                 );
             }
+            Method::Env(s) => {
+                p.insert("spp".into(), json!(s.spp));
+                p.insert("frames".into(), json!(s.frames));
+                p.insert("strategy".into(), json!(s.strategy.name()));
+                p.insert("face_resolution".into(), json!(s.face_resolution));
+                p.insert(
+                    "pixel_centres".into(),
+                    json!(s.pixels == PixelSampling::Centres),
+                );
+            }
         }
         p
     }
@@ -203,7 +220,8 @@ impl Method {
     /// pixel_centres, seed; bir takes vpls, frames, strategy, pool, light_samples, ratio,
     /// floor, power_samples, batch, pixel_centres, seed; bundles takes iterations, frames,
     /// strategy, heuristic, two_bounce, two_bounce_clamp, glossy, roughness_m,
-    /// contribution_clamp, lights, directions, env_offset, pixel_centres, seed.
+    /// contribution_clamp, lights, directions, env_offset, pixel_centres, seed; env takes spp,
+    /// frames, strategy, face_resolution, pixel_centres, seed.
     pub fn from_params(name: &str, params: &toml::Table) -> Result<Method, ParamError> {
         let mut reader = Params {
             method: name,
@@ -316,6 +334,21 @@ impl Method {
                     pixels: reader.pixels()?,
                 })
             }
+            "env" => {
+                let d = EnvSettings::default();
+                let names: Vec<&str> = EnvStrategy::ALL.iter().map(|s| s.name()).collect();
+                Method::Env(EnvSettings {
+                    spp: reader.uint("spp", d.spp, 1, 1 << 16)?,
+                    frames: reader.uint("frames", d.frames, 1, u32::MAX)?,
+                    seed: reader.uint("seed", d.seed, 0, u32::MAX)?,
+                    strategy: match reader.choice("strategy", &names)? {
+                        Some(c) => *EnvStrategy::ALL.iter().find(|s| s.name() == c).unwrap(),
+                        None => d.strategy,
+                    },
+                    face_resolution: reader.uint("face_resolution", d.face_resolution, 1, 4096)?,
+                    pixels: reader.pixels()?,
+                })
+            }
             _ => return Err(ParamError::UnknownMethod(name.to_string())),
         };
         reader.refuse_unknown()?;
@@ -335,6 +368,7 @@ impl Method {
                 .is_some()
                 .then(|| BirError::Environment.to_string()),
             Method::Bundles(_) => Bundles::declines(scene).map(|e| e.to_string()),
+            Method::Env(_) => Env::declines(scene).map(|e| e.to_string()),
         }
     }
 }
@@ -443,6 +477,14 @@ impl<'a> Params<'a> {
                 "adaptive",
                 "pixel_centres",
             ],
+            "env" => &[
+                "spp",
+                "frames",
+                "seed",
+                "strategy",
+                "face_resolution",
+                "pixel_centres",
+            ],
             "bundles" => &[
                 "iterations",
                 "frames",
@@ -492,6 +534,7 @@ pub struct Renderers {
     ir: OnceCell<InstantRadiosity>,
     bir: OnceCell<Bir>,
     bundles: OnceCell<Bundles>,
+    env: OnceCell<Env>,
 }
 
 #[derive(Debug, Error)]
@@ -543,6 +586,14 @@ impl Renderers {
                     .render(ctx, scene, gpu_scene, settings, progress)
                     .map_err(|e| match e {
                         BundlesError::Gpu(g) => RunError::Gpu(g),
+                        e => RunError::Declined(e.to_string()),
+                    })
+            }
+            Method::Env(settings) => {
+                let env = get_or_try_init(&self.env, || Env::new(ctx))?;
+                env.render(ctx, scene, gpu_scene, settings, progress)
+                    .map_err(|e| match e {
+                        EnvError::Gpu(g) => RunError::Gpu(g),
                         e => RunError::Declined(e.to_string()),
                     })
             }
@@ -637,6 +688,25 @@ mod tests {
                 .starts_with("bundles: vpls = 4: unknown parameter"),
             "{e}"
         );
+    }
+
+    #[test]
+    fn env_parameters_read_back() {
+        let env = Method::from_params(
+            "env",
+            &table("spp = 20\nframes = 3\nstrategy = \"uniform-faces\"\nface_resolution = 64\npixel_centres = true"),
+        )
+        .unwrap();
+        let back: toml::Table = env
+            .parameters()
+            .into_iter()
+            .map(|(k, v)| (k, toml::Value::try_from(v).unwrap()))
+            .collect();
+        assert_eq!(Method::from_params("env", &back).unwrap(), env);
+        let e = Method::from_params("env", &table("strategy = \"mis\"")).unwrap_err();
+        assert!(e.to_string().contains("expected one of \"dynamic\""), "{e}");
+        let e = Method::from_params("env", &table("face_resolution = 0")).unwrap_err();
+        assert!(e.to_string().starts_with("env: face_resolution = 0"), "{e}");
     }
 
     #[test]

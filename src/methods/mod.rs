@@ -5,6 +5,7 @@ pub mod accumulation;
 pub mod bir;
 pub mod bundles;
 pub mod direct;
+pub mod envmap;
 pub mod gbuffer;
 pub mod ir;
 pub mod method;

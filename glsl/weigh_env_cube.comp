@@ -1,0 +1,96 @@
+#version 450
+// Lu 14 Section 3.3.3 and Alg. 1 line 6: the cube map that drives environment sampling, rebuilt
+// from the scene's equirectangular map every frame. Each cube texel's weight is its luminance
+// times its solid angle, the luminance being the largest over the map texels its footprint
+// touches (a conservative maximum: the cube map only shapes the pdf, so it must be positive
+// wherever the map is, and point sampling would lose a sun smaller than a cube texel). The
+// footprint: 8 points per edge of the texel (32, corners included) mapped to the map's rows and
+// columns, the columns unwrapped across the seam, one map texel of margin on every side, and
+// every column with the rows up to the pole for the texel that holds a pole. One invocation
+// per cube texel: (i, j, face). src/sampling/cubemap.rs mirrors it (cube_weights).
+
+#extension GL_GOOGLE_include_directive : require
+
+layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
+
+// bvh.glsl only because the scene bindings come as one set (GpuScene::bindings).
+#include "bvh.glsl"
+#include "scene.glsl"
+#include "sampling.glsl"
+#include "cubemap.glsl"
+
+layout(set = 0, binding = 20, std430) writeonly buffer CubeWeights { float cube_weights[]; };
+
+layout(push_constant) uniform CubeParams {
+    uint resolution;  // R: texels along a face's side
+} params;
+
+// The continuous (column, row) of direction d on the W x H map.
+vec2 map_coordinates(vec3 d) {
+    float u = fract(atan(d.x, -d.z) * (0.5 * INV_PI));
+    float v = acos(clamp(d.y, -1.0, 1.0)) * INV_PI;
+    return vec2(u * float(scene.env_size.x), v * float(scene.env_size.y));
+}
+
+void main() {
+    uint r = params.resolution;
+    uint i = gl_GlobalInvocationID.x;
+    uint j = gl_GlobalInvocationID.y;
+    uint f = gl_GlobalInvocationID.z;
+    if (i >= r || j >= r || f >= 6u) return;
+    int w = int(scene.env_size.x);
+    int h = int(scene.env_size.y);
+    float s = 2.0 / float(r);
+    vec2 lo = vec2(-1.0 + s * float(i), -1.0 + s * float(j));
+    vec2 hi = lo + s;
+
+    // Boundary walk: bottom (u up), right (v up), top (u down), left (v down).
+    float row_min = 1e30;
+    float row_max = -1e30;
+    float col_first = 0.0;
+    float col_previous = 0.0;
+    float col_min = 1e30;
+    float col_max = -1e30;
+    for (uint k = 0u; k < 32u; ++k) {
+        uint edge = k / 8u;
+        float t = float(k % 8u) / 8.0;
+        vec2 uv = edge == 0u ? vec2(mix(lo.x, hi.x, t), lo.y)
+                : edge == 1u ? vec2(hi.x, mix(lo.y, hi.y, t))
+                : edge == 2u ? vec2(mix(hi.x, lo.x, t), hi.y)
+                             : vec2(lo.x, mix(hi.y, lo.y, t));
+        vec2 c = map_coordinates(normalize(cube_face_point(f, uv.x, uv.y)));
+        row_min = min(row_min, c.y);
+        row_max = max(row_max, c.y);
+        float col = c.x;
+        if (k > 0u) {
+            float step = col - mod(col_previous, float(w));
+            if (step > 0.5 * float(w)) step -= float(w);
+            if (step <= -0.5 * float(w)) step += float(w);
+            col = col_previous + step;
+        }
+        col_previous = col;
+        col_min = min(col_min, col);
+        col_max = max(col_max, col);
+    }
+    int j0 = max(int(floor(row_min)) - 1, 0);
+    int j1 = min(int(floor(row_max)) + 1, h - 1);
+    int i0 = int(floor(col_min)) - 1;
+    int i1 = int(floor(col_max)) + 1;
+    bool pole = (f == 2u || f == 3u) && lo.x <= 0.0 && hi.x >= 0.0 && lo.y <= 0.0 && hi.y >= 0.0;
+    if (pole) {
+        if (f == 2u) j0 = 0; else j1 = h - 1;
+    }
+    if (pole || i1 - i0 + 1 >= w) {
+        i0 = 0;
+        i1 = w - 1;
+    }
+
+    float peak = 0.0;
+    for (int row = j0; row <= j1; ++row) {
+        for (int col = i0; col <= i1; ++col) {
+            int wrapped = ((col % w) + w) % w;
+            peak = max(peak, luminance(env_texels[row * w + wrapped].rgb));
+        }
+    }
+    cube_weights[(f * r + j) * r + i] = peak * cube_texel_solid_angle(r, i, j);
+}

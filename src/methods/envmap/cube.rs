@@ -1,0 +1,114 @@
+//! The per-frame cube-map sampling table of method `env` (Lu 14 Section 3.3, Alg. 1 lines
+//! 5-10), all on the GPU: glsl/weigh_env_cube.comp (each cube texel's conservative luminance
+//! times its solid angle), the prefix sums within every face row and over each face's row
+//! totals (glsl/include/env_cube.glsl reads them), and glsl/generate_env_samples.comp (the
+//! frame's light samples per face, shared by every pixel).
+
+use bytemuck::{Pod, Zeroable};
+
+use crate::gpu::prefix_sum::PrefixSum;
+use crate::gpu::{bind, Binding, Buffer, Commands, Context, GpuResult, Kernel};
+use crate::scene::gpu::GpuScene;
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct CubeParams {
+    resolution: u32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct SampleParams {
+    resolution: u32,
+    per_face: u32,
+    first: u32,
+    seed: u32,
+}
+
+pub struct CubeTable {
+    weigh: Kernel,
+    generate: Kernel,
+    within_rows: PrefixSum,
+    over_rows: PrefixSum,
+    /// R: texels along a face's side.
+    pub resolution: u32,
+    /// Light samples pre-generated per face and frame.
+    pub per_face: u32,
+    pub weights: Buffer<f32>,
+    row_cdf: Buffer<f32>,
+    row_totals: Buffer<f32>,
+    face_cdf: Buffer<f32>,
+    pub face_totals: Buffer<f32>,
+    pub samples: Buffer<[f32; 4]>,
+}
+
+impl CubeTable {
+    pub fn new(ctx: &Context, resolution: u32, per_face: u32) -> GpuResult<Self> {
+        let r = resolution.max(1) as usize;
+        let per_face = per_face.max(1);
+        Ok(CubeTable {
+            weigh: Kernel::new(ctx, "weigh_env_cube")?,
+            generate: Kernel::new(ctx, "generate_env_samples")?,
+            within_rows: PrefixSum::new(ctx, r, 6 * r)?,
+            over_rows: PrefixSum::new(ctx, r, 6)?,
+            resolution: r as u32,
+            per_face,
+            weights: Buffer::zeroed(ctx, "CubeWeights", 6 * r * r)?,
+            row_cdf: Buffer::zeroed(ctx, "CubeRowCdf", 6 * r * r)?,
+            row_totals: Buffer::zeroed(ctx, "cube row totals", 6 * r)?,
+            face_cdf: Buffer::zeroed(ctx, "CubeFaceCdf", 6 * r)?,
+            face_totals: Buffer::zeroed(ctx, "CubeFaceTotals", 6)?,
+            samples: Buffer::zeroed(ctx, "EnvSamples", 6 * per_face as usize)?,
+        })
+    }
+
+    /// The table's bindings, for every kernel that includes env_cube.glsl.
+    pub fn bindings(&self) -> [Binding<'_>; 3] {
+        [
+            bind("CubeRowCdf", &self.row_cdf),
+            bind("CubeFaceCdf", &self.face_cdf),
+            bind("CubeFaceTotals", &self.face_totals),
+        ]
+    }
+
+    /// Pass "cube map": the weights from the scene's map.
+    pub fn record_weights<'a>(
+        &'a self,
+        cmd: &mut Commands<'a>,
+        scene: &'a GpuScene,
+    ) -> GpuResult<()> {
+        let mut bindings = scene.bindings();
+        bindings.push(bind("CubeWeights", &self.weights));
+        let r = self.resolution;
+        let params = CubeParams { resolution: r };
+        self.weigh
+            .dispatch_threads(cmd, &bindings, &params, [r, r, 6])
+    }
+
+    /// Pass "cdf": the scans of the weights.
+    pub fn record_cdf<'a>(&'a self, cmd: &mut Commands<'a>) -> GpuResult<()> {
+        self.within_rows
+            .record(cmd, &self.weights, &self.row_cdf, &self.row_totals)?;
+        self.over_rows
+            .record(cmd, &self.row_totals, &self.face_cdf, &self.face_totals)
+    }
+
+    /// Pass "light samples": `per_face` samples per face from Halton index `first`.
+    pub fn record_samples<'a>(
+        &'a self,
+        cmd: &mut Commands<'a>,
+        first: u32,
+        seed: u32,
+    ) -> GpuResult<()> {
+        let mut bindings: Vec<Binding<'_>> = self.bindings().into_iter().collect();
+        bindings.push(bind("EnvSamples", &self.samples));
+        let params = SampleParams {
+            resolution: self.resolution,
+            per_face: self.per_face,
+            first,
+            seed,
+        };
+        self.generate
+            .dispatch_threads(cmd, &bindings, &params, [self.per_face, 6, 1])
+    }
+}

@@ -1,0 +1,205 @@
+//! Dynamic environment-map importance sampling (Lu 14 ch. 3), method `env`: per frame the
+//! G-buffer (and the map the camera sees directly), the cube-map sampling table rebuilt from
+//! the scene's map on the GPU (cube: weights, scans, the frame's light samples per face), and
+//! the direct light of the map with visibility by the chosen strategy (shade).
+
+pub mod cube;
+pub mod shade;
+
+use std::time::Instant;
+
+use thiserror::Error;
+
+use crate::gpu::{Context, GpuError};
+use crate::methods::accumulation::Accumulation;
+use crate::methods::direct::GBufferAndDirectLight;
+use crate::methods::gbuffer::{GBuffer, PixelSampling};
+use crate::methods::progressive;
+use crate::methods::RenderOutput;
+use crate::sampling::pcg;
+use crate::scene::gpu::GpuScene;
+use crate::scene::Scene;
+
+use cube::CubeTable;
+use shade::ShadeEnv;
+
+/// How the map's direct light is sampled.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Strategy {
+    /// Lu's method: per-pixel face shares mu_f(n) (Eq. 3.4), fractional counts with beta
+    /// weights (Eq. 3.5-3.6), half the samples from the BRDF, balance heuristic (Eq. 3.7).
+    Dynamic,
+    /// The same with mu_f = 1/6 (the thesis's baseline, Fig. 3.6).
+    UniformFaces,
+    /// BRDF sampling only.
+    Brdf,
+    /// Cosine-weighted hemisphere sampling only.
+    Cosine,
+}
+
+impl Strategy {
+    pub const ALL: [Strategy; 4] = [
+        Strategy::Dynamic,
+        Strategy::UniformFaces,
+        Strategy::Brdf,
+        Strategy::Cosine,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Strategy::Dynamic => "dynamic",
+            Strategy::UniformFaces => "uniform-faces",
+            Strategy::Brdf => "brdf",
+            Strategy::Cosine => "cosine",
+        }
+    }
+
+    /// The strategy codes of glsl/shade_env.comp.
+    pub fn code(self) -> u32 {
+        match self {
+            Strategy::Dynamic => 0,
+            Strategy::UniformFaces => 1,
+            Strategy::Brdf => 2,
+            Strategy::Cosine => 3,
+        }
+    }
+
+    /// Whether the strategy samples the cube map (and so needs its table).
+    pub fn uses_cube(self) -> bool {
+        matches!(self, Strategy::Dynamic | Strategy::UniformFaces)
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EnvSettings {
+    /// N_s: samples per pixel per frame (light and BRDF together).
+    pub spp: u32,
+    pub frames: u32,
+    pub seed: u32,
+    pub strategy: Strategy,
+    /// R: texels along a cube face's side.
+    pub face_resolution: u32,
+    pub pixels: PixelSampling,
+}
+
+impl Default for EnvSettings {
+    fn default() -> Self {
+        EnvSettings {
+            spp: 60,
+            frames: 16,
+            seed: 0,
+            strategy: Strategy::Dynamic,
+            face_resolution: 256,
+            pixels: PixelSampling::Jittered,
+        }
+    }
+}
+
+#[derive(Debug, Error)]
+pub enum EnvError {
+    #[error("env renders the direct light of an environment map, and this scene has none (add an [environment] table, or use another method)")]
+    NoEnvironment,
+    #[error("env shades the environment map only; this scene also has {0} other lights (use --method reference)")]
+    OtherLights(usize),
+    #[error(transparent)]
+    Gpu(#[from] GpuError),
+}
+
+pub struct Env {
+    direct: GBufferAndDirectLight,
+    shade: ShadeEnv,
+}
+
+impl Env {
+    pub fn new(ctx: &Context) -> Result<Self, GpuError> {
+        Ok(Env {
+            direct: GBufferAndDirectLight::new(ctx)?,
+            shade: ShadeEnv::new(ctx)?,
+        })
+    }
+
+    /// Why env cannot render `scene`, or None.
+    pub fn declines(scene: &Scene) -> Option<EnvError> {
+        if scene.environment.is_none() {
+            return Some(EnvError::NoEnvironment);
+        }
+        let emissive = scene
+            .triangles
+            .iter()
+            .filter(|t| scene.materials[t.material as usize].is_emissive())
+            .count();
+        let others = emissive + scene.lights.len();
+        (others > 0).then_some(EnvError::OtherLights(others))
+    }
+
+    pub fn render(
+        &self,
+        ctx: &Context,
+        scene: &Scene,
+        gpu_scene: &GpuScene,
+        settings: &EnvSettings,
+        progress: impl FnMut(u32, u32),
+    ) -> Result<RenderOutput, EnvError> {
+        if let Some(e) = Self::declines(scene) {
+            return Err(e);
+        }
+        let start = Instant::now();
+        let gbuffer = GBuffer::new(ctx, gpu_scene)?;
+        let accumulation = Accumulation::new(ctx, gpu_scene.width, gpu_scene.height)?;
+        let spp = settings.spp.max(1);
+        let cube = CubeTable::new(ctx, settings.face_resolution, spp.div_ceil(2))?;
+        let seed = pcg::hash(&[settings.seed, 0x656e76]);
+        let frames = settings.frames.max(1);
+        let strategy = settings.strategy;
+        let passes = progressive::run(
+            ctx,
+            frames,
+            &accumulation,
+            |cmd, frame| {
+                // The G-buffer and the emission the camera sees (the map behind the scene).
+                self.direct.record(
+                    cmd,
+                    gpu_scene,
+                    &gbuffer,
+                    &accumulation,
+                    frame,
+                    settings.seed,
+                    settings.pixels,
+                    0,
+                    true,
+                )?;
+                if strategy.uses_cube() {
+                    cmd.pass("cube map", |cmd| cube.record_weights(cmd, gpu_scene))?;
+                    cmd.pass("cdf", |cmd| cube.record_cdf(cmd))?;
+                    // Each frame's samples are a Halton sequence from index 0 under the frame's
+                    // own scrambling: every pixel uses a prefix (M_f of them), and a prefix of
+                    // one sequence is well spread where a strided piece of a longer one is not.
+                    cmd.pass("light samples", |cmd| {
+                        cube.record_samples(cmd, 0, pcg::hash(&[seed, frame]))
+                    })?;
+                }
+                cmd.pass("shade", |cmd| {
+                    self.shade.record(
+                        cmd,
+                        gpu_scene,
+                        &gbuffer,
+                        &cube,
+                        &accumulation,
+                        strategy,
+                        spp,
+                        frame,
+                        seed,
+                    )
+                })
+            },
+            progress,
+        )?;
+        Ok(RenderOutput {
+            image: accumulation.resolve(frames),
+            passes,
+            wall_ms: start.elapsed().as_secs_f64() * 1e3,
+            nonfinite_estimates: accumulation.nonfinite_estimates()?,
+            stats: vec![],
+        })
+    }
+}

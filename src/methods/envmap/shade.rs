@@ -1,0 +1,61 @@
+//! glsl/shade_env.comp: the environment map's direct light at every G-buffer point, with a
+//! shadow ray per sample, by the chosen strategy (Lu 14 Eq. 3.4-3.7, Alg. 2, and baselines).
+
+use bytemuck::{Pod, Zeroable};
+
+use crate::gpu::{bind, Commands, Context, GpuResult, Kernel};
+use crate::methods::accumulation::Accumulation;
+use crate::methods::gbuffer::GBuffer;
+use crate::scene::gpu::GpuScene;
+
+use super::cube::CubeTable;
+use super::Strategy;
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct ShadeParams {
+    resolution: u32,
+    per_face: u32,
+    strategy: u32,
+    spp: f32,
+    frame: u32,
+    seed: u32,
+}
+
+pub struct ShadeEnv(Kernel);
+
+impl ShadeEnv {
+    pub fn new(ctx: &Context) -> GpuResult<Self> {
+        Ok(ShadeEnv(Kernel::new(ctx, "shade_env")?))
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    pub fn record<'a>(
+        &'a self,
+        cmd: &mut Commands<'a>,
+        scene: &'a GpuScene,
+        gbuffer: &'a GBuffer,
+        cube: &'a CubeTable,
+        accumulation: &'a Accumulation,
+        strategy: Strategy,
+        spp: u32,
+        frame: u32,
+        seed: u32,
+    ) -> GpuResult<()> {
+        let mut bindings = scene.bindings();
+        bindings.push(bind("GBuffer", &gbuffer.texels));
+        bindings.extend(accumulation.bindings());
+        bindings.extend(cube.bindings());
+        bindings.push(bind("EnvSamples", &cube.samples));
+        let params = ShadeParams {
+            resolution: cube.resolution,
+            per_face: cube.per_face,
+            strategy: strategy.code(),
+            spp: spp as f32,
+            frame,
+            seed,
+        };
+        self.0
+            .dispatch(cmd, &bindings, &params, scene.image_workgroups())
+    }
+}
