@@ -1,6 +1,7 @@
 //! Any method across many seeds on one scene: the image mean against the reference's, relMSE
 //! against a split reference, GPU time and the method's stats, averaged over seeds. The figures
-//! behind issue 6's U office comparison and issue 7's environment and roulette checks.
+//! behind issue 6's U office comparison, issue 7's environment checks and issue 8's equal-error
+//! ratios.
 //!
 //!   cargo run --release --example method_seeds -- SCENE.toml WIDTHxHEIGHT SEEDS REF_SPP \
 //!       REF_DEPTH "bir:strategy=both,vpls=256,frames=8" "bundles:directions=uniform" ...
@@ -8,8 +9,8 @@
 //! The reference is two path-traced renders of REF_SPP samples each (seeds 77 and 78) with at
 //! most REF_DEPTH scattering events (1: direct light; 1024: all), at pixel centres when a
 //! configuration asks for `pixel_centres=true`, cached next to the scene as
-//! method_seeds_ref_{77,78}_WxH_SPP_dDEPTH[_centres].exr. Each configuration is METHOD:PARAMS,
-//! PARAMS comma-separated key=value pairs as in suite files (Method::from_params: numbers,
+//! method_seeds_ref_{77,78}_WxH_SPP_dDEPTH[_centres]_HASH.exr (HASH: of the scene file's
+//! text). Each configuration is METHOD:PARAMS, PARAMS comma-separated key=value pairs as in suite files (Method::from_params: numbers,
 //! true/false, or bare words for choices); it renders with seeds 1000.. and prints the image
 //! mean relative to the reference's (mean and standard error over seeds), relMSE against the
 //! split reference (metrics::rel_mse_against_split_reference: the references' own noise taken
@@ -125,9 +126,14 @@ fn main() {
     scene.camera.width = width;
     scene.camera.height = height;
     let gpu = GpuScene::upload(&ctx, &scene).expect("scene upload");
+    // Keyed by the scene file's text too, so an edited scene never reuses a stale reference.
+    let text = std::fs::read(&scene_path).unwrap_or_default();
+    let key = text.iter().fold(0xcbf29ce484222325u64, |h, &b| {
+        (h ^ b as u64).wrapping_mul(0x100000001b3)
+    });
     let cache = |seed: u32| {
         scene_path.with_file_name(format!(
-            "method_seeds_ref_{seed}_{width}x{height}_{ref_spp}_d{ref_depth}{}.exr",
+            "method_seeds_ref_{seed}_{width}x{height}_{ref_spp}_d{ref_depth}{}_{key:016x}.exr",
             if centres { "_centres" } else { "" }
         ))
     };

@@ -31,6 +31,9 @@ layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 #include "env_cube.glsl"
 
 layout(set = 0, binding = 24, std430) readonly buffer EnvSamples { vec4 env_samples[]; };
+// Per pixel, summed over frames: x the light samples used (their beta weights), y those that
+// are effective (above the surface: not cancelled by the cosine; Lu Fig. 3.6).
+layout(set = 0, binding = 25, std430) buffer EnvSampleCounts { vec2 env_sample_counts[]; };
 
 layout(push_constant) uniform ShadeParams {
     uint resolution;  // R
@@ -118,6 +121,7 @@ void main() {
     float mu[6];
     face_shares(n, mu);
     float half_count = 0.5 * ns;
+    vec2 counts = vec2(0.0);
     // Light samples: M_f = mu_f N_s / 2 from face f, the last one weighted by frac(M_f).
     for (uint f = 0u; f < 6u; ++f) {
         float count = mu[f] * half_count;
@@ -127,6 +131,7 @@ void main() {
             vec4 ls = env_samples[f * params.per_face + i];
             if (!(ls.w > 0.0)) continue;
             vec3 wi = ls.xyz;
+            counts += vec2(beta, dot(n, wi) > 0.0 && dot(side, wi) > 0.0 ? beta : 0.0);
             vec3 s = integrand(m, n, side, wo, wi);
             if (!(max(max(s.r, s.g), s.b) > 0.0)) continue;
             float denominator = 0.5 * mu[f] * ls.w + 0.5 * bsdf_pdf(m, n, wo, wi);
@@ -152,5 +157,6 @@ void main() {
         float denominator = 0.5 * mu[f] * pdf_l + 0.5 * pdf_b;
         if (visible(origin, wi)) sum += beta * s / denominator;
     }
+    env_sample_counts[index] += counts;
     accumulate_radiance(index, sum / ns);
 }

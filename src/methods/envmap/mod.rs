@@ -10,7 +10,7 @@ use std::time::Instant;
 
 use thiserror::Error;
 
-use crate::gpu::{Context, GpuError};
+use crate::gpu::{Buffer, Context, GpuError};
 use crate::methods::accumulation::Accumulation;
 use crate::methods::direct::GBufferAndDirectLight;
 use crate::methods::gbuffer::{GBuffer, PixelSampling};
@@ -149,6 +149,7 @@ impl Env {
         let spp = settings.spp.max(1);
         let cube = CubeTable::new(ctx, settings.face_resolution, spp.div_ceil(2))?;
         let seed = pcg::hash(&[settings.seed, 0x656e76]);
+        let counts = Buffer::<[f32; 2]>::zeroed(ctx, "EnvSampleCounts", gpu_scene.pixel_count())?;
         let frames = settings.frames.max(1);
         let strategy = settings.strategy;
         let passes = progressive::run(
@@ -185,6 +186,7 @@ impl Env {
                         &gbuffer,
                         &cube,
                         &accumulation,
+                        &counts,
                         strategy,
                         spp,
                         frame,
@@ -194,12 +196,27 @@ impl Env {
             },
             progress,
         )?;
+        let mut stats = vec![];
+        if strategy.uses_cube() {
+            // Over the pixels that see a surface, per frame: the light samples used and the
+            // fraction of them above the surface (Lu Fig. 3.6's effective samples).
+            let counts = counts.read()?;
+            let lit: Vec<&[f32; 2]> = counts.iter().filter(|c| c[0] > 0.0).collect();
+            let used: f64 = lit.iter().map(|c| c[0] as f64).sum();
+            let effective: f64 = lit.iter().map(|c| c[1] as f64).sum();
+            let per_pixel = used / (lit.len().max(1) as f64 * frames as f64);
+            stats.push(("light_samples_per_pixel".into(), per_pixel));
+            stats.push((
+                "effective_light_fraction".into(),
+                if used > 0.0 { effective / used } else { 0.0 },
+            ));
+        }
         Ok(RenderOutput {
             image: accumulation.resolve(frames),
             passes,
             wall_ms: start.elapsed().as_secs_f64() * 1e3,
             nonfinite_estimates: accumulation.nonfinite_estimates()?,
-            stats: vec![],
+            stats,
         })
     }
 }

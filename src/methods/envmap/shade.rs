@@ -3,7 +3,7 @@
 
 use bytemuck::{Pod, Zeroable};
 
-use crate::gpu::{bind, Commands, Context, GpuResult, Kernel};
+use crate::gpu::{bind, Buffer, Commands, Context, GpuResult, Kernel};
 use crate::methods::accumulation::Accumulation;
 use crate::methods::gbuffer::GBuffer;
 use crate::scene::gpu::GpuScene;
@@ -37,6 +37,7 @@ impl ShadeEnv {
         gbuffer: &'a GBuffer,
         cube: &'a CubeTable,
         accumulation: &'a Accumulation,
+        counts: &'a Buffer<[f32; 2]>,
         strategy: Strategy,
         spp: u32,
         frame: u32,
@@ -47,6 +48,7 @@ impl ShadeEnv {
         bindings.extend(accumulation.bindings());
         bindings.extend(cube.bindings());
         bindings.push(bind("EnvSamples", &cube.samples));
+        bindings.push(bind("EnvSampleCounts", counts));
         let params = ShadeParams {
             resolution: cube.resolution,
             per_face: cube.per_face,
