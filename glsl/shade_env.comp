@@ -12,6 +12,9 @@
 //       h = s / (mu_face(w) pdf_L(w | face(w)) / 2 + pdf_B(w) / 2),
 //     L = (sum of beta g + sum of beta h) / N_s, unbiased whatever the split (N_L = N_B).
 //   uniform-faces (1): the same with mu_f = 1/6 (the thesis's comparison).
+//   latlong (4): N_s / 2 light samples per pixel from one table over the whole
+//     equirectangular map (luminance times solid angle: the pbrt/Mitsuba sampler,
+//     equirect_table.glsl), random per pixel, and N_s / 2 BRDF samples, balance heuristic.
 //   brdf (2): N_s BRDF samples, s / pdf_B.
 //   cosine (3): N_s cosine-weighted directions about n, s / (cos / pi).
 // BRDF and cosine samples are random per pixel (seed, pixel, sample).
@@ -29,6 +32,7 @@ layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 #include "radiance.glsl"
 #include "cubemap.glsl"
 #include "env_cube.glsl"
+#include "equirect_table.glsl"
 
 layout(set = 0, binding = 24, std430) readonly buffer EnvSamples { vec4 env_samples[]; };
 // Per pixel, summed over frames: x the light samples used (their beta weights), y those that
@@ -48,6 +52,7 @@ layout(push_constant) uniform ShadeParams {
 #define STRATEGY_UNIFORM_FACES 1u
 #define STRATEGY_BRDF 2u
 #define STRATEGY_COSINE 3u
+#define STRATEGY_LATLONG 4u
 
 // mu_f(n) for every face (Eq. 3.4), or 1/6 each.
 void face_shares(vec3 n, out float mu[6]) {
@@ -118,10 +123,50 @@ void main() {
         return;
     }
 
-    float mu[6];
-    face_shares(n, mu);
     float half_count = 0.5 * ns;
     vec2 counts = vec2(0.0);
+    uint whole = uint(ceil(half_count));
+
+    if (params.strategy == STRATEGY_LATLONG) {
+        for (uint i = 0u; i < whole && !equirect_table_empty(); ++i) {
+            float beta = min(1.0, half_count - float(i));
+            uint sample_index = params.frame * whole + i;
+            vec4 u = vec4(random(params.seed, index, sample_index, 3u),
+                          random(params.seed, index, sample_index, 4u),
+                          random(params.seed, index, sample_index, 5u),
+                          random(params.seed, index, sample_index, 6u));
+            uint texel;
+            vec3 wi = equirect_sample(u, texel);
+            float q = equirect_texel_density(texel);
+            if (!(q > 0.0)) continue;
+            counts += vec2(beta, dot(n, wi) > 0.0 && dot(side, wi) > 0.0 ? beta : 0.0);
+            vec3 s = integrand(m, n, side, wo, wi);
+            if (!(max(max(s.r, s.g), s.b) > 0.0)) continue;
+            float denominator = 0.5 * q + 0.5 * bsdf_pdf(m, n, wo, wi);
+            if (visible(origin, wi)) sum += beta * s / denominator;
+        }
+        for (uint i = 0u; i < whole; ++i) {
+            float beta = min(1.0, half_count - float(i));
+            uint sample_index = params.frame * whole + i;
+            vec3 u = vec3(random(params.seed, index, sample_index, 0u),
+                          random(params.seed, index, sample_index, 1u),
+                          random(params.seed, index, sample_index, 2u));
+            vec3 wi;
+            if (!bsdf_sample(m, n, wo, u, wi)) continue;
+            float pdf_b = bsdf_pdf(m, n, wo, wi);
+            if (!(pdf_b > 0.0)) continue;
+            vec3 s = integrand(m, n, side, wo, wi);
+            if (!(max(max(s.r, s.g), s.b) > 0.0)) continue;
+            float denominator = 0.5 * equirect_density(wi) + 0.5 * pdf_b;
+            if (visible(origin, wi)) sum += beta * s / denominator;
+        }
+        env_sample_counts[index] += counts;
+        accumulate_radiance(index, sum / ns);
+        return;
+    }
+
+    float mu[6];
+    face_shares(n, mu);
     // Light samples: M_f = mu_f N_s / 2 from face f, the last one weighted by frac(M_f).
     for (uint f = 0u; f < 6u; ++f) {
         float count = mu[f] * half_count;
@@ -139,7 +184,6 @@ void main() {
         }
     }
     // BRDF samples: N_s / 2, the last one weighted by its fraction.
-    uint whole = uint(ceil(half_count));
     for (uint i = 0u; i < whole; ++i) {
         float beta = min(1.0, half_count - float(i));
         uint sample_index = params.frame * whole + i;

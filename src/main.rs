@@ -133,7 +133,7 @@ struct RenderArgs {
     /// bir: which VPLs are shaded: standard (from the lights), reverse (from the camera) or
     /// both [default]. bundles: which one-bounce paths: through the VPLs (vpl), through the
     /// ray bundles (bundle), or both combined by MIS (mis) [default]. env: how the map's light
-    /// is sampled: dynamic [default], uniform-faces, brdf or cosine.
+    /// is sampled: dynamic [default], uniform-faces, latlong, brdf or cosine.
     #[arg(long, value_enum)]
     strategy: Option<StrategyArg>,
     /// env: texels along a side of each face of the cube map that drives the light samples
@@ -281,6 +281,8 @@ enum StrategyArg {
     Brdf,
     /// env: cosine-weighted hemisphere sampling only.
     Cosine,
+    /// env: one table over the whole latitude-longitude map (pbrt, Mitsuba), MIS with BRDF.
+    Latlong,
 }
 
 #[derive(Clone, Copy, clap::ValueEnum)]
@@ -685,7 +687,10 @@ fn render(options: &ContextOptions, args: RenderArgs) -> Result<()> {
                 Some(StrategyArg::UniformFaces) => EnvStrategy::UniformFaces,
                 Some(StrategyArg::Brdf) => EnvStrategy::Brdf,
                 Some(StrategyArg::Cosine) => EnvStrategy::Cosine,
-                Some(_) => bail!("--strategy: env takes dynamic, uniform-faces, brdf or cosine"),
+                Some(StrategyArg::Latlong) => EnvStrategy::Latlong,
+                Some(_) => {
+                    bail!("--strategy: env takes dynamic, uniform-faces, latlong, brdf or cosine")
+                }
             },
             face_resolution: args.face_resolution,
             pixels,

@@ -6,6 +6,7 @@ pub mod bir;
 pub mod bundles;
 pub mod direct;
 pub mod envmap;
+pub mod equirect_table;
 pub mod gbuffer;
 pub mod ir;
 pub mod method;

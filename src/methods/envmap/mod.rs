@@ -20,6 +20,7 @@ use crate::sampling::pcg;
 use crate::scene::gpu::GpuScene;
 use crate::scene::Scene;
 
+use crate::methods::equirect_table::EquirectTable;
 use cube::CubeTable;
 use shade::ShadeEnv;
 
@@ -35,12 +36,16 @@ pub enum Strategy {
     Brdf,
     /// Cosine-weighted hemisphere sampling only.
     Cosine,
+    /// Half the samples from one table over the whole equirectangular map (luminance times
+    /// solid angle: pbrt's and Mitsuba's sampler), half from the BRDF, balance heuristic.
+    Latlong,
 }
 
 impl Strategy {
-    pub const ALL: [Strategy; 4] = [
+    pub const ALL: [Strategy; 5] = [
         Strategy::Dynamic,
         Strategy::UniformFaces,
+        Strategy::Latlong,
         Strategy::Brdf,
         Strategy::Cosine,
     ];
@@ -51,6 +56,7 @@ impl Strategy {
             Strategy::UniformFaces => "uniform-faces",
             Strategy::Brdf => "brdf",
             Strategy::Cosine => "cosine",
+            Strategy::Latlong => "latlong",
         }
     }
 
@@ -61,6 +67,7 @@ impl Strategy {
             Strategy::UniformFaces => 1,
             Strategy::Brdf => 2,
             Strategy::Cosine => 3,
+            Strategy::Latlong => 4,
         }
     }
 
@@ -149,9 +156,10 @@ impl Env {
         let spp = settings.spp.max(1);
         let cube = CubeTable::new(ctx, settings.face_resolution, spp.div_ceil(2))?;
         let seed = pcg::hash(&[settings.seed, 0x656e76]);
-        let counts = Buffer::<[f32; 2]>::zeroed(ctx, "EnvSampleCounts", gpu_scene.pixel_count())?;
-        let frames = settings.frames.max(1);
         let strategy = settings.strategy;
+        let counts = Buffer::<[f32; 2]>::zeroed(ctx, "EnvSampleCounts", gpu_scene.pixel_count())?;
+        let latlong = EquirectTable::new(ctx, gpu_scene, 0.0, strategy == Strategy::Latlong)?;
+        let frames = settings.frames.max(1);
         let passes = progressive::run(
             ctx,
             frames,
@@ -179,12 +187,16 @@ impl Env {
                         cube.record_samples(cmd, 0, pcg::hash(&[seed, frame]))
                     })?;
                 }
+                if latlong.is_built() {
+                    cmd.pass("latlong table", |cmd| latlong.record(cmd, gpu_scene))?;
+                }
                 cmd.pass("shade", |cmd| {
                     self.shade.record(
                         cmd,
                         gpu_scene,
                         &gbuffer,
                         &cube,
+                        &latlong,
                         &accumulation,
                         &counts,
                         strategy,
@@ -197,7 +209,7 @@ impl Env {
             progress,
         )?;
         let mut stats = vec![];
-        if strategy.uses_cube() {
+        if strategy.uses_cube() || strategy == Strategy::Latlong {
             // Over the pixels that see a surface, per frame: the light samples used and the
             // fraction of them above the surface (Lu Fig. 3.6's effective samples).
             let counts = counts.read()?;

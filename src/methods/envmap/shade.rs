@@ -10,6 +10,7 @@ use crate::scene::gpu::GpuScene;
 
 use super::cube::CubeTable;
 use super::Strategy;
+use crate::methods::equirect_table::EquirectTable;
 
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
@@ -36,6 +37,7 @@ impl ShadeEnv {
         scene: &'a GpuScene,
         gbuffer: &'a GBuffer,
         cube: &'a CubeTable,
+        latlong: &'a EquirectTable,
         accumulation: &'a Accumulation,
         counts: &'a Buffer<[f32; 2]>,
         strategy: Strategy,
@@ -47,6 +49,7 @@ impl ShadeEnv {
         bindings.push(bind("GBuffer", &gbuffer.texels));
         bindings.extend(accumulation.bindings());
         bindings.extend(cube.bindings());
+        bindings.extend(latlong.bindings());
         bindings.push(bind("EnvSamples", &cube.samples));
         bindings.push(bind("EnvSampleCounts", counts));
         let params = ShadeParams {

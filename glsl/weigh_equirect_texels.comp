@@ -1,8 +1,8 @@
 #version 450
-// Tokuyoshi 12 Eq. 2: the weight of each environment texel in the density the global ray
-// bundles' directions are drawn from, (Y(Le) + Lo) times the texel's solid angle; the GPU
-// prefix sum turns the weights into the table bundle_directions.glsl samples. One invocation
-// per texel, (column, row) of the dispatch.
+// The weights of the equirectangular sampling table (equirect_table.glsl): each texel's
+// (Y(Le) + offset) times its solid angle. The offset is Tokuyoshi 12 Eq. 2's Lo for the bundle
+// directions and 0 for light sampling. The GPU prefix sums turn the weights into the table.
+// One invocation per texel, (column, row) of the dispatch.
 
 #extension GL_GOOGLE_include_directive : require
 
@@ -14,10 +14,10 @@ layout(local_size_x = 64, local_size_y = 1, local_size_z = 1) in;
 #include "sampling.glsl"
 #include "envmap.glsl"
 
-layout(set = 0, binding = 15, std430) writeonly buffer BundleDirectionWeights { float weights[]; };
+layout(set = 0, binding = 15, std430) writeonly buffer EquirectWeights { float weights[]; };
 
 layout(push_constant) uniform WeighParams {
-    float offset;  // Lo, the paper's user offset for indirect light (luminance)
+    float offset;  // added to every texel's luminance
 } params;
 
 void main() {
