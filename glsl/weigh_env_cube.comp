@@ -4,9 +4,10 @@
 // times its solid angle, the luminance being the largest over the map texels its footprint
 // touches (a conservative maximum: the cube map only shapes the pdf, so it must be positive
 // wherever the map is, and point sampling would lose a sun smaller than a cube texel). The
-// footprint: 8 points per edge of the texel (32, corners included) mapped to the map's rows and
-// columns, the columns unwrapped across the seam, one map texel of margin on every side, and
-// every column with the rows up to the pole for the texel that holds a pole. One invocation
+// footprint: the texel's corners and the edge points where the polar angle can peak (4 to 8)
+// mapped to the map's rows and columns, the columns unwrapped across the seam, one map texel of
+// margin on every side, and every column with the rows up to the pole for the texel that holds
+// a pole. One invocation
 // per cube texel: (i, j, face). src/sampling/cubemap.rs mirrors it (cube_weights).
 
 #extension GL_GOOGLE_include_directive : require
@@ -44,20 +45,32 @@ void main() {
     vec2 lo = vec2(-1.0 + s * float(i), -1.0 + s * float(j));
     vec2 hi = lo + s;
 
-    // Boundary walk: bottom (u up), right (v up), top (u down), left (v down).
+    // The walk: each corner counter-clockwise (bottom-left, bottom-right, top-right, top-left),
+    // and after it, where the edge it starts crosses the line on which the polar angle along
+    // the edge can peak (u = 0 on edges of constant v; v = 0 on edges of constant u, on +Y and
+    // -Y only), the crossing. The azimuth's extremes are at corners, the polar angle's at
+    // corners or crossings (src/sampling/cubemap.rs `equirect_footprint` has the argument).
+    bool polar_face = f == 2u || f == 3u;
+    bool crosses_u = lo.x < 0.0 && hi.x > 0.0;
+    bool crosses_v = polar_face && lo.y < 0.0 && hi.y > 0.0;
+    vec2 walk[8];
+    uint count = 0u;
+    walk[count++] = lo;
+    if (crosses_u) walk[count++] = vec2(0.0, lo.y);
+    walk[count++] = vec2(hi.x, lo.y);
+    if (crosses_v) walk[count++] = vec2(hi.x, 0.0);
+    walk[count++] = hi;
+    if (crosses_u) walk[count++] = vec2(0.0, hi.y);
+    walk[count++] = vec2(lo.x, hi.y);
+    if (crosses_v) walk[count++] = vec2(lo.x, 0.0);
+
     float row_min = 1e30;
     float row_max = -1e30;
-    float col_first = 0.0;
     float col_previous = 0.0;
     float col_min = 1e30;
     float col_max = -1e30;
-    for (uint k = 0u; k < 32u; ++k) {
-        uint edge = k / 8u;
-        float t = float(k % 8u) / 8.0;
-        vec2 uv = edge == 0u ? vec2(mix(lo.x, hi.x, t), lo.y)
-                : edge == 1u ? vec2(hi.x, mix(lo.y, hi.y, t))
-                : edge == 2u ? vec2(mix(hi.x, lo.x, t), hi.y)
-                             : vec2(lo.x, mix(hi.y, lo.y, t));
+    for (uint k = 0u; k < count; ++k) {
+        vec2 uv = walk[k];
         vec2 c = map_coordinates(normalize(cube_face_point(f, uv.x, uv.y)));
         row_min = min(row_min, c.y);
         row_max = max(row_max, c.y);

@@ -340,6 +340,26 @@ enum Bench {
         #[arg(long, value_delimiter = ',', value_parser = parse_case)]
         sizes: Vec<scan_bench::ScanCase>,
     },
+    /// env's per-frame sampling table (cube map, CDFs, light samples) at several cube-face
+    /// resolutions, next to the time to copy the map once (the bandwidth bound) and the
+    /// latitude-longitude table's build.
+    Env {
+        /// Scene file with an environment map (default: scenes/glossy-env of the source tree).
+        scene: Option<PathBuf>,
+        /// Replace the scene's map by a synthetic sky of this size, WIDTHxHEIGHT (the work
+        /// depends on the map's size, not its content).
+        #[arg(long, value_parser = parse_size)]
+        map: Option<(u32, u32)>,
+        /// Cube-face resolutions, comma separated.
+        #[arg(long, value_delimiter = ',', default_values_t = [64u32, 128, 256, 512, 1024])]
+        faces: Vec<u32>,
+        /// Light samples per face (N_s / 2).
+        #[arg(long, default_value_t = 30)]
+        samples: u32,
+        /// Timed repetitions per resolution (the median is reported), after 2 warm-up runs.
+        #[arg(long, default_value_t = 9)]
+        repeats: usize,
+    },
     /// Instant radiosity's per-pass GPU times for a range of VPL budgets, and its gathering
     /// throughput in (pixel, VPL) pairs/s next to the scene's incoherent any-hit ray rate.
     Ir {
@@ -391,6 +411,18 @@ enum Bench {
         #[arg(long, default_value_t = 1 << 20)]
         rays: usize,
     },
+}
+
+fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let bad = || format!("`{s}`: expected WIDTHxHEIGHT, each in 1..=16384");
+    let (w, h) = s.split_once('x').ok_or_else(bad)?;
+    let parse = |t: &str| {
+        t.trim()
+            .parse::<u32>()
+            .ok()
+            .filter(|v| (1..=16384).contains(v))
+    };
+    Ok((parse(w).ok_or_else(bad)?, parse(h).ok_or_else(bad)?))
 }
 
 fn parse_case(s: &str) -> Result<scan_bench::ScanCase, String> {
@@ -460,6 +492,43 @@ fn run(cli: Cli) -> Result<()> {
             }
             bar.finish_and_clear();
             scan_bench::print_table(&device_line(ctx.info()), &results);
+            Ok(())
+        }
+        Command::Bench(Bench::Env {
+            scene,
+            map,
+            faces,
+            samples,
+            repeats,
+        }) => {
+            let path = scene.unwrap_or_else(|| {
+                PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes/glossy-env/scene.toml")
+            });
+            let mut scene = scene::load(&path)?;
+            if let Some((w, h)) = map {
+                scene.environment = Some(irad::bench::env::synthetic_sky(w, h));
+            }
+            anyhow::ensure!(
+                faces.iter().all(|&r| (1..=4096).contains(&r)),
+                "--faces: each resolution must be in 1..=4096"
+            );
+            let ctx = Context::new(&options)?;
+            let bar = progress(faces.len() as u64, "bench env");
+            let results = irad::bench::env::run(
+                &ctx,
+                &scene,
+                &faces,
+                samples.max(1),
+                2,
+                repeats.max(1),
+                |r| {
+                    bar.set_message(format!("R = {r}"));
+                    bar.inc(1);
+                },
+            )?;
+            bar.finish_and_clear();
+            let map = scene.environment.as_ref().expect("checked by run");
+            irad::bench::env::print_table(&device_line(ctx.info()), map, samples.max(1), &results);
             Ok(())
         }
         Command::Bench(Bench::Ir {

@@ -1,6 +1,7 @@
 //! Benchmarks: they measure and print; they assert nothing (tests do).
 
 pub mod chart;
+pub mod env;
 pub mod ir;
 pub mod rays;
 pub mod scan;

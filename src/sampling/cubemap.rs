@@ -141,22 +141,33 @@ pub struct Footprint {
     pub columns: Option<(i64, i64)>,
 }
 
-/// The boundary points of cube texel (i, j) on which its footprint is measured: 8 per edge,
-/// 32 in all, corners included, walked counter-clockwise in (u, v) as weigh_env_cube.comp does:
-/// bottom edge (v = v0, u from u0), right (u = u1, v from v0), top (v = v1, u from u1), left
-/// (u = u0, v from v1), at t = k / 8, k = 0..7, along each edge.
-pub fn footprint_boundary(r: u32, i: u32, j: u32) -> [(f64, f64); 32] {
+/// The boundary points of cube texel (i, j) of `face` on which its footprint is measured, in
+/// the order weigh_env_cube.comp walks them (counter-clockwise in (u, v): bottom edge v = v0,
+/// right u = u1, top v = v1, left u = u0): each corner, then, where the edge crosses the line
+/// on which the polar angle along it can peak inside it, that point: u = 0 on the edges of
+/// constant v (every face), v = 0 on the edges of constant u (faces +Y and -Y only). With the
+/// corners these hold every extreme of the polar angle and the azimuth over the texel (see
+/// `equirect_footprint`); 4 to 8 points.
+pub fn footprint_boundary(r: u32, face: usize, i: u32, j: u32) -> Vec<(f64, f64)> {
     let ((u0, v0), (u1, v1)) = texel_bounds(r, i, j);
-    let mix = |a: f64, b: f64, t: f64| a + (b - a) * t;
-    let mut points = [(0.0, 0.0); 32];
-    for (k, p) in points.iter_mut().enumerate() {
-        let t = (k % 8) as f64 / 8.0;
-        *p = match k / 8 {
-            0 => (mix(u0, u1, t), v0),
-            1 => (u1, mix(v0, v1, t)),
-            2 => (mix(u1, u0, t), v1),
-            _ => (u0, mix(v1, v0, t)),
-        };
+    let polar_face = face == 2 || face == 3;
+    let mut points = Vec::with_capacity(8);
+    let crosses = |a: f64, b: f64| a.min(b) < 0.0 && a.max(b) > 0.0;
+    points.push((u0, v0));
+    if crosses(u0, u1) {
+        points.push((0.0, v0));
+    }
+    points.push((u1, v0));
+    if polar_face && crosses(v0, v1) {
+        points.push((u1, 0.0));
+    }
+    points.push((u1, v1));
+    if crosses(u0, u1) {
+        points.push((0.0, v1));
+    }
+    points.push((u0, v1));
+    if polar_face && crosses(v0, v1) {
+        points.push((u0, 0.0));
     }
     points
 }
@@ -164,7 +175,7 @@ pub fn footprint_boundary(r: u32, i: u32, j: u32) -> [(f64, f64); 32] {
 /// The conservative footprint of cube texel (i, j) of face `face` (resolution r) on a W x H
 /// equirectangular map, as weigh_env_cube.comp computes it:
 ///
-/// - The 32 `footprint_boundary` points are mapped to continuous (column, row) coordinates
+/// - The `footprint_boundary` points are mapped to continuous (column, row) coordinates
 ///   (`equirect_coordinates`).
 /// - Rows: floor(min row) - 1 ..= floor(max row) + 1, clamped to [0, H - 1].
 /// - Columns: the columns are unwrapped along the walk, each step's difference (to the previous
@@ -178,10 +189,9 @@ pub fn footprint_boundary(r: u32, i: u32, j: u32) -> [(f64, f64); 32] {
 /// the sphere, so their extremes over the texel lie on its boundary. The azimuth is monotone
 /// along each arc (a non-meridian great circle meets each half-meridian once), so its extremes
 /// are at the corners. The polar angle along an arc is extremal at its ends or at the foot of
-/// the perpendicular to it: u = 0 on a v-edge of a side face, u = 0 or v = 0 on +Y/-Y. Those
-/// lines are texel edges for even R and the texels' midlines (t = 4/8, sampled) for odd R, so
-/// the sampled points hold every extreme and the one-texel margins only absorb rounding (f32 on
-/// the GPU, where the radiance lookup is f32 too).
+/// the perpendicular to it: u = 0 on a v-edge of a side face, u = 0 or v = 0 on +Y/-Y. The
+/// walk holds the corners and those crossings, so it holds every extreme, and the one-texel
+/// margins only absorb rounding (f32 on the GPU, where the radiance lookup is f32 too).
 pub fn equirect_footprint(r: u32, face: usize, i: u32, j: u32, w: u32, h: u32) -> Footprint {
     let half = 0.5 * w as f64;
     let mut row_min = f64::INFINITY;
@@ -189,7 +199,7 @@ pub fn equirect_footprint(r: u32, face: usize, i: u32, j: u32, w: u32, h: u32) -
     let mut col_min = f64::INFINITY;
     let mut col_max = f64::NEG_INFINITY;
     let mut previous = 0.0f64;
-    for (k, &(u, v)) in footprint_boundary(r, i, j).iter().enumerate() {
+    for (k, &(u, v)) in footprint_boundary(r, face, i, j).iter().enumerate() {
         let (mut col, row) = equirect_coordinates(face_direction(face, u, v), w, h);
         row_min = row_min.min(row);
         row_max = row_max.max(row);
