@@ -11,6 +11,7 @@
 //       g = s / (mu_f pdf_L(w | f) / 2 + pdf_B(w) / 2),
 //       h = s / (mu_face(w) pdf_L(w | face(w)) / 2 + pdf_B(w) / 2),
 //     L = (sum of beta g + sum of beta h) / N_s, unbiased whatever the split (N_L = N_B).
+//     With light_share 1 (light only): all N_s from the faces, g = s / (mu_f pdf_L) (Eq. 3.5).
 //   uniform-faces (1): the same with mu_f = 1/6 (the thesis's comparison).
 //   latlong (4): N_s / 2 light samples per pixel from one table over the whole
 //     equirectangular map (luminance times solid angle: the pbrt/Mitsuba sampler,
@@ -46,6 +47,8 @@ layout(push_constant) uniform ShadeParams {
     float spp;        // N_s
     uint frame;
     uint seed;
+    float light_share;  // dynamic and uniform-faces: the share of N_s taken by light samples,
+                        // 1/2 (Eq. 3.7, with BRDF samples) or 1 (light only, Eq. 3.5)
 } params;
 
 #define STRATEGY_DYNAMIC 0u
@@ -167,9 +170,14 @@ void main() {
 
     float mu[6];
     face_shares(n, mu);
-    // Light samples: M_f = mu_f N_s / 2 from face f, the last one weighted by frac(M_f).
+    // With a = light_share: light samples M_f = mu_f a N_s from face f, the last one weighted
+    // by frac(M_f), and (1 - a) N_s BRDF samples; both weighted by the balance heuristic over
+    // a mu pdf_L + (1 - a) pdf_B (a = 1/2: Eq. 3.7; a = 1: Eq. 3.5).
+    float a = params.light_share;
+    float brdf_count = (1.0 - a) * ns;
+    whole = uint(ceil(brdf_count));
     for (uint f = 0u; f < 6u; ++f) {
-        float count = mu[f] * half_count;
+        float count = mu[f] * a * ns;
         uint whole = min(uint(ceil(count)), params.per_face);
         for (uint i = 0u; i < whole; ++i) {
             float beta = min(1.0, count - float(i));
@@ -179,13 +187,13 @@ void main() {
             counts += vec2(beta, dot(n, wi) > 0.0 && dot(side, wi) > 0.0 ? beta : 0.0);
             vec3 s = integrand(m, n, side, wo, wi);
             if (!(max(max(s.r, s.g), s.b) > 0.0)) continue;
-            float denominator = 0.5 * mu[f] * ls.w + 0.5 * bsdf_pdf(m, n, wo, wi);
+            float denominator = a * mu[f] * ls.w + (1.0 - a) * bsdf_pdf(m, n, wo, wi);
             if (visible(origin, wi)) sum += beta * s / denominator;
         }
     }
-    // BRDF samples: N_s / 2, the last one weighted by its fraction.
+    // BRDF samples: (1 - a) N_s, the last one weighted by its fraction.
     for (uint i = 0u; i < whole; ++i) {
-        float beta = min(1.0, half_count - float(i));
+        float beta = min(1.0, brdf_count - float(i));
         uint sample_index = params.frame * whole + i;
         vec3 u = vec3(random(params.seed, index, sample_index, 0u),
                       random(params.seed, index, sample_index, 1u),
@@ -198,7 +206,7 @@ void main() {
         if (!(max(max(s.r, s.g), s.b) > 0.0)) continue;
         uint f;
         float pdf_l = cube_face_pdf(wi, r, f);
-        float denominator = 0.5 * mu[f] * pdf_l + 0.5 * pdf_b;
+        float denominator = a * mu[f] * pdf_l + (1.0 - a) * pdf_b;
         if (visible(origin, wi)) sum += beta * s / denominator;
     }
     env_sample_counts[index] += counts;

@@ -140,6 +140,10 @@ struct RenderArgs {
     /// (rebuilt from the scene's map every frame).
     #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(1..=4096))]
     face_resolution: u32,
+    /// env --strategy dynamic|uniform-faces: take every sample from the cube map (Lu Eq. 3.5,
+    /// the thesis's Fig. 3.6 setting) instead of half from the BRDF (Eq. 3.7).
+    #[arg(long)]
+    light_only: bool,
     /// bundles: iterations per frame, each one VPL and one global ray bundle (the paper's 21).
     #[arg(long, default_value_t = 21, value_parser = clap::value_parser!(u32).range(1..=65536))]
     iterations: u32,
@@ -762,6 +766,7 @@ fn render(options: &ContextOptions, args: RenderArgs) -> Result<()> {
                 }
             },
             face_resolution: args.face_resolution,
+            light_only: args.light_only,
             pixels,
         }),
     };

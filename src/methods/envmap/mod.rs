@@ -86,6 +86,9 @@ pub struct EnvSettings {
     pub strategy: Strategy,
     /// R: texels along a cube face's side.
     pub face_resolution: u32,
+    /// dynamic and uniform-faces: every sample from the cube map (Eq. 3.5, the thesis's
+    /// Fig. 3.6 comparison) instead of half from the BRDF (Eq. 3.7).
+    pub light_only: bool,
     pub pixels: PixelSampling,
 }
 
@@ -97,6 +100,7 @@ impl Default for EnvSettings {
             seed: 0,
             strategy: Strategy::Dynamic,
             face_resolution: 256,
+            light_only: false,
             pixels: PixelSampling::Jittered,
         }
     }
@@ -154,7 +158,9 @@ impl Env {
         let gbuffer = GBuffer::new(ctx, gpu_scene)?;
         let accumulation = Accumulation::new(ctx, gpu_scene.width, gpu_scene.height)?;
         let spp = settings.spp.max(1);
-        let cube = CubeTable::new(ctx, settings.face_resolution, spp.div_ceil(2))?;
+        let light_only = settings.light_only && settings.strategy.uses_cube();
+        let per_face = if light_only { spp } else { spp.div_ceil(2) };
+        let cube = CubeTable::new(ctx, settings.face_resolution, per_face)?;
         let seed = pcg::hash(&[settings.seed, 0x656e76]);
         let strategy = settings.strategy;
         let counts = Buffer::<[f32; 2]>::zeroed(ctx, "EnvSampleCounts", gpu_scene.pixel_count())?;
@@ -201,6 +207,7 @@ impl Env {
                         &counts,
                         strategy,
                         spp,
+                        light_only,
                         frame,
                         seed,
                     )

@@ -21,6 +21,7 @@ struct ShadeParams {
     spp: f32,
     frame: u32,
     seed: u32,
+    light_share: f32,
 }
 
 pub struct ShadeEnv(Kernel);
@@ -42,6 +43,7 @@ impl ShadeEnv {
         counts: &'a Buffer<[f32; 2]>,
         strategy: Strategy,
         spp: u32,
+        light_only: bool,
         frame: u32,
         seed: u32,
     ) -> GpuResult<()> {
@@ -59,6 +61,7 @@ impl ShadeEnv {
             spp: spp as f32,
             frame,
             seed,
+            light_share: if light_only { 1.0 } else { 0.5 },
         };
         self.0
             .dispatch(cmd, &bindings, &params, scene.image_workgroups())
