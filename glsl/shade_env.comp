@@ -49,6 +49,7 @@ layout(push_constant) uniform ShadeParams {
     uint seed;
     float light_share;  // dynamic and uniform-faces: the share of N_s taken by light samples,
                         // 1/2 (Eq. 3.7, with BRDF samples) or 1 (light only, Eq. 3.5)
+    uint integer_counts;  // 1: round(M_f) samples per face instead of beta-weighted M_f
 } params;
 
 #define STRATEGY_DYNAMIC 0u
@@ -170,16 +171,23 @@ void main() {
 
     float mu[6];
     face_shares(n, mu);
-    // With a = light_share: light samples M_f = mu_f a N_s from face f, the last one weighted
-    // by frac(M_f), and (1 - a) N_s BRDF samples; both weighted by the balance heuristic over
-    // a mu pdf_L + (1 - a) pdf_B (a = 1/2: Eq. 3.7; a = 1: Eq. 3.5).
+    // With a = light_share: M_f = mu_f a N_s light samples from face f, the last one weighted
+    // by frac(M_f) (or, with integer counts, round(M_f) samples of weight 1: the thesis's
+    // comparison, Fig. 3.9), and N_B = (1 - a) N_s BRDF samples, every sample weighted by the
+    // balance heuristic over the counts actually taken (Veach's multi-sample form):
+    //   s / (M_face(w) pdf_L(w | face(w)) + N_B pdf_B(w)),
+    // which is Eq. 3.7 for a = 1/2 and fractional counts, and Eq. 3.5 for a = 1.
     float a = params.light_share;
     float brdf_count = (1.0 - a) * ns;
-    whole = uint(ceil(brdf_count));
+    float taken[6];
     for (uint f = 0u; f < 6u; ++f) {
         float count = mu[f] * a * ns;
-        uint whole = min(uint(ceil(count)), params.per_face);
-        for (uint i = 0u; i < whole; ++i) {
+        taken[f] = params.integer_counts != 0u ? round(count) : count;
+    }
+    for (uint f = 0u; f < 6u; ++f) {
+        float count = taken[f];
+        uint n_f = min(uint(ceil(count)), params.per_face);
+        for (uint i = 0u; i < n_f; ++i) {
             float beta = min(1.0, count - float(i));
             vec4 ls = env_samples[f * params.per_face + i];
             if (!(ls.w > 0.0)) continue;
@@ -187,11 +195,12 @@ void main() {
             counts += vec2(beta, dot(n, wi) > 0.0 && dot(side, wi) > 0.0 ? beta : 0.0);
             vec3 s = integrand(m, n, side, wo, wi);
             if (!(max(max(s.r, s.g), s.b) > 0.0)) continue;
-            float denominator = a * mu[f] * ls.w + (1.0 - a) * bsdf_pdf(m, n, wo, wi);
+            float denominator = count * ls.w + brdf_count * bsdf_pdf(m, n, wo, wi);
             if (visible(origin, wi)) sum += beta * s / denominator;
         }
     }
-    // BRDF samples: (1 - a) N_s, the last one weighted by its fraction.
+    // BRDF samples: N_B, the last one weighted by its fraction.
+    whole = uint(ceil(brdf_count));
     for (uint i = 0u; i < whole; ++i) {
         float beta = min(1.0, brdf_count - float(i));
         uint sample_index = params.frame * whole + i;
@@ -206,9 +215,9 @@ void main() {
         if (!(max(max(s.r, s.g), s.b) > 0.0)) continue;
         uint f;
         float pdf_l = cube_face_pdf(wi, r, f);
-        float denominator = a * mu[f] * pdf_l + (1.0 - a) * pdf_b;
+        float denominator = taken[f] * pdf_l + brdf_count * pdf_b;
         if (visible(origin, wi)) sum += beta * s / denominator;
     }
     env_sample_counts[index] += counts;
-    accumulate_radiance(index, sum / ns);
+    accumulate_radiance(index, sum);
 }

@@ -144,6 +144,10 @@ struct RenderArgs {
     /// the thesis's Fig. 3.6 setting) instead of half from the BRDF (Eq. 3.7).
     #[arg(long)]
     light_only: bool,
+    /// env --strategy dynamic|uniform-faces: round(M_f) light samples per face, each of weight
+    /// 1, instead of the beta weights (the thesis's integer counts, Fig. 3.9).
+    #[arg(long)]
+    integer_counts: bool,
     /// bundles: iterations per frame, each one VPL and one global ray bundle (the paper's 21).
     #[arg(long, default_value_t = 21, value_parser = clap::value_parser!(u32).range(1..=65536))]
     iterations: u32,
@@ -767,6 +771,7 @@ fn render(options: &ContextOptions, args: RenderArgs) -> Result<()> {
             },
             face_resolution: args.face_resolution,
             light_only: args.light_only,
+            integer_counts: args.integer_counts,
             pixels,
         }),
     };

@@ -59,16 +59,7 @@ fn every_strategy_matches_the_reference_direct_light() {
         for m in scene.materials.iter_mut() {
             m.ns = m.ns.min(20.0);
         }
-        let mut sky = test_sky();
-        for t in sky.texels.iter_mut().filter(|t| t.x > 1.0) {
-            *t = Vec3::splat(0.5);
-        }
-        for j in 6..10u32 {
-            for i in 28..36u32 {
-                sky.texels[(j * sky.width + i) as usize] = Vec3::new(12.0, 10.0, 8.0);
-            }
-        }
-        scene.environment = Some(sky);
+        scene.environment = Some(broad_sky());
         let gpu = GpuScene::upload(ctx, &scene).unwrap();
         let r = luminance_mean(&direct_reference(ctx, &gpu, 8192, 51));
         let env = Env::new(ctx).unwrap();
@@ -99,6 +90,7 @@ fn every_strategy_matches_the_reference_direct_light() {
                         strategy,
                         face_resolution: 32,
                         light_only,
+                        integer_counts: false,
                         pixels: PixelSampling::Centres,
                     };
                     let out = env.render(ctx, &scene, &gpu, &settings, |_, _| {}).unwrap();
@@ -115,6 +107,21 @@ fn every_strategy_matches_the_reference_direct_light() {
             );
         }
     });
+}
+
+/// The test sky with its small bright texels replaced by a broad bright patch (8 x 4 texels):
+/// no tiny sun for BRDF or cosine samples to find by chance.
+fn broad_sky() -> Environment {
+    let mut sky = test_sky();
+    for t in sky.texels.iter_mut().filter(|t| t.x > 1.0) {
+        *t = Vec3::splat(0.5);
+    }
+    for j in 6..10u32 {
+        for i in 28..36u32 {
+            sky.texels[(j * sky.width + i) as usize] = Vec3::new(12.0, 10.0, 8.0);
+        }
+    }
+    sky
 }
 
 /// A 64 x 32 sky for the sampler tests: a smooth gradient, a sun of one texel, and a bright
@@ -330,6 +337,7 @@ fn dynamic_shares_waste_fewer_samples_with_the_sun_behind() {
                     strategy,
                     face_resolution: 64,
                     light_only: false,
+                    integer_counts: false,
                     pixels: PixelSampling::Centres,
                 };
                 let out = env.render(ctx, &scene, &gpu, &settings, |_, _| {}).unwrap();
@@ -354,6 +362,66 @@ fn dynamic_shares_waste_fewer_samples_with_the_sun_behind() {
         assert!(
             dynamic_error < uniform_error,
             "relMSE: dynamic {dynamic_error:.4e}, uniform faces {uniform_error:.4e}"
+        );
+    });
+}
+
+/// Lu 14 Fig. 3.9: with integer sample counts per face, neighbouring pixels whose face shares
+/// mu_f(n) round to different counts jump; the beta weights bring each sample in gradually.
+/// Light samples only (the figure's setting: every pixel then sees the same shared samples and
+/// no per-pixel random numbers, so the image is a function of the normal alone; integer counts
+/// are biased there, a face rounded to no samples being lost, so this compares continuity
+/// only). On the smooth glossy sphere of glossy-env under the broad-patch sky, the gradient energy (the sum of squared
+/// luminance differences between neighbouring pixels) is lower with beta weights than with
+/// integer counts, summed over seeds.
+#[test]
+fn beta_weights_keep_neighbouring_pixels_continuous() {
+    with_gpu(|ctx| {
+        let mut scene = scene("glossy-env", 160, 120);
+        scene.environment = Some(broad_sky());
+        let gpu = GpuScene::upload(ctx, &scene).unwrap();
+        let env = Env::new(ctx).unwrap();
+        // A box inside the sphere in the image (no silhouette).
+        let (x0, x1, y0, y1) = (70u32, 90u32, 56u32, 78u32);
+        let energy = |image: &Image| {
+            let y = |x: u32, yy: u32| {
+                let p = image.pixels[(yy * image.width + x) as usize];
+                0.2126 * p[0] as f64 + 0.7152 * p[1] as f64 + 0.0722 * p[2] as f64
+            };
+            let mut e = 0.0;
+            for yy in y0..y1 {
+                for x in x0..x1 {
+                    e += (y(x + 1, yy) - y(x, yy)).powi(2) + (y(x, yy + 1) - y(x, yy)).powi(2);
+                }
+            }
+            e
+        };
+        let (mut fractional, mut integer) = (0.0, 0.0);
+        for seed in 0..4 {
+            for integer_counts in [false, true] {
+                let settings = EnvSettings {
+                    spp: 8,
+                    frames: 1,
+                    seed: 400 + seed,
+                    strategy: Strategy::Dynamic,
+                    face_resolution: 64,
+                    light_only: true,
+                    integer_counts,
+                    pixels: PixelSampling::Centres,
+                };
+                let out = env.render(ctx, &scene, &gpu, &settings, |_, _| {}).unwrap();
+                let e = energy(&out.image);
+                if integer_counts {
+                    integer += e;
+                } else {
+                    fractional += e;
+                }
+            }
+        }
+        eprintln!("gradient energy: beta weights {fractional:.4}, integer counts {integer:.4}");
+        assert!(
+            fractional < integer,
+            "beta weights {fractional:.4} against integer counts {integer:.4}"
         );
     });
 }

@@ -206,6 +206,7 @@ impl Method {
                 p.insert("strategy".into(), json!(s.strategy.name()));
                 p.insert("face_resolution".into(), json!(s.face_resolution));
                 p.insert("light_only".into(), json!(s.light_only));
+                p.insert("integer_counts".into(), json!(s.integer_counts));
                 p.insert(
                     "pixel_centres".into(),
                     json!(s.pixels == PixelSampling::Centres),
@@ -222,7 +223,7 @@ impl Method {
     /// floor, power_samples, batch, pixel_centres, seed; bundles takes iterations, frames,
     /// strategy, heuristic, two_bounce, two_bounce_clamp, glossy, roughness_m,
     /// contribution_clamp, lights, directions, env_offset, pixel_centres, seed; env takes spp,
-    /// frames, strategy, face_resolution, light_only, pixel_centres, seed.
+    /// frames, strategy, face_resolution, light_only, integer_counts, pixel_centres, seed.
     pub fn from_params(name: &str, params: &toml::Table) -> Result<Method, ParamError> {
         let mut reader = Params {
             method: name,
@@ -348,6 +349,7 @@ impl Method {
                     },
                     face_resolution: reader.uint("face_resolution", d.face_resolution, 1, 4096)?,
                     light_only: reader.flag("light_only", d.light_only)?,
+                    integer_counts: reader.flag("integer_counts", d.integer_counts)?,
                     pixels: reader.pixels()?,
                 })
             }
@@ -486,6 +488,7 @@ impl<'a> Params<'a> {
                 "strategy",
                 "face_resolution",
                 "light_only",
+                "integer_counts",
                 "pixel_centres",
             ],
             "bundles" => &[
@@ -697,7 +700,7 @@ mod tests {
     fn env_parameters_read_back() {
         let env = Method::from_params(
             "env",
-            &table("spp = 20\nframes = 3\nstrategy = \"uniform-faces\"\nface_resolution = 64\nlight_only = true\npixel_centres = true"),
+            &table("spp = 20\nframes = 3\nstrategy = \"uniform-faces\"\nface_resolution = 64\nlight_only = true\ninteger_counts = true\npixel_centres = true"),
         )
         .unwrap();
         let back: toml::Table = env

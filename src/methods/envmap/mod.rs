@@ -89,6 +89,11 @@ pub struct EnvSettings {
     /// dynamic and uniform-faces: every sample from the cube map (Eq. 3.5, the thesis's
     /// Fig. 3.6 comparison) instead of half from the BRDF (Eq. 3.7).
     pub light_only: bool,
+    /// dynamic and uniform-faces: round(M_f) light samples per face, each of weight 1 (the
+    /// thesis's "classical integer number of samples", Fig. 3.9) instead of the beta weights;
+    /// still unbiased under Eq. 3.7 (the BRDF samples cover a face rounded to none), not with
+    /// light samples only.
+    pub integer_counts: bool,
     pub pixels: PixelSampling,
 }
 
@@ -101,6 +106,7 @@ impl Default for EnvSettings {
             strategy: Strategy::Dynamic,
             face_resolution: 256,
             light_only: false,
+            integer_counts: false,
             pixels: PixelSampling::Jittered,
         }
     }
@@ -208,6 +214,7 @@ impl Env {
                         strategy,
                         spp,
                         light_only,
+                        settings.integer_counts,
                         frame,
                         seed,
                     )

@@ -22,6 +22,7 @@ struct ShadeParams {
     frame: u32,
     seed: u32,
     light_share: f32,
+    integer_counts: u32,
 }
 
 pub struct ShadeEnv(Kernel);
@@ -44,6 +45,7 @@ impl ShadeEnv {
         strategy: Strategy,
         spp: u32,
         light_only: bool,
+        integer_counts: bool,
         frame: u32,
         seed: u32,
     ) -> GpuResult<()> {
@@ -62,6 +64,7 @@ impl ShadeEnv {
             frame,
             seed,
             light_share: if light_only { 1.0 } else { 0.5 },
+            integer_counts: integer_counts as u32,
         };
         self.0
             .dispatch(cmd, &bindings, &params, scene.image_workgroups())
