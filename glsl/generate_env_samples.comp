@@ -4,7 +4,8 @@
 // the face by binary search over the face's row scan (dimension 0), a texel in the row by
 // binary search over the row's scan (dimension 1), and (u, v) uniformly in the texel
 // (dimensions 2-3). Each sample stores its direction and pdf_L(w | f) (env_cube.glsl); a face
-// with no weight stores pdf 0. One invocation per (sample, face).
+// with no weight stores pdf 0. One invocation per (sample, face); slot
+// (set * 6 + f) * per_face + k.
 
 #extension GL_GOOGLE_include_directive : require
 
@@ -22,6 +23,7 @@ layout(push_constant) uniform SampleParams {
     uint per_face;    // samples per face
     uint first;       // Halton index of sample 0
     uint seed;
+    uint set;         // which of the sample sets (alpha uses two, independently scrambled)
 } params;
 
 void main() {
@@ -29,7 +31,7 @@ void main() {
     uint f = gl_GlobalInvocationID.y;
     if (k >= params.per_face || f >= 6u) return;
     uint r = params.resolution;
-    uint slot = f * params.per_face + k;
+    uint slot = (params.set * 6u + f) * params.per_face + k;
     float total = cube_face_totals[f];
     if (!(total > 0.0)) {
         env_samples[slot] = vec4(0.0, 1.0, 0.0, 0.0);

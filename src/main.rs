@@ -133,7 +133,8 @@ struct RenderArgs {
     /// bir: which VPLs are shaded: standard (from the lights), reverse (from the camera) or
     /// both [default]. bundles: which one-bounce paths: through the VPLs (vpl), through the
     /// ray bundles (bundle), or both combined by MIS (mis) [default]. env: how the map's light
-    /// is sampled: dynamic [default], uniform-faces, latlong, brdf or cosine.
+    /// is sampled: dynamic [default], uniform-faces, alpha, latlong, hierarchical, brdf or
+    /// cosine.
     #[arg(long, value_enum)]
     strategy: Option<StrategyArg>,
     /// env: texels along a side of each face of the cube map that drives the light samples
@@ -148,6 +149,11 @@ struct RenderArgs {
     /// 1, instead of the beta weights (the thesis's integer counts, Fig. 3.9).
     #[arg(long)]
     integer_counts: bool,
+    /// env --strategy alpha: M, the samples per pixel and frame, half light and half BRDF,
+    /// that estimate the per-pixel split alpha (Lu 14 Eq. 5.4-5.5); the other --spp minus M
+    /// use it [default: half of --spp].
+    #[arg(long, value_parser = clap::value_parser!(u32).range(0..=65536))]
+    alpha_samples: Option<u32>,
     /// bundles: iterations per frame, each one VPL and one global ray bundle (the paper's 21).
     #[arg(long, default_value_t = 21, value_parser = clap::value_parser!(u32).range(1..=65536))]
     iterations: u32,
@@ -291,6 +297,11 @@ enum StrategyArg {
     Cosine,
     /// env: one table over the whole latitude-longitude map (pbrt, Mitsuba), MIS with BRDF.
     Latlong,
+    /// env: a luminance mip pyramid descended 2x2 per level (Falcor, Mitsuba 3), MIS with BRDF.
+    Hierarchical,
+    /// env: dynamic's samplers split per pixel by Lu 14 ch. 5's estimated alpha; writes
+    /// OUT.alpha.{exr,png} (red: light samples, green: BRDF samples, yellow: half and half).
+    Alpha,
 }
 
 #[derive(Clone, Copy, clap::ValueEnum)]
@@ -765,13 +776,16 @@ fn render(options: &ContextOptions, args: RenderArgs) -> Result<()> {
                 Some(StrategyArg::Brdf) => EnvStrategy::Brdf,
                 Some(StrategyArg::Cosine) => EnvStrategy::Cosine,
                 Some(StrategyArg::Latlong) => EnvStrategy::Latlong,
-                Some(_) => {
-                    bail!("--strategy: env takes dynamic, uniform-faces, latlong, brdf or cosine")
-                }
+                Some(StrategyArg::Hierarchical) => EnvStrategy::Hierarchical,
+                Some(StrategyArg::Alpha) => EnvStrategy::Alpha,
+                Some(_) => bail!(
+                    "--strategy: env takes dynamic, uniform-faces, alpha, latlong, hierarchical, brdf or cosine"
+                ),
             },
             face_resolution: args.face_resolution,
             light_only: args.light_only,
             integer_counts: args.integer_counts,
+            alpha_samples: args.alpha_samples,
             pixels,
         }),
     };

@@ -113,6 +113,9 @@ pub fn render(
         irad_version: image::sidecar::IRAD_VERSION.into(),
     };
     let paths = image::write_all(&job.out, &output.image, &record, job.exposure)?;
+    for (name, map) in &output.maps {
+        image::sidecar::write_map(&job.out, name, map)?;
+    }
     Ok(RenderReport {
         image: output.image,
         record,

@@ -11,6 +11,7 @@ use irad::methods::bundles::light_vertices::{
     FrameLightVertices, LightSelection, TraceLightVertices,
 };
 use irad::methods::envmap::cube::CubeTable;
+use irad::methods::envmap::pyramid::{self, EnvPyramid, PyramidDraws};
 use irad::methods::envmap::{Env, EnvSettings, Strategy};
 use irad::methods::gbuffer::PixelSampling;
 use irad::methods::reference::{Reference, ReferenceSettings};
@@ -96,6 +97,7 @@ fn every_strategy_matches_the_reference_direct_light() {
                         face_resolution: 32,
                         light_only,
                         integer_counts: false,
+                        alpha_samples: None,
                         pixels: PixelSampling::Centres,
                     };
                     let out = env.render(ctx, &scene, &gpu, &settings, |_, _| {}).unwrap();
@@ -154,12 +156,12 @@ fn test_sky() -> Environment {
 
 /// Runs the table's three passes on `scene`'s map and reads back the weights and the samples.
 fn build_table(ctx: &Context, gpu: &GpuScene, r: u32, per_face: u32) -> (Vec<f32>, Vec<[f32; 4]>) {
-    let cube = CubeTable::new(ctx, r, per_face).unwrap();
+    let cube = CubeTable::new(ctx, r, per_face, 1).unwrap();
     let mut cmd = Commands::new(ctx).unwrap();
     cmd.pass("cube map", |cmd| cube.record_weights(cmd, gpu))
         .unwrap();
     cmd.pass("cdf", |cmd| cube.record_cdf(cmd)).unwrap();
-    cmd.pass("light samples", |cmd| cube.record_samples(cmd, 0, 7))
+    cmd.pass("light samples", |cmd| cube.record_samples(cmd, 0, 0, 7))
         .unwrap();
     cmd.submit_and_wait().unwrap();
     (cube.weights.read().unwrap(), cube.samples.read().unwrap())
@@ -343,6 +345,7 @@ fn dynamic_shares_waste_fewer_samples_with_the_sun_behind() {
                     face_resolution: 64,
                     light_only: false,
                     integer_counts: false,
+                    alpha_samples: None,
                     pixels: PixelSampling::Centres,
                 };
                 let out = env.render(ctx, &scene, &gpu, &settings, |_, _| {}).unwrap();
@@ -412,6 +415,7 @@ fn beta_weights_keep_neighbouring_pixels_continuous() {
                     face_resolution: 64,
                     light_only: true,
                     integer_counts,
+                    alpha_samples: None,
                     pixels: PixelSampling::Centres,
                 };
                 let out = env.render(ctx, &scene, &gpu, &settings, |_, _| {}).unwrap();
@@ -512,5 +516,328 @@ fn latlong_table_samples_follow_their_pdf() {
         let dof = cells.saturating_sub(1).max(1) as f64;
         eprintln!("latlong table: chi^2 {chi2:.1} over {dof} degrees of freedom");
         assert!(chi2 / dof < 1.5, "chi^2 {chi2:.1} / {dof}");
+    });
+}
+
+/// A w x h version of the test sky: the gradient, a one-texel sun, a bright texel at the u = 0
+/// seam and one in the row at the north pole.
+fn sky_of_size(w: u32, h: u32) -> Environment {
+    let mut texels = Vec::with_capacity((w * h) as usize);
+    for j in 0..h {
+        for i in 0..w {
+            let up = 1.0 - j as f32 / h as f32;
+            texels.push(Vec3::new(0.2, 0.3, 0.5) * (0.2 + up) + Vec3::splat(0.01 * (i % 7) as f32));
+        }
+    }
+    texels[(h * 10 / 32 * w + w * 20 / 64) as usize] = Vec3::splat(400.0);
+    texels[(h * 14 / 32 * w) as usize] = Vec3::splat(50.0);
+    texels[3] = Vec3::splat(80.0);
+    Environment {
+        width: w,
+        height: h,
+        texels,
+        source: "test sky".into(),
+    }
+}
+
+fn luminance(c: Vec3) -> f64 {
+    (0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z) as f64
+}
+
+/// The `hierarchical` pyramid's leaves as glsl/weigh_env_pyramid.comp builds them: the
+/// largest luminance among the map texels a leaf's footprint touches times its solid angle.
+fn pyramid_leaves(env: &Environment) -> (u32, u32, Vec<f64>) {
+    let (w, h) = (env.width, env.height);
+    let rows = pyramid::leaf_rows(h);
+    let columns = 2 * rows;
+    let mut leaves = vec![];
+    for j in 0..rows {
+        for i in 0..columns {
+            let c0 = i * w / columns;
+            let c1 = ((i + 1) * w).div_ceil(columns).max(c0 + 1).min(w);
+            let r0 = j * h / rows;
+            let r1 = ((j + 1) * h).div_ceil(rows).max(r0 + 1).min(h);
+            let mut y: f64 = 0.0;
+            for r in r0..r1 {
+                for c in c0..c1 {
+                    y = y.max(luminance(env.texels[(r * w + c) as usize]));
+                }
+            }
+            leaves.push(y * leaf_solid_angle(j, rows));
+        }
+    }
+    (columns, rows, leaves)
+}
+
+fn leaf_solid_angle(j: u32, rows: u32) -> f64 {
+    let pi = std::f64::consts::PI;
+    let h = rows as f64;
+    pi / h * ((pi * j as f64 / h).cos() - (pi * (j + 1) as f64 / h).cos())
+}
+
+/// The `hierarchical` sampler (Falcor's and Mitsuba 3's mip-pyramid descent) against its own
+/// density, on maps whose size is not a power of two (so leaves straddle map texels): the GPU
+/// leaves against the CPU's conservative maxima; each draw's reported density against the
+/// leaf's weight over the total and its solid angle; the histogram of 200,000 draws over the
+/// leaves by a chi-square test (as for the cube map; zero-weight leaves never drawn); the
+/// density at uniform probes against the CPU's, and its integral over the sphere (4 pi times
+/// the probes' mean) within 4 standard errors of 1. The maps carry a one-texel sun, a bright
+/// texel at the u = 0 seam and one at the pole.
+#[test]
+fn hierarchical_samples_follow_their_density() {
+    with_gpu(|ctx| {
+        let mut scene = scene("glossy-env", 8, 8);
+        for (w, h) in [(48u32, 24u32), (64, 32), (100, 20)] {
+            let mut sky = sky_of_size(w, h);
+            if h >= 24 {
+                // A black band: zero-weight leaves must never be drawn.
+                for t in sky.texels[(h / 2 * w) as usize..((h / 2 + 2) * w) as usize].iter_mut() {
+                    *t = Vec3::ZERO;
+                }
+            }
+            scene.environment = Some(sky);
+            let env = scene.environment.as_ref().unwrap();
+            let gpu = GpuScene::upload(ctx, &scene).unwrap();
+            let n = 200_000u32;
+            let pyramid = EnvPyramid::new(ctx, &gpu, true).unwrap();
+            let draws = PyramidDraws::new(ctx, n).unwrap();
+            let mut cmd = Commands::new(ctx).unwrap();
+            cmd.pass("pyramid", |cmd| pyramid.record(cmd, &gpu))
+                .unwrap();
+            cmd.pass("draws", |cmd| draws.record(cmd, &gpu, &pyramid, 5))
+                .unwrap();
+            cmd.submit_and_wait().unwrap();
+            let stored = pyramid.weights.read().unwrap();
+            let (columns, rows, cpu) = pyramid_leaves(env);
+            for (k, (&g, &c)) in stored.iter().zip(&cpu).enumerate() {
+                assert!(
+                    (g as f64 - c).abs() <= 1e-4 * c + 1e-12,
+                    "{w}x{h}: leaf {k}: GPU {g} against {c}"
+                );
+            }
+            let top = pyramid.levels().last().unwrap().2;
+            let total = stored[top] as f64 + stored[top + 1] as f64;
+            let cpu_total: f64 = cpu.iter().sum();
+            assert!(
+                (total - cpu_total).abs() <= 1e-4 * cpu_total,
+                "{w}x{h}: total {total} against {cpu_total}"
+            );
+            let leaf_of = |d: Vec3| {
+                let (c, r) = cubemap::equirect_coordinates(d.as_dvec3().normalize(), columns, rows);
+                let i = (c.floor() as u32).min(columns - 1);
+                let j = (r.floor() as u32).min(rows - 1);
+                let f = |x: f64| (x - x.round()).abs();
+                ((j * columns + i) as usize, f(c).min(f(r)))
+            };
+            let density =
+                |t: usize| cpu[t] / cpu_total / leaf_solid_angle(t as u32 / columns, rows);
+            let mut counts = vec![0u32; cpu.len()];
+            for d in &draws.draws.read().unwrap() {
+                let (t, edge) = leaf_of(Vec3::new(d[0], d[1], d[2]));
+                let p = density(t);
+                assert!(
+                    (d[3] as f64 - p).abs() <= 1e-3 * p || edge < 0.02,
+                    "{w}x{h}: reported density {} against {p} in leaf {t}",
+                    d[3]
+                );
+                counts[t] += 1;
+            }
+            let (mut chi2, mut cells) = (0.0, 0u32);
+            let (mut pooled_o, mut pooled_e) = (0.0, 0.0);
+            for (t, &o) in counts.iter().enumerate() {
+                let e = n as f64 * cpu[t] / cpu_total;
+                if e == 0.0 {
+                    assert_eq!(o, 0, "{w}x{h}: leaf {t} has weight 0 but {o} draws");
+                    continue;
+                }
+                pooled_o += o as f64;
+                pooled_e += e;
+                if pooled_e >= 5.0 {
+                    chi2 += (pooled_o - pooled_e).powi(2) / pooled_e;
+                    cells += 1;
+                    (pooled_o, pooled_e) = (0.0, 0.0);
+                }
+            }
+            let dof = cells.saturating_sub(1).max(1) as f64;
+            let mut integral = vec![];
+            for d in &draws.probes.read().unwrap() {
+                let (t, edge) = leaf_of(Vec3::new(d[0], d[1], d[2]));
+                let p = density(t);
+                assert!(
+                    (d[3] as f64 - p).abs() <= 1e-3 * p || edge < 0.02,
+                    "{w}x{h}: probe density {} against {p} in leaf {t}",
+                    d[3]
+                );
+                integral.push(4.0 * std::f64::consts::PI * d[3] as f64);
+            }
+            let (mean, stderr) = mean_and_stderr(&integral);
+            eprintln!(
+                "{w}x{h} map, {columns}x{rows} leaves: chi^2 {chi2:.1} over {dof} degrees of freedom; integral {mean:.4} ± {stderr:.4}"
+            );
+            assert!(chi2 / dof < 1.5, "{w}x{h}: chi^2 {chi2:.1} / {dof}");
+            assert!(
+                (mean - 1.0).abs() < 4.0 * stderr,
+                "{w}x{h}: integral {mean} ± {stderr}"
+            );
+        }
+    });
+}
+
+/// A glossy scene's map with high frequencies: the test sky's gradient under 48 small bright
+/// spots (one texel each, luminance 20 to 200) scattered over the upper hemisphere.
+fn starry_sky() -> Environment {
+    let mut sky = test_sky();
+    let mut rng = 0x2545f491u32;
+    let mut next = || {
+        rng ^= rng << 13;
+        rng ^= rng >> 17;
+        rng ^= rng << 5;
+        rng
+    };
+    for _ in 0..48 {
+        let i = next() % sky.width;
+        let j = next() % (sky.height / 2);
+        let y = 20.0 + (next() % 180) as f32;
+        sky.texels[(j * sky.width + i) as usize] = Vec3::new(y, 0.9 * y, 0.8 * y);
+    }
+    sky
+}
+
+fn env_settings(strategy: Strategy, spp: u32, frames: u32, seed: u32) -> EnvSettings {
+    EnvSettings {
+        spp,
+        frames,
+        seed,
+        strategy,
+        face_resolution: 32,
+        pixels: PixelSampling::Centres,
+        ..Default::default()
+    }
+}
+
+/// Lu 14 Section 5.3.4's two extreme cases, where the second-order estimate of alpha (the BRDF
+/// share, Eq. 5.4) tends to 3/4 instead of 1 and to 1/4 instead of 0 but names the better
+/// strategy: diffuse surfaces under a map that is black but for one texel (a near-Dirac sun:
+/// light sampling wins, alpha below 1/2) and near-mirror surfaces (Phong exponent 2000) under
+/// a smooth sky (BRDF sampling wins, alpha above 1/2). Also the alpha map: red (light) at 1
+/// and green below it where light sampling leads, the other way round where BRDF sampling
+/// does, black where no surface is seen.
+#[test]
+fn alpha_names_the_better_strategy_in_the_extreme_cases() {
+    with_gpu(|ctx| {
+        let env = Env::new(ctx).unwrap();
+        let mut sun = test_sky();
+        sun.texels.iter_mut().for_each(|t| *t = Vec3::ZERO);
+        sun.texels[(10 * sun.width + 20) as usize] = Vec3::splat(400.0);
+        let mut smooth = test_sky();
+        for t in smooth.texels.iter_mut().filter(|t| t.x > 1.0) {
+            *t = Vec3::splat(0.5);
+        }
+        for (name, map, mirror) in [
+            ("diffuse under a sun", sun, false),
+            ("mirror under a smooth sky", smooth, true),
+        ] {
+            let mut scene = scene("glossy-env", 24, 18);
+            for m in scene.materials.iter_mut() {
+                if mirror {
+                    (m.kd, m.ks, m.ns) = (Vec3::ZERO, Vec3::splat(0.9), 2000.0);
+                } else {
+                    (m.kd, m.ks) = (Vec3::splat(0.7), Vec3::ZERO);
+                }
+            }
+            scene.environment = Some(map);
+            let gpu = GpuScene::upload(ctx, &scene).unwrap();
+            let out = env
+                .render(
+                    ctx,
+                    &scene,
+                    &gpu,
+                    &env_settings(Strategy::Alpha, 64, 2, 3),
+                    |_, _| {},
+                )
+                .unwrap();
+            assert_eq!(out.nonfinite_estimates, 0);
+            let alpha = out.stats.iter().find(|(k, _)| k == "mean_alpha").unwrap().1;
+            let (map_name, map) = &out.maps[0];
+            assert_eq!(map_name, "alpha");
+            let (mut light_led, mut brdf_led, mut black) = (0, 0, 0);
+            for p in &map.pixels {
+                assert!(
+                    p.iter().all(|c| (0.0..=1.0).contains(c)),
+                    "{name}: map pixel {p:?}"
+                );
+                match (p[0], p[1]) {
+                    (r, g) if r == 0.0 && g == 0.0 => black += 1,
+                    (r, g) if r == 1.0 && g < 1.0 => light_led += 1,
+                    (r, g) if g == 1.0 && r < 1.0 => brdf_led += 1,
+                    _ => {}
+                }
+            }
+            eprintln!(
+                "{name}: mean alpha (BRDF share) {alpha:.3}; map: {light_led} pixels light-led, {brdf_led} BRDF-led, {black} black"
+            );
+            if mirror {
+                assert!(alpha > 0.6, "{name}: alpha {alpha}");
+                assert!(
+                    brdf_led > 4 * light_led,
+                    "{name}: {brdf_led} against {light_led}"
+                );
+            } else {
+                assert!(alpha < 0.4, "{name}: alpha {alpha}");
+                assert!(
+                    light_led > 4 * brdf_led,
+                    "{name}: {light_led} against {brdf_led}"
+                );
+            }
+        }
+    });
+}
+
+/// Lu 14 Section 5.5.1 (Table 5.2, Fig. 5.1 right): on a glossy scene under a high-frequency
+/// map, alpha's per-pixel variance over 16 seeds, averaged over the pixels, is below that of
+/// the balance heuristic's half and half (dynamic) at the same samples per pixel (the thesis,
+/// without visibility: 20 to 26% lower).
+#[test]
+fn alpha_lowers_the_variance_under_a_high_frequency_map() {
+    with_gpu(|ctx| {
+        let mut scene = scene("glossy-env", 32, 24);
+        scene.environment = Some(starry_sky());
+        let gpu = GpuScene::upload(ctx, &scene).unwrap();
+        let env = Env::new(ctx).unwrap();
+        let variance = |strategy: Strategy| {
+            let images: Vec<Image> = (0..16)
+                .map(|seed| {
+                    let out = env
+                        .render(
+                            ctx,
+                            &scene,
+                            &gpu,
+                            &env_settings(strategy, 32, 1, 500 + seed),
+                            |_, _| {},
+                        )
+                        .unwrap();
+                    assert_eq!(out.nonfinite_estimates, 0);
+                    out.image
+                })
+                .collect();
+            let pixels = images[0].pixels.len();
+            let mut sum = 0.0;
+            for p in 0..pixels {
+                let y: Vec<f64> = images
+                    .iter()
+                    .map(|im| luminance(Vec3::from(im.pixels[p])))
+                    .collect();
+                let mean = y.iter().sum::<f64>() / y.len() as f64;
+                sum += y.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (y.len() - 1) as f64;
+            }
+            sum / pixels as f64
+        };
+        let balance = variance(Strategy::Dynamic);
+        let alpha = variance(Strategy::Alpha);
+        eprintln!(
+            "mean per-pixel variance: balance heuristic {balance:.4e}, alpha {alpha:.4e} ({:+.1}%)",
+            100.0 * (alpha / balance - 1.0)
+        );
+        assert!(alpha < balance, "alpha {alpha} against balance {balance}");
     });
 }

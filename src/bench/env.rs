@@ -81,13 +81,13 @@ pub fn run(
     let mut results = Vec::new();
     for &r in faces {
         progress(r);
-        let cube = CubeTable::new(ctx, r, samples_per_face)?;
+        let cube = CubeTable::new(ctx, r, samples_per_face, 1)?;
         let mut times: [Vec<f64>; 5] = Default::default();
         for i in 0..warmup + repeats {
             let mut cmd = Commands::new(ctx)?;
             cmd.pass("cube map", |cmd| cube.record_weights(cmd, &gpu))?;
             cmd.pass("cdf", |cmd| cube.record_cdf(cmd))?;
-            cmd.pass("light samples", |cmd| cube.record_samples(cmd, 0, 1))?;
+            cmd.pass("light samples", |cmd| cube.record_samples(cmd, 0, 0, 1))?;
             cmd.pass("latlong table", |cmd| latlong.record(cmd, &gpu))?;
             cmd.pass("copy", |cmd| copy.record(cmd, &source, &destination))?;
             let t = cmd.submit_and_wait()?;

@@ -101,6 +101,28 @@ pub fn output_paths(out: &Path) -> (PathBuf, PathBuf, PathBuf) {
     (with("exr"), with("png"), with("json"))
 }
 
+/// Writes a per-pixel map beside the image: `<out>.<name>.exr` (float32) and
+/// `<out>.<name>.png` (the values in [0, 1] as 8 bits, no tone mapping or sRGB curve: a
+/// visualisation, not a picture). Returns the two paths.
+pub fn write_map(out: &Path, name: &str, map: &Image) -> Result<(PathBuf, PathBuf)> {
+    let (exr_path, ..) = output_paths(out);
+    let stem = exr_path.with_extension("");
+    let with = |ext: &str| {
+        let mut s = OsString::from(stem.as_os_str());
+        s.push(format!(".{name}.{ext}"));
+        PathBuf::from(s)
+    };
+    let (exr_map, png_map) = (with("exr"), with("png"));
+    exr::write(&exr_map, map)?;
+    let bytes: Vec<u8> = map
+        .pixels
+        .iter()
+        .flat_map(|p| p.map(|c| (c.clamp(0.0, 1.0) * 255.0).round() as u8))
+        .collect();
+    png::write_rgb8(&png_map, map.width, map.height, &bytes)?;
+    Ok((exr_map, png_map))
+}
+
 /// Writes `<out>.exr` (float32 linear RGB), `<out>.png` (tone-mapped at `exposure` stops) and
 /// `<out>.json`, creating the parent folder, and returns the three paths.
 pub fn write_all(

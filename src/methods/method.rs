@@ -207,6 +207,9 @@ impl Method {
                 p.insert("face_resolution".into(), json!(s.face_resolution));
                 p.insert("light_only".into(), json!(s.light_only));
                 p.insert("integer_counts".into(), json!(s.integer_counts));
+                if let Some(m) = s.alpha_samples {
+                    p.insert("alpha_samples".into(), json!(m));
+                }
                 p.insert(
                     "pixel_centres".into(),
                     json!(s.pixels == PixelSampling::Centres),
@@ -223,7 +226,8 @@ impl Method {
     /// floor, power_samples, batch, pixel_centres, seed; bundles takes iterations, frames,
     /// strategy, heuristic, two_bounce, two_bounce_clamp, glossy, roughness_m,
     /// contribution_clamp, lights, directions, env_offset, pixel_centres, seed; env takes spp,
-    /// frames, strategy, face_resolution, light_only, integer_counts, pixel_centres, seed.
+    /// frames, strategy, face_resolution, light_only, integer_counts, alpha_samples, pixel_centres,
+    /// seed.
     pub fn from_params(name: &str, params: &toml::Table) -> Result<Method, ParamError> {
         let mut reader = Params {
             method: name,
@@ -350,6 +354,10 @@ impl Method {
                     face_resolution: reader.uint("face_resolution", d.face_resolution, 1, 4096)?,
                     light_only: reader.flag("light_only", d.light_only)?,
                     integer_counts: reader.flag("integer_counts", d.integer_counts)?,
+                    alpha_samples: match reader.params.contains_key("alpha_samples") {
+                        true => Some(reader.uint("alpha_samples", 0, 0, 1 << 16)?),
+                        false => d.alpha_samples,
+                    },
                     pixels: reader.pixels()?,
                 })
             }
@@ -489,6 +497,7 @@ impl<'a> Params<'a> {
                 "face_resolution",
                 "light_only",
                 "integer_counts",
+                "alpha_samples",
                 "pixel_centres",
             ],
             "bundles" => &[
@@ -709,6 +718,18 @@ mod tests {
             .map(|(k, v)| (k, toml::Value::try_from(v).unwrap()))
             .collect();
         assert_eq!(Method::from_params("env", &back).unwrap(), env);
+        let alpha = Method::from_params(
+            "env",
+            &table("strategy = \"alpha\"\nspp = 32\nalpha_samples = 8"),
+        )
+        .unwrap();
+        let back: toml::Table = alpha
+            .parameters()
+            .into_iter()
+            .map(|(k, v)| (k, toml::Value::try_from(v).unwrap()))
+            .collect();
+        assert_eq!(back["alpha_samples"].as_integer(), Some(8));
+        assert_eq!(Method::from_params("env", &back).unwrap(), alpha);
         let e = Method::from_params("env", &table("strategy = \"mis\"")).unwrap_err();
         assert!(e.to_string().contains("expected one of \"dynamic\""), "{e}");
         let e = Method::from_params("env", &table("face_resolution = 0")).unwrap_err();

@@ -30,4 +30,7 @@ pub struct RenderOutput {
     /// Method-specific figures for records and reports (bir: the fraction of kept VPLs from
     /// each side, rays per kept VPL), by name.
     pub stats: Vec<(String, f64)>,
+    /// Per-pixel maps written beside the image as `<out>.<name>.exr` and `.png` (env alpha:
+    /// "alpha", the light and BRDF shares), by name.
+    pub maps: Vec<(String, Image)>,
 }

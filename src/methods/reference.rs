@@ -96,6 +96,7 @@ impl Reference {
             wall_ms: start.elapsed().as_secs_f64() * 1e3,
             nonfinite_estimates: accumulation.nonfinite_estimates()?,
             stats: Vec::new(),
+            maps: vec![],
         })
     }
 }

@@ -468,6 +468,7 @@ impl Bir {
             wall_ms: start.elapsed().as_secs_f64() * 1e3,
             nonfinite_estimates: accumulation.nonfinite_estimates()?,
             stats,
+            maps: vec![],
         })
     }
 

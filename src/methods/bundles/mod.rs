@@ -303,6 +303,7 @@ impl Bundles {
                     slots + pixels * (1.0 + slots * shadow_rays),
                 ),
             ],
+            maps: vec![],
         })
     }
 }

@@ -23,6 +23,7 @@ struct SampleParams {
     per_face: u32,
     first: u32,
     seed: u32,
+    set: u32,
 }
 
 pub struct CubeTable {
@@ -32,8 +33,10 @@ pub struct CubeTable {
     over_rows: PrefixSum,
     /// R: texels along a face's side.
     pub resolution: u32,
-    /// Light samples pre-generated per face and frame.
+    /// Light samples pre-generated per face, set and frame.
     pub per_face: u32,
+    /// Independent sample sets (alpha draws its two steps from two).
+    pub sets: u32,
     pub weights: Buffer<f32>,
     row_cdf: Buffer<f32>,
     row_totals: Buffer<f32>,
@@ -43,9 +46,10 @@ pub struct CubeTable {
 }
 
 impl CubeTable {
-    pub fn new(ctx: &Context, resolution: u32, per_face: u32) -> GpuResult<Self> {
+    pub fn new(ctx: &Context, resolution: u32, per_face: u32, sets: u32) -> GpuResult<Self> {
         let r = resolution.max(1) as usize;
         let per_face = per_face.max(1);
+        let sets = sets.max(1);
         Ok(CubeTable {
             weigh: Kernel::new(ctx, "weigh_env_cube")?,
             generate: Kernel::new(ctx, "generate_env_samples")?,
@@ -53,12 +57,13 @@ impl CubeTable {
             over_rows: PrefixSum::new(ctx, r, 6)?,
             resolution: r as u32,
             per_face,
+            sets,
             weights: Buffer::zeroed(ctx, "CubeWeights", 6 * r * r)?,
             row_cdf: Buffer::zeroed(ctx, "CubeRowCdf", 6 * r * r)?,
             row_totals: Buffer::zeroed(ctx, "cube row totals", 6 * r)?,
             face_cdf: Buffer::zeroed(ctx, "CubeFaceCdf", 6 * r)?,
             face_totals: Buffer::zeroed(ctx, "CubeFaceTotals", 6)?,
-            samples: Buffer::zeroed(ctx, "EnvSamples", 6 * per_face as usize)?,
+            samples: Buffer::zeroed(ctx, "EnvSamples", 6 * (sets * per_face) as usize)?,
         })
     }
 
@@ -93,10 +98,12 @@ impl CubeTable {
             .record(cmd, &self.row_totals, &self.face_cdf, &self.face_totals)
     }
 
-    /// Pass "light samples": `per_face` samples per face from Halton index `first`.
+    /// Pass "light samples": `per_face` samples per face of sample set `set` from Halton
+    /// index `first`.
     pub fn record_samples<'a>(
         &'a self,
         cmd: &mut Commands<'a>,
+        set: u32,
         first: u32,
         seed: u32,
     ) -> GpuResult<()> {
@@ -107,6 +114,7 @@ impl CubeTable {
             per_face: self.per_face,
             first,
             seed,
+            set: set.min(self.sets - 1),
         };
         self.generate
             .dispatch_threads(cmd, &bindings, &params, [self.per_face, 6, 1])

@@ -4,6 +4,7 @@
 //! the direct light of the map with visibility by the chosen strategy (shade).
 
 pub mod cube;
+pub mod pyramid;
 pub mod shade;
 
 use std::time::Instant;
@@ -11,6 +12,7 @@ use std::time::Instant;
 use thiserror::Error;
 
 use crate::gpu::{Buffer, Context, GpuError};
+use crate::image::Image;
 use crate::methods::accumulation::Accumulation;
 use crate::methods::direct::GBufferAndDirectLight;
 use crate::methods::gbuffer::{GBuffer, PixelSampling};
@@ -22,6 +24,7 @@ use crate::scene::Scene;
 
 use crate::methods::equirect_table::EquirectTable;
 use cube::CubeTable;
+use pyramid::EnvPyramid;
 use shade::ShadeEnv;
 
 /// How the map's direct light is sampled.
@@ -39,13 +42,21 @@ pub enum Strategy {
     /// Half the samples from one table over the whole equirectangular map (luminance times
     /// solid angle: pbrt's and Mitsuba's sampler), half from the BRDF, balance heuristic.
     Latlong,
+    /// As latlong, with a luminance mip pyramid descended 2x2 per level instead of a CDF
+    /// (Falcor's and Mitsuba 3's sampler).
+    Hierarchical,
+    /// dynamic's two samplers split per pixel by Lu 14 Chapter 5: M samples half and half
+    /// estimate the BRDF share alpha (Eq. 5.4-5.5), the other N use it, Eq. 5.6 combines them.
+    Alpha,
 }
 
 impl Strategy {
-    pub const ALL: [Strategy; 5] = [
+    pub const ALL: [Strategy; 7] = [
         Strategy::Dynamic,
         Strategy::UniformFaces,
+        Strategy::Alpha,
         Strategy::Latlong,
+        Strategy::Hierarchical,
         Strategy::Brdf,
         Strategy::Cosine,
     ];
@@ -57,6 +68,8 @@ impl Strategy {
             Strategy::Brdf => "brdf",
             Strategy::Cosine => "cosine",
             Strategy::Latlong => "latlong",
+            Strategy::Hierarchical => "hierarchical",
+            Strategy::Alpha => "alpha",
         }
     }
 
@@ -68,12 +81,17 @@ impl Strategy {
             Strategy::Brdf => 2,
             Strategy::Cosine => 3,
             Strategy::Latlong => 4,
+            Strategy::Hierarchical => 5,
+            Strategy::Alpha => 6,
         }
     }
 
     /// Whether the strategy samples the cube map (and so needs its table).
     pub fn uses_cube(self) -> bool {
-        matches!(self, Strategy::Dynamic | Strategy::UniformFaces)
+        matches!(
+            self,
+            Strategy::Dynamic | Strategy::UniformFaces | Strategy::Alpha
+        )
     }
 }
 
@@ -94,6 +112,9 @@ pub struct EnvSettings {
     /// still unbiased under Eq. 3.7 (the BRDF samples cover a face rounded to none), not with
     /// light samples only.
     pub integer_counts: bool,
+    /// alpha: M, the samples per pixel and frame that estimate alpha (the rest, N_s - M, use
+    /// it); None: N_s / 2 (Lu's Table 5.2 setting).
+    pub alpha_samples: Option<u32>,
     pub pixels: PixelSampling,
 }
 
@@ -107,6 +128,7 @@ impl Default for EnvSettings {
             face_resolution: 256,
             light_only: false,
             integer_counts: false,
+            alpha_samples: None,
             pixels: PixelSampling::Jittered,
         }
     }
@@ -164,13 +186,23 @@ impl Env {
         let gbuffer = GBuffer::new(ctx, gpu_scene)?;
         let accumulation = Accumulation::new(ctx, gpu_scene.width, gpu_scene.height)?;
         let spp = settings.spp.max(1);
-        let light_only = settings.light_only && settings.strategy.uses_cube();
-        let per_face = if light_only { spp } else { spp.div_ceil(2) };
-        let cube = CubeTable::new(ctx, settings.face_resolution, per_face)?;
-        let seed = pcg::hash(&[settings.seed, 0x656e76]);
         let strategy = settings.strategy;
+        let light_only =
+            settings.light_only && matches!(strategy, Strategy::Dynamic | Strategy::UniformFaces);
+        let alpha_samples = settings.alpha_samples.unwrap_or(spp / 2).min(spp);
+        // Samples per face: the light share of N_s, or for alpha the larger of its two steps'
+        // (M / 2 from set 0; at most N from set 1).
+        let (per_face, sets) = match strategy {
+            Strategy::Alpha => ((alpha_samples.div_ceil(2)).max(spp - alpha_samples), 2),
+            _ if light_only => (spp, 1),
+            _ => (spp.div_ceil(2), 1),
+        };
+        let cube = CubeTable::new(ctx, settings.face_resolution, per_face, sets)?;
+        let seed = pcg::hash(&[settings.seed, 0x656e76]);
         let counts = Buffer::<[f32; 2]>::zeroed(ctx, "EnvSampleCounts", gpu_scene.pixel_count())?;
+        let alpha = Buffer::<f32>::zeroed(ctx, "EnvAlpha", gpu_scene.pixel_count())?;
         let latlong = EquirectTable::new(ctx, gpu_scene, 0.0, strategy == Strategy::Latlong)?;
+        let pyramid = EnvPyramid::new(ctx, gpu_scene, strategy == Strategy::Hierarchical)?;
         let frames = settings.frames.max(1);
         let passes = progressive::run(
             ctx,
@@ -196,11 +228,16 @@ impl Env {
                     // own scrambling: every pixel uses a prefix (M_f of them), and a prefix of
                     // one sequence is well spread where a strided piece of a longer one is not.
                     cmd.pass("light samples", |cmd| {
-                        cube.record_samples(cmd, 0, pcg::hash(&[seed, frame]))
+                        (0..cube.sets).try_for_each(|set| {
+                            cube.record_samples(cmd, set, 0, pcg::hash(&[seed, frame, set]))
+                        })
                     })?;
                 }
                 if latlong.is_built() {
                     cmd.pass("latlong table", |cmd| latlong.record(cmd, gpu_scene))?;
+                }
+                if pyramid.is_built() {
+                    cmd.pass("pyramid", |cmd| pyramid.record(cmd, gpu_scene))?;
                 }
                 cmd.pass("shade", |cmd| {
                     self.shade.record(
@@ -209,21 +246,26 @@ impl Env {
                         &gbuffer,
                         &cube,
                         &latlong,
+                        &pyramid,
                         &accumulation,
                         &counts,
-                        strategy,
-                        spp,
-                        light_only,
-                        settings.integer_counts,
-                        frame,
-                        seed,
+                        &alpha,
+                        &shade::ShadeSettings {
+                            strategy,
+                            spp,
+                            light_only,
+                            integer_counts: settings.integer_counts,
+                            alpha_samples,
+                            frame,
+                            seed,
+                        },
                     )
                 })
             },
             progress,
         )?;
         let mut stats = vec![];
-        if strategy.uses_cube() || strategy == Strategy::Latlong {
+        if !matches!(strategy, Strategy::Brdf | Strategy::Cosine) {
             // Over the pixels that see a surface, per frame: the light samples used and the
             // fraction of them above the surface (Lu Fig. 3.6's effective samples).
             let counts = counts.read()?;
@@ -237,12 +279,48 @@ impl Env {
                 if used > 0.0 { effective / used } else { 0.0 },
             ));
         }
+        let mut maps = vec![];
+        if strategy == Strategy::Alpha {
+            let alpha = alpha.read()?;
+            stats.push(("mean_alpha".into(), mean_alpha(&alpha, frames)));
+            maps.push((
+                "alpha".into(),
+                alpha_map(&alpha, frames, gpu_scene.width, gpu_scene.height),
+            ));
+        }
         Ok(RenderOutput {
             image: accumulation.resolve(frames),
             passes,
             wall_ms: start.elapsed().as_secs_f64() * 1e3,
             nonfinite_estimates: accumulation.nonfinite_estimates()?,
             stats,
+            maps,
         })
     }
+}
+
+/// The mean over the pixels that see a surface (alpha sum > 0) of alpha, the BRDF share.
+pub fn mean_alpha(alpha_sums: &[f32], frames: u32) -> f64 {
+    let lit: Vec<f64> = alpha_sums
+        .iter()
+        .filter(|&&a| a > 0.0)
+        .map(|&a| a as f64 / frames.max(1) as f64)
+        .collect();
+    lit.iter().sum::<f64>() / lit.len().max(1) as f64
+}
+
+/// The alpha map (Lu 14 Fig. 5.1, 5.6): per pixel, with alpha the frames' mean BRDF share,
+/// R = (1 - alpha) / max(alpha, 1 - alpha) (light samples) and G = alpha / max(alpha,
+/// 1 - alpha) (BRDF samples), so yellow is the balance heuristic's half and half; black where
+/// no surface is seen.
+pub fn alpha_map(alpha_sums: &[f32], frames: u32, width: u32, height: u32) -> Image {
+    let mut map = Image::new(width, height);
+    for (pixel, &sum) in map.pixels.iter_mut().zip(alpha_sums) {
+        if sum > 0.0 {
+            let a = (sum / frames.max(1) as f32).clamp(0.0, 1.0);
+            let m = a.max(1.0 - a);
+            *pixel = [(1.0 - a) / m, a / m, 0.0];
+        }
+    }
+    map
 }

@@ -9,6 +9,7 @@ use crate::methods::gbuffer::GBuffer;
 use crate::scene::gpu::GpuScene;
 
 use super::cube::CubeTable;
+use super::pyramid::EnvPyramid;
 use super::Strategy;
 use crate::methods::equirect_table::EquirectTable;
 
@@ -23,6 +24,20 @@ struct ShadeParams {
     seed: u32,
     light_share: f32,
     integer_counts: u32,
+    alpha_samples: f32,
+}
+
+/// What the shading does this frame.
+pub struct ShadeSettings {
+    pub strategy: Strategy,
+    /// N_s.
+    pub spp: u32,
+    pub light_only: bool,
+    pub integer_counts: bool,
+    /// alpha: M.
+    pub alpha_samples: u32,
+    pub frame: u32,
+    pub seed: u32,
 }
 
 pub struct ShadeEnv(Kernel);
@@ -40,14 +55,11 @@ impl ShadeEnv {
         gbuffer: &'a GBuffer,
         cube: &'a CubeTable,
         latlong: &'a EquirectTable,
+        pyramid: &'a EnvPyramid,
         accumulation: &'a Accumulation,
         counts: &'a Buffer<[f32; 2]>,
-        strategy: Strategy,
-        spp: u32,
-        light_only: bool,
-        integer_counts: bool,
-        frame: u32,
-        seed: u32,
+        alpha: &'a Buffer<f32>,
+        settings: &ShadeSettings,
     ) -> GpuResult<()> {
         let mut bindings = scene.bindings();
         bindings.push(bind("GBuffer", &gbuffer.texels));
@@ -56,15 +68,18 @@ impl ShadeEnv {
         bindings.extend(latlong.bindings());
         bindings.push(bind("EnvSamples", &cube.samples));
         bindings.push(bind("EnvSampleCounts", counts));
+        bindings.push(pyramid.binding());
+        bindings.push(bind("EnvAlpha", alpha));
         let params = ShadeParams {
             resolution: cube.resolution,
             per_face: cube.per_face,
-            strategy: strategy.code(),
-            spp: spp as f32,
-            frame,
-            seed,
-            light_share: if light_only { 1.0 } else { 0.5 },
-            integer_counts: integer_counts as u32,
+            strategy: settings.strategy.code(),
+            spp: settings.spp as f32,
+            frame: settings.frame,
+            seed: settings.seed,
+            light_share: if settings.light_only { 1.0 } else { 0.5 },
+            integer_counts: settings.integer_counts as u32,
+            alpha_samples: settings.alpha_samples as f32,
         };
         self.0
             .dispatch(cmd, &bindings, &params, scene.image_workgroups())
