@@ -154,6 +154,10 @@ struct RenderArgs {
     /// use it [default: half of --spp].
     #[arg(long, value_parser = clap::value_parser!(u32).range(0..=65536))]
     alpha_samples: Option<u32>,
+    /// env: no shadow rays (every sample counted as visible), as in the thesis's timings; for
+    /// timing comparisons only: the image is wrong wherever the map is occluded.
+    #[arg(long)]
+    no_shadows: bool,
     /// bundles: iterations per frame, each one VPL and one global ray bundle (the paper's 21).
     #[arg(long, default_value_t = 21, value_parser = clap::value_parser!(u32).range(1..=65536))]
     iterations: u32,
@@ -378,6 +382,19 @@ enum Bench {
         /// Timed repetitions per resolution (the median is reported), after 2 warm-up runs.
         #[arg(long, default_value_t = 9)]
         repeats: usize,
+        /// Then the shading table: env's frame time at these samples per pixel (N_s), with
+        /// and without shadow rays, comma separated; 0 skips it.
+        #[arg(long, value_delimiter = ',', default_values_t = [16u32, 60, 240])]
+        spp: Vec<u32>,
+        /// The strategies of the shading table, comma separated.
+        #[arg(long, value_delimiter = ',', default_values_t = ["dynamic".to_string(), "alpha".into(), "latlong".into(), "hierarchical".into()])]
+        strategies: Vec<String>,
+        /// The shading table's image size, WIDTHxHEIGHT (default: the scene's).
+        #[arg(long, value_parser = parse_size)]
+        resolution: Option<(u32, u32)>,
+        /// The shading table's timed frames per row (after one warm-up frame).
+        #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..))]
+        frames: u32,
     },
     /// Instant radiosity's per-pass GPU times for a range of VPL budgets, and its gathering
     /// throughput in (pixel, VPL) pairs/s next to the scene's incoherent any-hit ray rate.
@@ -519,6 +536,10 @@ fn run(cli: Cli) -> Result<()> {
             faces,
             samples,
             repeats,
+            spp,
+            strategies,
+            resolution,
+            frames,
         }) => {
             let path = scene.unwrap_or_else(|| {
                 PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes/glossy-env/scene.toml")
@@ -548,6 +569,54 @@ fn run(cli: Cli) -> Result<()> {
             bar.finish_and_clear();
             let map = scene.environment.as_ref().expect("checked by run");
             irad::bench::env::print_table(&device_line(ctx.info()), map, samples.max(1), &results);
+            let spp: Vec<u32> = spp.into_iter().filter(|&n| n > 0).collect();
+            if spp.is_empty() {
+                return Ok(());
+            }
+            let strategies = strategies
+                .iter()
+                .map(|name| {
+                    EnvStrategy::ALL
+                        .into_iter()
+                        .find(|s| s.name() == name)
+                        .ok_or_else(|| {
+                            let names: Vec<&str> =
+                                EnvStrategy::ALL.iter().map(|s| s.name()).collect();
+                            anyhow::anyhow!(
+                                "--strategies: no env strategy {name:?} (one of {})",
+                                names.join(", ")
+                            )
+                        })
+                })
+                .collect::<Result<Vec<_>>>()?;
+            if let Some((w, h)) = resolution {
+                scene.camera.width = w;
+                scene.camera.height = h;
+            }
+            let bar = progress(
+                (strategies.len() * spp.len() * 2) as u64,
+                "bench env shading",
+            );
+            let face_resolution = 256;
+            let shading = irad::bench::env::run_shading(
+                &ctx,
+                &scene,
+                &strategies,
+                &spp,
+                face_resolution,
+                frames,
+                |s, n, shadows| {
+                    bar.set_message(format!(
+                        "{} N_s {n}{}",
+                        s.name(),
+                        if shadows { "" } else { " no shadows" }
+                    ));
+                    bar.inc(1);
+                },
+            )?;
+            bar.finish_and_clear();
+            println!();
+            irad::bench::env::print_shading(&device_line(ctx.info()), &scene, &shading);
             Ok(())
         }
         Command::Bench(Bench::Ir {
@@ -786,6 +855,7 @@ fn render(options: &ContextOptions, args: RenderArgs) -> Result<()> {
             light_only: args.light_only,
             integer_counts: args.integer_counts,
             alpha_samples: args.alpha_samples,
+            shadows: !args.no_shadows,
             pixels,
         }),
     };

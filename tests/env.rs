@@ -98,6 +98,7 @@ fn every_strategy_matches_the_reference_direct_light() {
                         light_only,
                         integer_counts: false,
                         alpha_samples: None,
+                        shadows: true,
                         pixels: PixelSampling::Centres,
                     };
                     let out = env.render(ctx, &scene, &gpu, &settings, |_, _| {}).unwrap();
@@ -346,6 +347,7 @@ fn dynamic_shares_waste_fewer_samples_with_the_sun_behind() {
                     light_only: false,
                     integer_counts: false,
                     alpha_samples: None,
+                    shadows: true,
                     pixels: PixelSampling::Centres,
                 };
                 let out = env.render(ctx, &scene, &gpu, &settings, |_, _| {}).unwrap();
@@ -416,6 +418,7 @@ fn beta_weights_keep_neighbouring_pixels_continuous() {
                     light_only: true,
                     integer_counts,
                     alpha_samples: None,
+                    shadows: true,
                     pixels: PixelSampling::Centres,
                 };
                 let out = env.render(ctx, &scene, &gpu, &settings, |_, _| {}).unwrap();

@@ -2,7 +2,9 @@
 //! several cube-face resolutions, next to the time to copy the map once (the bandwidth bound:
 //! building the table must at least read the map), and the latitude-longitude table's build
 //! (env's latlong strategy, bundles' directions) for comparison. All GPU times are medians of
-//! the timed repetitions, measured in one submission per repetition.
+//! the timed repetitions, measured in one submission per repetition. Then the frame time of
+//! env's strategies against samples per pixel, with and without shadow rays (the thesis's
+//! timings leave visibility out).
 
 use anyhow::Result;
 use glam::Vec3;
@@ -10,6 +12,7 @@ use glam::Vec3;
 use super::median;
 use crate::gpu::{copy::CopyValues, Buffer, Commands, Context};
 use crate::methods::envmap::cube::CubeTable;
+use crate::methods::envmap::{Env, EnvSettings, Strategy};
 use crate::methods::equirect_table::EquirectTable;
 use crate::scene::gpu::GpuScene;
 use crate::scene::{Environment, Scene};
@@ -138,6 +141,89 @@ pub fn print_table(
             r.latlong_ms,
             r.copy_ms,
             r.table_ms() / r.copy_ms
+        );
+    }
+}
+
+/// One row of the shading table: a strategy at N_s samples per pixel, with or without shadow
+/// rays, per frame (GPU ms, means over the timed frames).
+pub struct EnvShadingResult {
+    pub strategy: Strategy,
+    pub spp: u32,
+    pub shadows: bool,
+    /// The "shade" pass.
+    pub shade_ms: f64,
+    /// Every pass of the frame (G-buffer, the map seen by the camera, tables, shading).
+    pub frame_ms: f64,
+}
+
+/// env's frame time against samples per pixel: for each strategy, N_s and shadow setting, one
+/// warm-up render of a frame, then `frames` timed frames of the scene at its resolution.
+pub fn run_shading(
+    ctx: &Context,
+    scene: &Scene,
+    strategies: &[Strategy],
+    spps: &[u32],
+    face_resolution: u32,
+    frames: u32,
+    mut progress: impl FnMut(Strategy, u32, bool),
+) -> Result<Vec<EnvShadingResult>> {
+    if let Some(e) = Env::declines(scene) {
+        anyhow::bail!("bench env: {e}");
+    }
+    let gpu = GpuScene::upload(ctx, scene)?;
+    let env = Env::new(ctx)?;
+    let mut results = vec![];
+    for &strategy in strategies {
+        for &spp in spps {
+            for shadows in [true, false] {
+                progress(strategy, spp, shadows);
+                let settings = |frames| EnvSettings {
+                    spp,
+                    frames,
+                    strategy,
+                    face_resolution,
+                    shadows,
+                    ..Default::default()
+                };
+                env.render(ctx, scene, &gpu, &settings(1), |_, _| {})?;
+                let out = env.render(ctx, scene, &gpu, &settings(frames.max(1)), |_, _| {})?;
+                let per_frame = |ms: Option<f64>| ms.unwrap_or(f64::NAN) / frames.max(1) as f64;
+                let shade = out.passes.passes.iter().find(|p| p.0 == "shade");
+                results.push(EnvShadingResult {
+                    strategy,
+                    spp,
+                    shadows,
+                    shade_ms: per_frame(shade.and_then(|p| p.1)),
+                    frame_ms: per_frame(out.passes.total_gpu_ms()),
+                });
+            }
+        }
+    }
+    Ok(results)
+}
+
+pub fn print_shading(device: &str, scene: &Scene, results: &[EnvShadingResult]) {
+    println!(
+        "env shading per frame on {device}: {}x{} (mean GPU ms over the timed frames)",
+        scene.camera.width, scene.camera.height
+    );
+    println!(
+        "{:>13} {:>6} {:>11} {:>11} {:>8} {:>13} {:>13} {:>10}",
+        "strategy", "N_s", "shade", "frame", "fps", "shade no-vis", "frame no-vis", "fps no-vis"
+    );
+    for pair in results.chunks(2) {
+        let [with, without] = pair else { continue };
+        println!(
+            "{:>13} {:>6} {:>11.3} {:>11.3} {:>8.1} {:>13.3} {:>13.3} {:>10.1}",
+            with.strategy.name(),
+            with.spp,
+            with.shade_ms,
+            with.frame_ms,
+            1e3 / with.frame_ms,
+            without.shade_ms,
+            without.frame_ms,
+            1e3 / without.frame_ms
         );
     }
 }

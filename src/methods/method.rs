@@ -210,6 +210,7 @@ impl Method {
                 if let Some(m) = s.alpha_samples {
                     p.insert("alpha_samples".into(), json!(m));
                 }
+                p.insert("shadows".into(), json!(s.shadows));
                 p.insert(
                     "pixel_centres".into(),
                     json!(s.pixels == PixelSampling::Centres),
@@ -226,8 +227,8 @@ impl Method {
     /// floor, power_samples, batch, pixel_centres, seed; bundles takes iterations, frames,
     /// strategy, heuristic, two_bounce, two_bounce_clamp, glossy, roughness_m,
     /// contribution_clamp, lights, directions, env_offset, pixel_centres, seed; env takes spp,
-    /// frames, strategy, face_resolution, light_only, integer_counts, alpha_samples, pixel_centres,
-    /// seed.
+    /// frames, strategy, face_resolution, light_only, integer_counts, alpha_samples, shadows,
+    /// pixel_centres, seed.
     pub fn from_params(name: &str, params: &toml::Table) -> Result<Method, ParamError> {
         let mut reader = Params {
             method: name,
@@ -358,6 +359,7 @@ impl Method {
                         true => Some(reader.uint("alpha_samples", 0, 0, 1 << 16)?),
                         false => d.alpha_samples,
                     },
+                    shadows: reader.flag("shadows", d.shadows)?,
                     pixels: reader.pixels()?,
                 })
             }
@@ -498,6 +500,7 @@ impl<'a> Params<'a> {
                 "light_only",
                 "integer_counts",
                 "alpha_samples",
+                "shadows",
                 "pixel_centres",
             ],
             "bundles" => &[

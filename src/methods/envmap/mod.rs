@@ -115,6 +115,9 @@ pub struct EnvSettings {
     /// alpha: M, the samples per pixel and frame that estimate alpha (the rest, N_s - M, use
     /// it); None: N_s / 2 (Lu's Table 5.2 setting).
     pub alpha_samples: Option<u32>,
+    /// A shadow ray per sample (true, the default). false leaves visibility out, as the
+    /// thesis's timings do: for timing comparisons only, the image is wrong where occluded.
+    pub shadows: bool,
     pub pixels: PixelSampling,
 }
 
@@ -129,6 +132,7 @@ impl Default for EnvSettings {
             light_only: false,
             integer_counts: false,
             alpha_samples: None,
+            shadows: true,
             pixels: PixelSampling::Jittered,
         }
     }
@@ -256,6 +260,7 @@ impl Env {
                             light_only,
                             integer_counts: settings.integer_counts,
                             alpha_samples,
+                            shadows: settings.shadows,
                             frame,
                             seed,
                         },

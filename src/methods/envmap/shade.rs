@@ -25,6 +25,7 @@ struct ShadeParams {
     light_share: f32,
     integer_counts: u32,
     alpha_samples: f32,
+    shadows: u32,
 }
 
 /// What the shading does this frame.
@@ -36,6 +37,8 @@ pub struct ShadeSettings {
     pub integer_counts: bool,
     /// alpha: M.
     pub alpha_samples: u32,
+    /// false: no shadow rays (the thesis's setting, for its timings; biased where occluded).
+    pub shadows: bool,
     pub frame: u32,
     pub seed: u32,
 }
@@ -80,6 +83,7 @@ impl ShadeEnv {
             light_share: if settings.light_only { 1.0 } else { 0.5 },
             integer_counts: settings.integer_counts as u32,
             alpha_samples: settings.alpha_samples as f32,
+            shadows: settings.shadows as u32,
         };
         self.0
             .dispatch(cmd, &bindings, &params, scene.image_workgroups())
