@@ -73,6 +73,13 @@ pub fn render(
         .transpose()?;
     let gpu_scene = GpuScene::upload(ctx, job.scene).context("uploading the scene")?;
     let mut warnings = job.scene.warnings.clone();
+    let maps = gpu_scene.environment_frames() as u64;
+    let frames = job.method.samples();
+    if maps > 1 && frames % maps != 0 {
+        warnings.push(format!(
+            "the environment is a sequence of {maps} maps (frame f shows map f mod {maps}) and this render has {frames} frames, not a multiple of {maps}: the maps are not weighed equally, so the image is not the sequence's average"
+        ));
+    }
     let output = Renderers::default().run(ctx, &job.method, job.scene, &gpu_scene, progress)?;
     if output.nonfinite_estimates > 0 {
         warnings.push(format!(

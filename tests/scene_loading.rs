@@ -342,13 +342,107 @@ fn bad_light_intensity_and_direction() {
 }
 
 #[test]
-fn environment_glob_is_not_supported_yet() {
-    let toml = format!("{}[environment]\nexr = \"sky/*.exr\"\n", good_toml());
+fn environment_glob_is_a_sequence_in_name_order() {
+    let toml = format!("{}[environment]\nexr = \"sky/f_*.exr\"\n", good_toml());
     let s = scratch("glob", &toml, OBJ, MTL);
+    std::fs::create_dir_all(s.path("sky")).unwrap();
+    // Written out of order; a non-matching file beside them is left out.
+    for (name, value) in [
+        ("f_2.exr", 3.0),
+        ("f_0.exr", 1.0),
+        ("f_1.exr", 2.0),
+        ("g_9.exr", 9.0),
+    ] {
+        let mut image = sky(8, 4, None);
+        image.pixels.iter_mut().for_each(|p| *p = [value; 3]);
+        exr::write(&s.path("sky").join(name), &image).unwrap();
+    }
+    let scene = s.load().unwrap();
+    let frames: Vec<f32> = scene
+        .environment_sequence
+        .iter()
+        .map(|e| e.texels[0].x)
+        .collect();
+    assert_eq!(frames, vec![1.0, 2.0, 3.0]);
+    assert_eq!(scene.environment.as_ref().unwrap().texels[0].x, 1.0);
+    // Every frame is in the content hash.
+    let before = scene.content_hash;
+    exr::write(&s.path("sky").join("f_2.exr"), &sky(8, 4, None)).unwrap();
+    assert_ne!(s.load().unwrap().content_hash, before);
+    // A frame of another size is refused, naming it and the first.
+    exr::write(&s.path("sky").join("f_1.exr"), &sky(16, 8, None)).unwrap();
+    s.error(&["f_1.exr: size = 16x8", "f_0.exr (8x4)"]);
+}
+
+#[test]
+fn environment_glob_errors() {
+    let toml = format!("{}[environment]\nexr = \"sky/*.exr\"\n", good_toml());
+    let s = scratch("glob-none", &toml, OBJ, MTL);
+    std::fs::create_dir_all(s.path("sky")).unwrap();
     s.error(&[
         "scene.toml: environment.exr = \"sky/*.exr\"",
+        "no file in",
+        "matches",
+    ]);
+    let toml = format!("{}[environment]\nexr = \"gone/*.exr\"\n", good_toml());
+    let s = scratch("glob-folder", &toml, OBJ, MTL);
+    s.error(&["gone", "environment.exr = \"gone/*.exr\" (its folder)"]);
+    let toml = format!("{}[environment]\nexr = \"sky/[ab].exr\"\n", good_toml());
+    let s = scratch("glob-class", &toml, OBJ, MTL);
+    s.error(&[
+        "scene.toml: environment.exr = \"sky/[ab].exr\"",
         "not supported yet",
     ]);
+    let toml = format!("{}[environment]\nexr = \"*/a.exr\"\n", good_toml());
+    let s = scratch("glob-dir", &toml, OBJ, MTL);
+    s.error(&["environment.exr = \"*/a.exr\"", "not supported yet"]);
+}
+
+#[test]
+fn procedural_sky_and_its_errors() {
+    let sky_toml =
+        |fields: &str| format!("{CAMERA}{MESH}[environment]\nsky = \"moving-sun\"\n{fields}");
+    let s = scratch("sky", &sky_toml("size = [16, 8]\nframes = 5\n"), OBJ, MTL);
+    let scene = s.load().unwrap();
+    assert_eq!(scene.environment_sequence.len(), 5);
+    assert_eq!(scene.environment.as_ref().unwrap().width, 16);
+    assert_ne!(
+        scene.environment_sequence[0].texels,
+        scene.environment_sequence[1].texels
+    );
+    for (fields, parts) in [
+        (
+            "size = [0, 8]\n",
+            vec!["environment.size = [0, 8]", "1..=16384"],
+        ),
+        ("frames = 0\n", vec!["environment.frames = 0", "1..=4096"]),
+        (
+            "sun_elevation = 95\n",
+            vec!["environment.sun_elevation = 95", "-90..=90"],
+        ),
+        (
+            "sun_radius = 0\n",
+            vec!["environment.sun_radius = 0", "(0, 90]"],
+        ),
+        (
+            "sun_radiance = [1, -1, 1]\n",
+            vec!["environment.sun_radiance", ">= 0"],
+        ),
+        (
+            "size = [16384, 16384]\nframes = 4096\n",
+            vec!["environment.frames = 4096", "texels in all"],
+        ),
+    ] {
+        scratch("sky-bad", &sky_toml(fields), OBJ, MTL).error(&parts);
+    }
+    let toml = format!("{CAMERA}{MESH}[environment]\nsky = \"noon\"\n");
+    scratch("sky-name", &toml, OBJ, MTL).error(&["environment.sky = \"noon\"", "moving-sun"]);
+    let toml = format!("{CAMERA}{MESH}[environment]\nsky = \"moving-sun\"\nexr = \"a.exr\"\n");
+    scratch("sky-both", &toml, OBJ, MTL).error(&["environment.sky", "not both"]);
+    let toml = format!("{CAMERA}{MESH}[environment]\nscale = 2\n");
+    scratch("sky-neither", &toml, OBJ, MTL).error(&["environment.exr = (missing)", "moving-sun"]);
+    let toml = format!("{CAMERA}{MESH}[environment]\nexr = \"a.exr\"\nframes = 3\n");
+    scratch("sky-field", &toml, OBJ, MTL).error(&["environment.frames", "sky only"]);
 }
 
 #[test]

@@ -165,6 +165,28 @@ impl<'a> Commands<'a> {
         self.barrier_between_passes();
     }
 
+    /// Copies `size` bytes of `src` from byte `offset` into the start of `dst`.
+    pub fn copy_region(
+        &mut self,
+        src: &'a dyn GpuBuffer,
+        offset: u64,
+        dst: &'a dyn GpuBuffer,
+        size: u64,
+    ) {
+        let size = size
+            .min(dst.byte_size())
+            .min(src.byte_size().saturating_sub(offset));
+        if size > 0 {
+            let region = [vk::BufferCopy::default().src_offset(offset).size(size)];
+            unsafe {
+                self.ctx
+                    .device()
+                    .cmd_copy_buffer(self.cb, src.handle(), dst.handle(), &region)
+            };
+        }
+        self.barrier_between_passes();
+    }
+
     /// Fills all of `buffer` with zero bytes.
     pub fn fill_zero(&mut self, buffer: &'a dyn GpuBuffer) {
         unsafe {

@@ -6,6 +6,7 @@
 //! the image from run to run (DESIGN.md: same seed, same device, same bits).
 
 use crate::gpu::{Commands, Context, GpuResult, PassTotals};
+use crate::scene::gpu::GpuScene;
 
 use super::accumulation::Accumulation;
 
@@ -13,9 +14,12 @@ use super::accumulation::Accumulation;
 pub const MAX_FRAMES_PER_SUBMISSION: u32 = 16;
 
 /// Records frames 0..frames with `record(cmd, frame)`, each submission starting with a clear
-/// of `accumulation`'s GPU sums; calls `progress(done, frames)` after each submission.
+/// of `accumulation`'s GPU sums; calls `progress(done, frames)` after each submission. A frame
+/// of a scene with a dynamic map starts with that frame's map (GpuScene's pass "environment
+/// frame").
 pub fn run<'s>(
     ctx: &Context,
+    scene: &'s GpuScene,
     frames: u32,
     accumulation: &'s Accumulation,
     mut record: impl FnMut(&mut Commands<'s>, u32) -> GpuResult<()>,
@@ -29,6 +33,7 @@ pub fn run<'s>(
         let mut cmd = Commands::new(ctx)?;
         accumulation.begin_submission(&mut cmd);
         for frame in done..done + count {
+            scene.record_environment_frame(&mut cmd, frame)?;
             record(&mut cmd, frame)?;
         }
         let timings = cmd.submit_and_wait()?;

@@ -67,6 +67,7 @@ impl Reference {
         let spp = settings.spp.max(1);
         let passes = progressive::run(
             ctx,
+            scene,
             spp,
             &accumulation,
             |cmd, frame| {

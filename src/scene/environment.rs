@@ -1,7 +1,8 @@
 //! The `[environment]` table: an equirectangular RGB OpenEXR map (DESIGN.md "Conventions"),
-//! checked texel by texel and multiplied by `scale`.
+//! checked texel by texel and multiplied by `scale`; or a sequence of them (a glob, one map per
+//! frame); or a built-in procedural sky (sky.rs).
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use glam::Vec3;
 
@@ -13,15 +14,58 @@ pub fn is_glob(exr: &str) -> bool {
     exr.contains(['*', '?', '[', '{'])
 }
 
-/// Checks `environment.scale` and refuses sequences; `file` is the scene file.
+/// Checks `[environment]`: one of `exr` and `sky`, the sky's fields only with `sky`, a glob
+/// only in the file name and with `*` and `?` only, and `scale`; `file` is the scene file.
 pub fn check(file: &str, env: &EnvironmentFile) -> Result<(), SceneError> {
-    if is_glob(&env.exr) {
-        return Err(SceneError::Unsupported {
-            file: file.to_string(),
-            field: "environment.exr".into(),
-            value: format!("{:?}", env.exr),
-            what: "environment map sequences (globs)".into(),
-        });
+    let invalid = |field: &str, value: String, problem: &str| SceneError::Invalid {
+        file: file.to_string(),
+        field: format!("environment.{field}"),
+        value,
+        problem: problem.into(),
+    };
+    match (&env.exr, &env.sky) {
+        (Some(exr), Some(sky)) => {
+            return Err(invalid(
+                "sky",
+                format!("{sky:?}"),
+                &format!("give exr ({exr:?}) or sky, not both"),
+            ))
+        }
+        (None, None) => {
+            return Err(invalid(
+                "exr",
+                "(missing)".into(),
+                "give exr (a map or a glob naming a sequence) or sky = \"moving-sun\"",
+            ))
+        }
+        (Some(exr), None) => {
+            let sky_fields = [
+                ("size", env.size.is_some()),
+                ("frames", env.frames.is_some()),
+                ("sun_elevation", env.sun_elevation.is_some()),
+                ("sun_radius", env.sun_radius.is_some()),
+                ("sun_radiance", env.sun_radiance.is_some()),
+            ];
+            if let Some((field, _)) = sky_fields.iter().find(|f| f.1) {
+                return Err(invalid(
+                    field,
+                    "(given)".into(),
+                    "applies to sky only, not to exr",
+                ));
+            }
+            if is_glob(exr) {
+                let (dir, name) = split_glob(exr);
+                if is_glob(&dir.to_string_lossy()) || name.contains(['[', '{']) {
+                    return Err(SceneError::Unsupported {
+                        file: file.to_string(),
+                        field: "environment.exr".into(),
+                        value: format!("{exr:?}"),
+                        what: "globs other than * and ? in the file name".into(),
+                    });
+                }
+            }
+        }
+        (None, Some(_)) => {}
     }
     if !(env.scale.is_finite() && env.scale >= 0.0) {
         return Err(SceneError::Invalid {
@@ -76,6 +120,55 @@ pub fn read(display: &str, path: &Path, scale: f32) -> Result<Environment, Scene
     })
 }
 
+/// A glob's folder (literal) and file-name pattern.
+pub fn split_glob(pattern: &str) -> (PathBuf, String) {
+    let path = Path::new(pattern);
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    (
+        path.parent().map(Path::to_path_buf).unwrap_or_default(),
+        name,
+    )
+}
+
+/// Whether `name` matches `pattern`: `*` any run of characters, `?` any one.
+pub fn glob_matches(pattern: &str, name: &str) -> bool {
+    let (p, n): (Vec<char>, Vec<char>) = (pattern.chars().collect(), name.chars().collect());
+    // Positions in the pattern and the name, and where to resume after the last `*`.
+    let (mut i, mut j, mut star, mut resume) = (0, 0, None, 0);
+    while j < n.len() {
+        if i < p.len() && (p[i] == '?' || p[i] == n[j]) {
+            i += 1;
+            j += 1;
+        } else if i < p.len() && p[i] == '*' {
+            star = Some(i);
+            resume = j;
+            i += 1;
+        } else if let Some(s) = star {
+            i = s + 1;
+            resume += 1;
+            j = resume;
+        } else {
+            return false;
+        }
+    }
+    p[i..].iter().all(|&c| c == '*')
+}
+
+/// The files in `dir` whose names match `pattern`, sorted by name.
+pub fn expand_glob(dir: &Path, pattern: &str) -> std::io::Result<Vec<PathBuf>> {
+    let mut found: Vec<PathBuf> = std::fs::read_dir(dir)?
+        .filter_map(|e| e.ok())
+        .filter(|e| e.file_type().is_ok_and(|t| t.is_file()))
+        .filter(|e| glob_matches(pattern, &e.file_name().to_string_lossy()))
+        .map(|e| e.path())
+        .collect();
+    found.sort();
+    Ok(found)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -84,5 +177,22 @@ mod tests {
     fn globs_are_recognized() {
         assert!(is_glob("sky/*.exr") && is_glob("sky_??.exr"));
         assert!(!is_glob("sky.exr") && !is_glob("skies/noon-2.exr"));
+    }
+
+    #[test]
+    fn glob_matching() {
+        assert!(glob_matches("sky_*.exr", "sky_0001.exr"));
+        assert!(glob_matches("sky_*.exr", "sky_.exr"));
+        assert!(glob_matches("*", "anything"));
+        assert!(glob_matches("s?y_*_*.exr", "sky_a_b.exr"));
+        assert!(glob_matches("*a*b", "xxaxxb"));
+        assert!(!glob_matches("sky_*.exr", "sky_0001.png"));
+        assert!(!glob_matches("sky_??.exr", "sky_1.exr"));
+        assert!(!glob_matches("*a*b", "xxbxxa"));
+        assert_eq!(
+            split_glob("frames/sky_*.exr"),
+            ("frames".into(), "sky_*.exr".into())
+        );
+        assert_eq!(split_glob("sky_*.exr"), ("".into(), "sky_*.exr".into()));
     }
 }

@@ -57,7 +57,21 @@ pub struct LightFile {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct EnvironmentFile {
-    pub exr: String,
+    /// An equirectangular EXR, or a glob (`*`, `?` in the file name) naming a sequence: one
+    /// map per frame, in file-name order.
+    pub exr: Option<String>,
+    /// A built-in procedural sky instead of `exr`: "moving-sun" (src/scene/sky.rs).
+    pub sky: Option<String>,
+    /// sky: texels across and down (signed so that bad sizes get the loader's message).
+    pub size: Option<[i64; 2]>,
+    /// sky: frames in one revolution of the sun (one map per frame).
+    pub frames: Option<i64>,
+    /// sky: the sun's elevation above the horizon, degrees.
+    pub sun_elevation: Option<f32>,
+    /// sky: the sun disk's angular radius, degrees.
+    pub sun_radius: Option<f32>,
+    /// sky: the sun disk's radiance.
+    pub sun_radiance: Option<[f32; 3]>,
     #[serde(default = "default_scale")]
     pub scale: f32,
 }

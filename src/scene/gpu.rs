@@ -10,11 +10,11 @@ use bytemuck::{Pod, Zeroable};
 use glam::{Vec3, Vec4};
 
 use crate::bvh::{Bvh, GpuBvh};
-use crate::gpu::{bind, Binding, Buffer, Context, GpuResult};
+use crate::gpu::{bind, Binding, Buffer, Commands, Context, GpuBuffer, GpuResult};
 use crate::sampling::distribution::Distribution1D;
 use crate::sampling::environment::{luminance, sampling_weights, texel_solid_angle};
 
-use super::{Light, Scene};
+use super::{Environment, Light, Scene};
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
@@ -97,6 +97,8 @@ pub struct GpuScene {
     pub emitter_triangles: Buffer<EmitterTriangle>,
     pub env_texels: Buffer<Vec4>,
     pub env_cdf: Buffer<u32>,
+    /// A dynamic map's frames, copied into env_texels and env_cdf per frame.
+    env_frames: Option<EnvironmentFrames>,
     pub constants: Buffer<SceneConstants>,
     pub light_table: LightTable,
     /// The environment map's texels across and down, when the scene has one.
@@ -104,6 +106,42 @@ pub struct GpuScene {
     pub width: u32,
     pub height: u32,
     pub triangle_count: usize,
+}
+
+/// Every frame's environment tables, back to back.
+struct EnvironmentFrames {
+    count: u32,
+    texels: Buffer<Vec4>,
+    cdf: Buffer<u32>,
+}
+
+/// A map's texels with the solid-angle pdf of env_sample in .w, its CDF (W x H entries) and
+/// its sampling weights' total (luminance times solid angle; 0 for a black map, whose texels
+/// then hold the pdf of sampling by solid angle alone, so that a frame of a sequence can be
+/// black without a zero pdf anywhere).
+fn environment_tables(env: &Environment) -> (Vec<Vec4>, Vec<u32>, f64) {
+    let mut texels: Vec<Vec4> = env.texels.iter().map(|t| t.extend(0.0)).collect();
+    let weights = sampling_weights(env);
+    let (d, total) = match Distribution1D::new(&weights) {
+        Some(d) => {
+            let total = d.total;
+            (d, total)
+        }
+        None => {
+            let by_solid_angle: Vec<f64> = (0..texels.len() as u32)
+                .map(|i| texel_solid_angle(i / env.width, env.width, env.height))
+                .collect();
+            (
+                Distribution1D::new(&by_solid_angle).expect("solid angles are positive"),
+                0.0,
+            )
+        }
+    };
+    for (i, texel) in texels.iter_mut().enumerate() {
+        let row = i as u32 / env.width;
+        texel.w = (d.probabilities[i] / texel_solid_angle(row, env.width, env.height)) as f32;
+    }
+    (texels, d.upper, total)
 }
 
 /// Centre and radius of a sphere around the triangles and point lights.
@@ -233,18 +271,42 @@ impl GpuScene {
         let mut env_texels = vec![Vec4::ZERO];
         let mut env_cdf = vec![1u32 << 31];
         let mut env_size = [0u32; 4];
+        let mut env_frames = None;
         if let Some(env) = &scene.environment {
-            env_texels = env.texels.iter().map(|t| t.extend(0.0)).collect();
             env_size = [env.width, env.height, 1, 0];
-            if let Some(d) = Distribution1D::new(&sampling_weights(env)) {
-                for (i, texel) in env_texels.iter_mut().enumerate() {
-                    let row = i as u32 / env.width;
-                    texel.w =
-                        (d.probabilities[i] / texel_solid_angle(row, env.width, env.height)) as f32;
+            if scene.environment_sequence.is_empty() {
+                let (mut texels, cdf, total) = environment_tables(env);
+                if total == 0.0 {
+                    // A black still map is no light: nothing samples it.
+                    texels.iter_mut().for_each(|t| t.w = 0.0);
                 }
-                env_cdf = d.upper.clone();
-                let power = PI * (radius as f64).powi(2) * d.total;
-                powers.push((LIGHT_ENVIRONMENT, 0, power));
+                env_texels = texels;
+                if total > 0.0 {
+                    env_cdf = cdf;
+                    powers.push((LIGHT_ENVIRONMENT, 0, PI * (radius as f64).powi(2) * total));
+                }
+            } else {
+                // A sequence: every frame's tables, one after another; frame 0's are live
+                // until record_environment_frame copies another's over them. Light selection
+                // weighs the map by its mean power over the frames.
+                let (mut texels, mut cdfs, mut power) = (vec![], vec![], 0.0);
+                for map in &scene.environment_sequence {
+                    let (t, c, total) = environment_tables(map);
+                    texels.extend(t);
+                    cdfs.extend(c);
+                    power += total / scene.environment_sequence.len() as f64;
+                }
+                let texel_count = (env.width * env.height) as usize;
+                env_texels = texels[..texel_count].to_vec();
+                env_cdf = cdfs[..texel_count].to_vec();
+                if power > 0.0 {
+                    powers.push((LIGHT_ENVIRONMENT, 0, PI * (radius as f64).powi(2) * power));
+                }
+                env_frames = Some(EnvironmentFrames {
+                    count: scene.environment_sequence.len() as u32,
+                    texels: Buffer::from_slice(ctx, "environment frames' texels", &texels)?,
+                    cdf: Buffer::from_slice(ctx, "environment frames' CDFs", &cdfs)?,
+                });
             }
         }
 
@@ -319,6 +381,7 @@ impl GpuScene {
             )?,
             env_texels: Buffer::from_slice(ctx, "EnvTexels", &env_texels)?,
             env_cdf: Buffer::from_slice(ctx, "EnvCdf", &env_cdf)?,
+            env_frames,
             constants: Buffer::from_slice(ctx, "SceneParams", &[constants])?,
             light_table: LightTable {
                 entries,
@@ -328,6 +391,31 @@ impl GpuScene {
             width: cam.width,
             height: cam.height,
             triangle_count: scene.triangles.len(),
+        })
+    }
+
+    /// The number of maps in the scene's environment sequence (1 for a still map or none).
+    pub fn environment_frames(&self) -> u32 {
+        self.env_frames.as_ref().map_or(1, |f| f.count)
+    }
+
+    /// Pass "environment frame" for a dynamic map: copies frame `frame` mod len's texels and
+    /// CDF into the live buffers every kernel reads. Nothing for a still map.
+    pub fn record_environment_frame<'a>(
+        &'a self,
+        cmd: &mut Commands<'a>,
+        frame: u32,
+    ) -> GpuResult<()> {
+        let Some(frames) = &self.env_frames else {
+            return Ok(());
+        };
+        let k = (frame % frames.count) as u64;
+        let texels = self.env_texels.byte_size();
+        let cdf = self.env_cdf.byte_size();
+        cmd.pass("environment frame", |cmd| {
+            cmd.copy_region(&frames.texels, k * texels, &self.env_texels, texels);
+            cmd.copy_region(&frames.cdf, k * cdf, &self.env_cdf, cdf);
+            Ok(())
         })
     }
 

@@ -7,8 +7,9 @@ use std::path::{Path, PathBuf};
 use glam::Vec3;
 
 use super::hash::Fnv1a64;
+use super::sky::MovingSun;
 use super::{camera, environment, failure, file, lights, obj};
-use super::{Material, Scene, SceneError, Triangle};
+use super::{Environment, Material, Scene, SceneError, Triangle};
 
 /// A triangle whose area is at most this times the squared diagonal of the scene's bounding
 /// box is degenerate and dropped (with a warning).
@@ -213,26 +214,14 @@ fn build(file: &str, toml_text: &str, files: &Files) -> Result<Scene, SceneError
         meshes.push((obj_file, triangles));
     }
 
-    let environment = match &f.environment {
-        Some(env) => {
-            let rel = Path::new(&env.exr);
-            let (display, bytes) = files.read(
-                rel,
-                format!("referenced by {file}: environment.exr = {:?}", env.exr),
-            )?;
-            hash.write(&bytes);
-            let Some(path) = files.disk_path(rel) else {
-                return Err(SceneError::Unsupported {
-                    file: file.to_string(),
-                    field: "environment.exr".into(),
-                    value: format!("{:?}", env.exr),
-                    what: "environment maps in embedded scenes".into(),
-                });
-            };
-            Some(environment::read(&display, &path, env.scale)?)
-        }
-        None => None,
+    let mut environment_sequence = match &f.environment {
+        Some(env) => load_environment(file, files, env, &mut hash)?,
+        None => vec![],
     };
+    let environment = environment_sequence.first().cloned();
+    if environment_sequence.len() < 2 {
+        environment_sequence.clear();
+    }
 
     let triangles = drop_degenerate(meshes, &mut warnings);
     if triangles.is_empty() {
@@ -255,8 +244,9 @@ fn build(file: &str, toml_text: &str, files: &Files) -> Result<Scene, SceneError
             }
         })
         || environment
-            .as_ref()
-            .is_some_and(|e| e.texels.iter().any(|t| t.max_element() > 0.0));
+            .iter()
+            .chain(&environment_sequence)
+            .any(|e| e.texels.iter().any(|t| t.max_element() > 0.0));
     if !emits {
         return Err(SceneError::NoLight {
             file: file.to_string(),
@@ -272,9 +262,80 @@ fn build(file: &str, toml_text: &str, files: &Files) -> Result<Scene, SceneError
         materials,
         lights,
         environment,
+        environment_sequence,
         failure,
         warnings,
     })
+}
+
+/// The maps of `[environment]`, one per frame (one for a still map).
+fn load_environment(
+    file: &str,
+    files: &Files,
+    env: &file::EnvironmentFile,
+    hash: &mut Fnv1a64,
+) -> Result<Vec<Environment>, SceneError> {
+    let Some(exr) = &env.exr else {
+        let sky = MovingSun::from_file(file, env)?;
+        return Ok((0..sky.frames).map(|f| sky.map(f, env.scale)).collect());
+    };
+    let unsupported_embedded = || SceneError::Unsupported {
+        file: file.to_string(),
+        field: "environment.exr".into(),
+        value: format!("{exr:?}"),
+        what: "environment maps in embedded scenes".into(),
+    };
+    let rels: Vec<PathBuf> = if environment::is_glob(exr) {
+        let (dir, pattern) = environment::split_glob(exr);
+        let folder = files.disk_path(&dir).ok_or_else(unsupported_embedded)?;
+        let found =
+            environment::expand_glob(&folder, &pattern).map_err(|source| SceneError::Read {
+                path: folder.display().to_string(),
+                referenced_by: format!("{file}: environment.exr = {exr:?} (its folder)"),
+                source,
+            })?;
+        if found.is_empty() {
+            return Err(SceneError::Invalid {
+                file: file.to_string(),
+                field: "environment.exr".into(),
+                value: format!("{exr:?}"),
+                problem: format!("no file in {} matches", folder.display()),
+            });
+        }
+        found
+            .iter()
+            .map(|p| dir.join(p.file_name().unwrap_or_default()))
+            .collect()
+    } else {
+        vec![PathBuf::from(exr)]
+    };
+    let mut maps: Vec<Environment> = Vec::with_capacity(rels.len());
+    for rel in &rels {
+        let (display, bytes) = files.read(
+            rel,
+            format!("referenced by {file}: environment.exr = {exr:?}"),
+        )?;
+        hash.write(&bytes);
+        let path = files.disk_path(rel).ok_or_else(unsupported_embedded)?;
+        let map = environment::read(&display, &path, env.scale)?;
+        if let Some(first) = maps.first() {
+            if (map.width, map.height) != (first.width, first.height) {
+                return Err(SceneError::Invalid {
+                    file: display,
+                    field: "size".into(),
+                    value: format!("{}x{}", map.width, map.height),
+                    problem: format!(
+                        "every map of the sequence {exr:?} must have the size of the first, {} ({}x{})",
+                        first.source.display(),
+                        first.width,
+                        first.height
+                    ),
+                });
+            }
+        }
+        maps.push(map);
+    }
+    Ok(maps)
 }
 
 /// Drops triangles of (near) zero area, relative to the whole scene's extent, with one

@@ -105,7 +105,11 @@ pub struct Scene {
     pub triangles: Vec<Triangle>,
     pub materials: Vec<Material>,
     pub lights: Vec<Light>,
+    /// The map (of frame 0, for a sequence).
     pub environment: Option<Environment>,
+    /// A dynamic map's frames (an `exr` glob or a procedural sky), all of one size; frame f
+    /// of a render shows map f mod len. Empty for a still map.
+    pub environment_sequence: Vec<Environment>,
     /// The scene's `[failure]` table, for scenes under scenes/failure/; None elsewhere.
     pub failure: Option<FailureNote>,
     /// Things the loader fixed and reports (for example "dropped 2 degenerate triangles").
@@ -123,6 +127,7 @@ mod lights;
 mod load;
 mod mtl;
 mod obj;
+pub mod sky;
 
 pub use error::SceneError;
 pub use load::{default_scene, load, load_str, DEGENERATE_AREA};

@@ -112,6 +112,7 @@ pub fn scene(
         materials,
         lights: Vec::new(),
         environment: None,
+        environment_sequence: vec![],
         failure: None,
         warnings: Vec::new(),
     }

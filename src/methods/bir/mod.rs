@@ -264,6 +264,7 @@ impl Bir {
         let frames = settings.frames.max(1);
         let passes = progressive::run(
             ctx,
+            gpu_scene,
             frames,
             &accumulation,
             |cmd, frame| {

@@ -223,6 +223,7 @@ impl Bundles {
         let frames = settings.frames.max(1);
         let passes = progressive::run(
             ctx,
+            gpu_scene,
             frames,
             &accumulation,
             |cmd, frame| {

@@ -210,6 +210,7 @@ impl Env {
         let frames = settings.frames.max(1);
         let passes = progressive::run(
             ctx,
+            gpu_scene,
             frames,
             &accumulation,
             |cmd, frame| {

@@ -131,6 +131,7 @@ impl InstantRadiosity {
         let frames = settings.frames.max(1);
         let passes = progressive::run(
             ctx,
+            gpu_scene,
             frames,
             &accumulation,
             |cmd, frame| {
