@@ -51,8 +51,9 @@ layout(set = 0, binding = 24, std430) readonly buffer EnvSamples { vec4 env_samp
 // Per pixel, summed over frames: x the light samples used (their beta weights), y those that
 // are effective (above the surface: not cancelled by the cosine; Lu Fig. 3.6).
 layout(set = 0, binding = 25, std430) buffer EnvSampleCounts { vec2 env_sample_counts[]; };
-// alpha: per pixel, the frames' alpha (the BRDF share) summed.
-layout(set = 0, binding = 27, std430) buffer EnvAlpha { float env_alpha[]; };
+// alpha: per pixel, x the frames' alpha (the BRDF share) summed, y the frames that saw a
+// surface there.
+layout(set = 0, binding = 27, std430) buffer EnvAlpha { vec2 env_alpha[]; };
 
 layout(push_constant) uniform ShadeParams {
     uint resolution;  // R
@@ -126,9 +127,10 @@ struct Shading {
     uint pixel;
 };
 
-// BRDF sample i of a batch of `count` per frame, random dimensions from `dim`.
-bool brdf_sample(Shading p, uint count, uint i, uint dim, out vec3 wi, out float pdf) {
-    uint sample_index = params.frame * count + i;
+// BRDF sample i of at most `stride` per frame (the same stride every frame and pixel, so no
+// two frames share a sample index), random dimensions from `dim`.
+bool brdf_sample(Shading p, uint stride, uint i, uint dim, out vec3 wi, out float pdf) {
+    uint sample_index = params.frame * stride + i;
     vec3 u = vec3(random(params.seed, p.pixel, sample_index, dim),
                   random(params.seed, p.pixel, sample_index, dim + 1u),
                   random(params.seed, p.pixel, sample_index, dim + 2u));
@@ -187,11 +189,12 @@ vec3 estimate_cube(Shading p, float mu[6], float taken[6], float brdf_count, uin
         }
     }
     uint whole = uint(ceil(brdf_count));
+    uint stride = uint(ceil(params.spp));
     for (uint i = 0u; i < whole; ++i) {
         float beta = min(1.0, brdf_count - float(i));
         vec3 wi;
         float pdf_b;
-        if (!brdf_sample(p, whole, i, dim, wi, pdf_b)) continue;
+        if (!brdf_sample(p, stride, i, dim, wi, pdf_b)) continue;
         vec3 s = integrand(p.m, p.n, p.side, p.wo, wi);
         if (!nonzero(s) || !visible(p.origin, wi)) continue;
         uint f;
@@ -301,8 +304,11 @@ void main() {
         float taken[6];
         for (uint f = 0u; f < 6u; ++f) taken[f] = mu[f] * 0.5 * m_count;
         vec3 first = estimate_cube(p, mu, taken, 0.5 * m_count, 0u, 0u, true, counts, terms);
-        float alpha = terms.y > 0.0 ? clamp(0.25 * (2.0 + terms.x / terms.y), ALPHA_MIN, ALPHA_MAX)
-                                    : 0.5;
+        float ratio = terms.x / terms.y;
+        // No contribution (or an overflow) gives no evidence: the balance heuristic's half.
+        float alpha = terms.y > 0.0 && !isinf(terms.y) && !isnan(ratio)
+                          ? clamp(0.25 * (2.0 + ratio), ALPHA_MIN, ALPHA_MAX)
+                          : 0.5;
         // Step 2: N samples split by alpha, from the second sample set and other dimensions.
         float n_count = ns - m_count;
         for (uint f = 0u; f < 6u; ++f) taken[f] = mu[f] * (1.0 - alpha) * n_count;
@@ -310,7 +316,7 @@ void main() {
         // Eq. 5.6: each step's estimate is its sum (the balance heuristic's multi-sample
         // form divides by the counts already); weighted by M / (M + N) and N / (M + N).
         sum = (m_count * first + n_count * second) / ns;
-        env_alpha[index] += alpha;
+        env_alpha[index] += vec2(alpha, 1.0);
         env_sample_counts[index] += counts;
         accumulate_radiance(index, sum);
         return;

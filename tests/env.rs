@@ -69,16 +69,18 @@ fn every_strategy_matches_the_reference_direct_light() {
         let gpu = GpuScene::upload(ctx, &scene).unwrap();
         let r = luminance_mean(&direct_reference(ctx, &gpu, 8192, 51));
         let env = Env::new(ctx).unwrap();
-        // Every strategy, and dynamic with light samples only (Eq. 3.5).
-        let cases = Strategy::ALL
-            .iter()
-            .map(|&s| (s, false))
-            .chain([(Strategy::Dynamic, true)]);
-        for (strategy, light_only) in cases {
+        // Every strategy, dynamic with light samples only (Eq. 3.5), and alpha estimated from
+        // an odd M = 5 of the 16 samples.
+        let cases = Strategy::ALL.iter().map(|&s| (s, false, None)).chain([
+            (Strategy::Dynamic, true, None),
+            (Strategy::Alpha, false, Some(5)),
+        ]);
+        for (strategy, light_only, alpha_samples) in cases {
             let name = format!(
-                "{}{}",
+                "{}{}{}",
                 strategy.name(),
-                if light_only { " (light only)" } else { "" }
+                if light_only { " (light only)" } else { "" },
+                alpha_samples.map_or(String::new(), |m| format!(" (M = {m})"))
             );
             // Uniform faces spends two thirds of its light samples on faces that matter little
             // here: 3x the samples (the thesis's ratio) for a like standard error.
@@ -97,7 +99,7 @@ fn every_strategy_matches_the_reference_direct_light() {
                         face_resolution: 32,
                         light_only,
                         integer_counts: false,
-                        alpha_samples: None,
+                        alpha_samples,
                         shadows: true,
                         pixels: PixelSampling::Centres,
                     };
@@ -584,14 +586,25 @@ fn leaf_solid_angle(j: u32, rows: u32) -> f64 {
 /// leaf's weight over the total and its solid angle; the histogram of 200,000 draws over the
 /// leaves by a chi-square test (as for the cube map; zero-weight leaves never drawn); the
 /// density at uniform probes against the CPU's, and its integral over the sphere (4 pi times
-/// the probes' mean) within 4 standard errors of 1. The maps carry a one-texel sun, a bright
-/// texel at the u = 0 seam and one at the pole.
+/// the probes' mean) within 4 standard errors of 1. Maps of 48 x 24 and 100 x 20 (leaves
+/// straddling texels), 64 x 32 (one texel per leaf) and 7 x 1 (a single 2 x 1 level); the
+/// taller ones carry a one-texel sun, a bright texel at the u = 0 seam and one at the pole.
 #[test]
 fn hierarchical_samples_follow_their_density() {
     with_gpu(|ctx| {
         let mut scene = scene("glossy-env", 8, 8);
-        for (w, h) in [(48u32, 24u32), (64, 32), (100, 20)] {
-            let mut sky = sky_of_size(w, h);
+        for (w, h) in [(48u32, 24u32), (64, 32), (100, 20), (7, 1)] {
+            let mut sky = if h > 1 {
+                sky_of_size(w, h)
+            } else {
+                let texels = (0..w).map(|i| Vec3::splat(1.0 + i as f32)).collect();
+                Environment {
+                    width: w,
+                    height: h,
+                    texels,
+                    source: "test band".into(),
+                }
+            };
             if h >= 24 {
                 // A black band: zero-weight leaves must never be drawn.
                 for t in sky.texels[(h / 2 * w) as usize..((h / 2 + 2) * w) as usize].iter_mut() {
@@ -779,14 +792,16 @@ fn alpha_names_the_better_strategy_in_the_extreme_cases() {
             eprintln!(
                 "{name}: mean alpha (BRDF share) {alpha:.3}; map: {light_led} pixels light-led, {brdf_led} BRDF-led, {black} black"
             );
+            assert!(black > 0, "{name}: no black pixel where the sky is seen");
+            // Section 5.3.4: about 3/4 for the mirror and 1/4 for the near-Dirac sun.
             if mirror {
-                assert!(alpha > 0.6, "{name}: alpha {alpha}");
+                assert!((alpha - 0.75).abs() < 0.08, "{name}: alpha {alpha}");
                 assert!(
                     brdf_led > 4 * light_led,
                     "{name}: {brdf_led} against {light_led}"
                 );
             } else {
-                assert!(alpha < 0.4, "{name}: alpha {alpha}");
+                assert!((alpha - 0.25).abs() < 0.08, "{name}: alpha {alpha}");
                 assert!(
                     light_led > 4 * brdf_led,
                     "{name}: {light_led} against {brdf_led}"
@@ -798,8 +813,8 @@ fn alpha_names_the_better_strategy_in_the_extreme_cases() {
 
 /// Lu 14 Section 5.5.1 (Table 5.2, Fig. 5.1 right): on a glossy scene under a high-frequency
 /// map, alpha's per-pixel variance over 16 seeds, averaged over the pixels, is below that of
-/// the balance heuristic's half and half (dynamic) at the same samples per pixel (the thesis,
-/// without visibility: 20 to 26% lower).
+/// the balance heuristic's half and half (dynamic) at the same samples per pixel (32, over two
+/// frames; the thesis, without visibility: 20 to 26% lower).
 #[test]
 fn alpha_lowers_the_variance_under_a_high_frequency_map() {
     with_gpu(|ctx| {
@@ -815,7 +830,7 @@ fn alpha_lowers_the_variance_under_a_high_frequency_map() {
                             ctx,
                             &scene,
                             &gpu,
-                            &env_settings(strategy, 32, 1, 500 + seed),
+                            &env_settings(strategy, 32, 2, 500 + seed),
                             |_, _| {},
                         )
                         .unwrap();
@@ -841,7 +856,12 @@ fn alpha_lowers_the_variance_under_a_high_frequency_map() {
             "mean per-pixel variance: balance heuristic {balance:.4e}, alpha {alpha:.4e} ({:+.1}%)",
             100.0 * (alpha / balance - 1.0)
         );
-        assert!(alpha < balance, "alpha {alpha} against balance {balance}");
+        // The thesis's reduction is 20-26%; a tenth is asserted (sixteen seeds estimate each
+        // pixel's variance to about +-35%, averaged over 768 pixels).
+        assert!(
+            alpha < 0.9 * balance,
+            "alpha {alpha} against balance {balance}"
+        );
     });
 }
 

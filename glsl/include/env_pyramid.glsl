@@ -40,10 +40,11 @@ float pyramid_weight(uint offset, uint width, uint i, uint j) {
     return env_pyramid[offset + j * width + i];
 }
 
-// Solid angle of a leaf in row j.
+// Solid angle of a leaf in row j: (pi / H') (cos theta_j - cos theta_j+1), as a product of
+// sines (no cancellation near the poles of tall maps).
 float pyramid_leaf_solid_angle(uint j) {
     float h = float(pyramid_rows());
-    return PI / h * (cos(PI * float(j) / h) - cos(PI * float(j + 1u) / h));
+    return PI / h * 2.0 * sin(PI * (float(j) + 0.5) / h) * sin(0.5 * PI / h);
 }
 
 float pyramid_total() {
@@ -56,7 +57,8 @@ float pyramid_leaf_density(uint i, uint j) {
     float total = pyramid_total();
     if (!(total > 0.0)) return 0.0;
     uint rows = pyramid_rows();
-    return env_pyramid[j * 2u * rows + i] / total / pyramid_leaf_solid_angle(j);
+    float omega = pyramid_leaf_solid_angle(j);
+    return omega > 0.0 ? env_pyramid[j * 2u * rows + i] / total / omega : 0.0;
 }
 
 // The density of direction d.

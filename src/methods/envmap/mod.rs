@@ -204,7 +204,7 @@ impl Env {
         let cube = CubeTable::new(ctx, settings.face_resolution, per_face, sets)?;
         let seed = pcg::hash(&[settings.seed, 0x656e76]);
         let counts = Buffer::<[f32; 2]>::zeroed(ctx, "EnvSampleCounts", gpu_scene.pixel_count())?;
-        let alpha = Buffer::<f32>::zeroed(ctx, "EnvAlpha", gpu_scene.pixel_count())?;
+        let alpha = Buffer::<[f32; 2]>::zeroed(ctx, "EnvAlpha", gpu_scene.pixel_count())?;
         let latlong = EquirectTable::new(ctx, gpu_scene, 0.0, strategy == Strategy::Latlong)?;
         let pyramid = EnvPyramid::new(ctx, gpu_scene, strategy == Strategy::Hierarchical)?;
         let frames = settings.frames.max(1);
@@ -288,10 +288,11 @@ impl Env {
         let mut maps = vec![];
         if strategy == Strategy::Alpha {
             let alpha = alpha.read()?;
-            stats.push(("mean_alpha".into(), mean_alpha(&alpha, frames)));
+            stats.push(("alpha_samples".into(), alpha_samples as f64));
+            stats.push(("mean_alpha".into(), mean_alpha(&alpha)));
             maps.push((
                 "alpha".into(),
-                alpha_map(&alpha, frames, gpu_scene.width, gpu_scene.height),
+                alpha_map(&alpha, gpu_scene.width, gpu_scene.height),
             ));
         }
         Ok(RenderOutput {
@@ -305,25 +306,26 @@ impl Env {
     }
 }
 
-/// The mean over the pixels that see a surface (alpha sum > 0) of alpha, the BRDF share.
-pub fn mean_alpha(alpha_sums: &[f32], frames: u32) -> f64 {
+/// The mean over the pixels that saw a surface of alpha (the BRDF share), each pixel's alpha
+/// its mean over the frames that saw a surface there ((sum, frames) per pixel).
+pub fn mean_alpha(alpha_sums: &[[f32; 2]]) -> f64 {
     let lit: Vec<f64> = alpha_sums
         .iter()
-        .filter(|&&a| a > 0.0)
-        .map(|&a| a as f64 / frames.max(1) as f64)
+        .filter(|a| a[1] > 0.0)
+        .map(|a| a[0] as f64 / a[1] as f64)
         .collect();
     lit.iter().sum::<f64>() / lit.len().max(1) as f64
 }
 
-/// The alpha map (Lu 14 Fig. 5.1, 5.6): per pixel, with alpha the frames' mean BRDF share,
-/// R = (1 - alpha) / max(alpha, 1 - alpha) (light samples) and G = alpha / max(alpha,
-/// 1 - alpha) (BRDF samples), so yellow is the balance heuristic's half and half; black where
-/// no surface is seen.
-pub fn alpha_map(alpha_sums: &[f32], frames: u32, width: u32, height: u32) -> Image {
+/// The alpha map (Lu 14 Fig. 5.1, 5.6): per pixel, with alpha the mean BRDF share over the
+/// frames that saw a surface there ((sum, frames) per pixel), R = (1 - alpha) / max(alpha,
+/// 1 - alpha) (light samples) and G = alpha / max(alpha, 1 - alpha) (BRDF samples), so
+/// yellow is the balance heuristic's half and half; black where no surface is seen.
+pub fn alpha_map(alpha_sums: &[[f32; 2]], width: u32, height: u32) -> Image {
     let mut map = Image::new(width, height);
-    for (pixel, &sum) in map.pixels.iter_mut().zip(alpha_sums) {
-        if sum > 0.0 {
-            let a = (sum / frames.max(1) as f32).clamp(0.0, 1.0);
+    for (pixel, sum) in map.pixels.iter_mut().zip(alpha_sums) {
+        if sum[1] > 0.0 {
+            let a = (sum[0] / sum[1]).clamp(0.0, 1.0);
             let m = a.max(1.0 - a);
             *pixel = [(1.0 - a) / m, a / m, 0.0];
         }

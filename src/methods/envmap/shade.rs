@@ -61,7 +61,7 @@ impl ShadeEnv {
         pyramid: &'a EnvPyramid,
         accumulation: &'a Accumulation,
         counts: &'a Buffer<[f32; 2]>,
-        alpha: &'a Buffer<f32>,
+        alpha: &'a Buffer<[f32; 2]>,
         settings: &ShadeSettings,
     ) -> GpuResult<()> {
         let mut bindings = scene.bindings();
