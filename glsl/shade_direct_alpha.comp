@@ -27,8 +27,8 @@ layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 #include "gbuffer.glsl"
 #include "radiance.glsl"
 
-// Per pixel: x, y Eq. 5.5's sums over the estimation frames; z unused; w alpha summed over
-// the frames that used it.
+// Per pixel: x, y Eq. 5.5's sums over the estimation frames; z the later frames that saw a
+// surface here, w their alphas summed.
 layout(set = 0, binding = 26, std430) buffer DirectAlphaState { vec4 alpha_state[]; };
 
 layout(push_constant) uniform AlphaParams {
@@ -145,7 +145,7 @@ void main() {
     if (estimating) {
         alpha_state[index].xy = state.xy + terms;
     } else {
-        alpha_state[index].w = state.w + alpha;
+        alpha_state[index].zw = state.zw + vec2(1.0, alpha);
     }
     accumulate_radiance(index, L);
 }

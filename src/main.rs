@@ -246,6 +246,12 @@ struct RenderArgs {
     /// First bounce at which Russian roulette may end a path.
     #[arg(long, default_value_t = 3)]
     roulette_depth: u32,
+    /// reference --max-depth 1: split the direct light between light and BSDF sampling per
+    /// pixel by Lu 14 ch. 5's alpha, estimated over the first M frames (one sample of each,
+    /// balance heuristic); later frames take 2 alpha BSDF and 2 (1 - alpha) light samples.
+    /// Writes OUT.alpha.{exr,png} (red: light, green: BSDF).
+    #[arg(long, value_name = "M")]
+    alpha_frames: Option<u32>,
     /// Output stem: writes OUT.exr, OUT.png and OUT.json [default: out/<scene name>].
     #[arg(short, long, value_name = "OUT")]
     out: Option<PathBuf>,
@@ -720,12 +726,18 @@ fn render(options: &ContextOptions, args: RenderArgs) -> Result<()> {
     } else {
         PixelSampling::Jittered
     };
+    if let Some(m) = args.alpha_frames {
+        if !matches!(args.method, MethodArg::Reference) || args.max_depth != 1 {
+            bail!("--alpha-frames {m}: splits the reference's direct light only (--method reference --max-depth 1)");
+        }
+    }
     let method = match args.method {
         MethodArg::Reference => Method::Reference(ReferenceSettings {
             spp: args.spp,
             seed: args.seed,
             max_depth: args.max_depth,
             roulette_depth: args.roulette_depth,
+            alpha_frames: args.alpha_frames,
             pixels,
         }),
         MethodArg::Ir => Method::Ir(IrSettings {

@@ -118,6 +118,9 @@ impl Method {
                 p.insert("spp".into(), json!(s.spp));
                 p.insert("max_depth".into(), json!(s.max_depth));
                 p.insert("roulette_depth".into(), json!(s.roulette_depth));
+                if let Some(m) = s.alpha_frames {
+                    p.insert("alpha_frames".into(), json!(m));
+                }
                 p.insert(
                     "pixel_centres".into(),
                     json!(s.pixels == PixelSampling::Centres),
@@ -237,11 +240,23 @@ impl Method {
         let method = match name {
             "reference" => {
                 let d = ReferenceSettings::default();
+                let max_depth = reader.uint("max_depth", d.max_depth, 1, u32::MAX)?;
+                if let Some(v) = reader.params.get("alpha_frames").filter(|_| max_depth != 1) {
+                    return Err(reader.error(
+                        "alpha_frames",
+                        v,
+                        "splits the direct light only: needs max_depth = 1",
+                    ));
+                }
                 Method::Reference(ReferenceSettings {
                     spp: reader.uint("spp", d.spp, 1, u32::MAX)?,
                     seed: reader.uint("seed", d.seed, 0, u32::MAX)?,
-                    max_depth: reader.uint("max_depth", d.max_depth, 1, u32::MAX)?,
+                    max_depth,
                     roulette_depth: reader.uint("roulette_depth", d.roulette_depth, 0, u32::MAX)?,
+                    alpha_frames: match reader.params.contains_key("alpha_frames") {
+                        true => Some(reader.uint("alpha_frames", 0, 0, u32::MAX)?),
+                        false => d.alpha_frames,
+                    },
                     pixels: reader.pixels()?,
                 })
             }
@@ -472,6 +487,7 @@ impl<'a> Params<'a> {
                 "seed",
                 "max_depth",
                 "roulette_depth",
+                "alpha_frames",
                 "pixel_centres",
             ],
             "bir" => &[

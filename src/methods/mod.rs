@@ -5,6 +5,7 @@ pub mod accumulation;
 pub mod bir;
 pub mod bundles;
 pub mod direct;
+pub mod direct_alpha;
 pub mod envmap;
 pub mod equirect_table;
 pub mod gbuffer;

@@ -10,6 +10,8 @@ use crate::gpu::{Context, GpuResult};
 use crate::scene::gpu::GpuScene;
 
 use super::accumulation::Accumulation;
+use super::direct_alpha::ShadeDirectAlpha;
+use super::envmap;
 use super::gbuffer::{GBuffer, PixelSampling, WriteGBuffer};
 use super::paths::TracePaths;
 use super::progressive;
@@ -24,6 +26,10 @@ pub struct ReferenceSettings {
     pub max_depth: u32,
     /// First bounce at which Russian roulette may end a path.
     pub roulette_depth: u32,
+    /// With `max_depth` 1 only: Lu 14 Chapter 5's per-pixel split of the direct light between
+    /// light and BSDF sampling, estimated over the first M frames (glsl/shade_direct_alpha.comp)
+    /// instead of the power heuristic's one sample of each.
+    pub alpha_frames: Option<u32>,
     pub pixels: PixelSampling,
 }
 
@@ -34,6 +40,7 @@ impl Default for ReferenceSettings {
             seed: 0,
             max_depth: 1024,
             roulette_depth: 3,
+            alpha_frames: None,
             pixels: PixelSampling::Jittered,
         }
     }
@@ -42,6 +49,7 @@ impl Default for ReferenceSettings {
 pub struct Reference {
     gbuffer: WriteGBuffer,
     paths: TracePaths,
+    alpha: ShadeDirectAlpha,
 }
 
 impl Reference {
@@ -49,6 +57,7 @@ impl Reference {
         Ok(Reference {
             gbuffer: WriteGBuffer::new(ctx)?,
             paths: TracePaths::new(ctx)?,
+            alpha: ShadeDirectAlpha::new(ctx)?,
         })
     }
 
@@ -65,6 +74,8 @@ impl Reference {
         let gbuffer = GBuffer::new(ctx, scene)?;
         let accumulation = Accumulation::new(ctx, scene.width, scene.height)?;
         let spp = settings.spp.max(1);
+        let alpha_frames = settings.alpha_frames.filter(|_| settings.max_depth == 1);
+        let state = ShadeDirectAlpha::state(ctx, scene)?;
         let passes = progressive::run(
             ctx,
             scene,
@@ -75,6 +86,20 @@ impl Reference {
                     self.gbuffer
                         .record(cmd, scene, &gbuffer, frame, settings.seed, settings.pixels)
                 })?;
+                if let Some(m) = alpha_frames {
+                    return cmd.pass("direct light alpha", |cmd| {
+                        self.alpha.record(
+                            cmd,
+                            scene,
+                            &gbuffer,
+                            &accumulation,
+                            &state,
+                            frame,
+                            settings.seed,
+                            m,
+                        )
+                    });
+                }
                 cmd.pass("reference paths", |cmd| {
                     self.paths.record(
                         cmd,
@@ -91,13 +116,23 @@ impl Reference {
             },
             progress,
         )?;
+        let (mut stats, mut maps) = (vec![], vec![]);
+        if alpha_frames.is_some() {
+            // Per pixel: alpha's mean over the frames from M on that saw a surface there.
+            let sums: Vec<[f32; 2]> = state.read()?.iter().map(|s| [s[3], s[2]]).collect();
+            stats.push(("mean_alpha".into(), envmap::mean_alpha(&sums)));
+            maps.push((
+                "alpha".into(),
+                envmap::alpha_map(&sums, scene.width, scene.height),
+            ));
+        }
         Ok(RenderOutput {
             image: accumulation.resolve(spp),
             passes,
             wall_ms: start.elapsed().as_secs_f64() * 1e3,
             nonfinite_estimates: accumulation.nonfinite_estimates()?,
-            stats: Vec::new(),
-            maps: vec![],
+            stats,
+            maps,
         })
     }
 }
