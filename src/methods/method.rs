@@ -681,6 +681,28 @@ mod tests {
     }
 
     #[test]
+    fn reference_alpha_frames_need_the_direct_light_only() {
+        let r =
+            Method::from_params("reference", &table("max_depth = 1\nalpha_frames = 32")).unwrap();
+        assert_eq!(
+            r,
+            Method::Reference(ReferenceSettings {
+                max_depth: 1,
+                alpha_frames: Some(32),
+                ..Default::default()
+            })
+        );
+        let back: toml::Table = r
+            .parameters()
+            .into_iter()
+            .map(|(k, v)| (k, toml::Value::try_from(v).unwrap()))
+            .collect();
+        assert_eq!(Method::from_params("reference", &back).unwrap(), r);
+        let e = Method::from_params("reference", &table("alpha_frames = 32")).unwrap_err();
+        assert!(e.to_string().contains("needs max_depth = 1"), "{e}");
+    }
+
+    #[test]
     fn bir_parameters_read_back() {
         let bir = Method::from_params(
             "bir",
