@@ -1,5 +1,5 @@
 #version 450
-// The `hierarchical` sampler on its own, for its tests and the bench (env_pyramid.glsl): draw
+// The `hierarchical` sampler on its own, for its tests (env_pyramid.glsl): draw
 // k writes the direction drawn from random numbers (seed, k) and the density the draw
 // reports; probe k writes a uniformly distributed direction and pyramid_density there (its
 // mean times 4 pi is the density's integral over the sphere). One invocation per k.

@@ -3,6 +3,7 @@
 
 pub mod accumulation;
 pub mod bir;
+pub mod bsdf_draws;
 pub mod bundles;
 pub mod direct;
 pub mod direct_alpha;

@@ -108,6 +108,13 @@ pub struct GpuScene {
     pub triangle_count: usize,
 }
 
+/// The probability with which bsdf.glsl samples the Phong lobe of `m` (Material.kd.w):
+/// Y(Ks) / (Y(Kd) + Y(Ks)).
+pub fn phong_probability(m: &super::Material) -> f32 {
+    let (yd, ys) = (luminance(m.kd), luminance(m.ks));
+    (if ys > 0.0 { ys / (yd + ys) } else { 0.0 }) as f32
+}
+
 /// Every frame's environment tables, back to back.
 struct EnvironmentFrames {
     count: u32,
@@ -335,14 +342,10 @@ impl GpuScene {
         let materials: Vec<GpuMaterial> = scene
             .materials
             .iter()
-            .map(|m| {
-                let (yd, ys) = (luminance(m.kd), luminance(m.ks));
-                let p_spec = if ys > 0.0 { ys / (yd + ys) } else { 0.0 };
-                GpuMaterial {
-                    kd: m.kd.extend(p_spec as f32),
-                    ks: m.ks.extend(m.ns),
-                    ke: m.ke.extend(if m.is_emissive() { 1.0 } else { 0.0 }),
-                }
+            .map(|m| GpuMaterial {
+                kd: m.kd.extend(phong_probability(m)),
+                ks: m.ks.extend(m.ns),
+                ke: m.ke.extend(if m.is_emissive() { 1.0 } else { 0.0 }),
             })
             .collect();
 
