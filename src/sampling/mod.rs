@@ -4,4 +4,5 @@ pub mod cubemap;
 pub mod distribution;
 pub mod environment;
 pub mod pcg;
+pub mod restricted;
 pub mod scan;
