@@ -15,7 +15,7 @@
 //!   M(s) = the integral of C over [0, s] x [0, H], restricted affinely to [s0, s1]; then t as
 //!   above. The marginal then weighs column s by its whole-image mass m(s) where the window
 //!   holds only w(s) of it, so the realised pdf is
-//!     p(s, t) = m(s) / (M(s1) - M(s0)) * C(s, t) / w(s),
+//!   p(s, t) = m(s) / (M(s1) - M(s0)) * C(s, t) / w(s),
 //!   which equals C / A only when w(s) / m(s) is the same for every column of the window.
 //!   Dividing by C / A with this sampler is biased (tested below); a column with w(s) = 0 but
 //!   m(s) > 0 is drawn and wastes its sample.
@@ -224,7 +224,7 @@ impl ImageTables {
         search: Search,
     ) -> Option<Draw> {
         let w = window.clamped(self.width, self.height);
-        if !(w.s1 > w.s0 && w.t1 > w.t0) {
+        if w.s1 <= w.s0 || w.t1 <= w.t0 {
             return None;
         }
         // s: a knot-indexed CDF over the window's columns, then linear in the column.
@@ -239,7 +239,7 @@ impl ImageTables {
             Marginal::Affine => self.marginal_at(s) - self.marginal_at(w.s0),
         };
         let total = f(w.s1);
-        if !(total > 0.0) {
+        if total.is_nan() || total <= 0.0 {
             return None;
         }
         let target = u.0 * total;
@@ -255,7 +255,7 @@ impl ImageTables {
         // t: column i restricted to [t0, t1].
         let below = self.column(i, w.t0);
         let mass = self.column(i, w.t1) - below;
-        if !(mass > 0.0) {
+        if mass.is_nan() || mass <= 0.0 {
             return None;
         }
         let first_t = w.t0.floor() as usize;
@@ -287,7 +287,7 @@ impl ImageTables {
         let (i, j) = texel;
         let c = self.texel(i, j);
         let a = self.window_integral(w);
-        if !(a > 0.0) || !(c > 0.0) {
+        if (a.is_nan() || a <= 0.0) || (c.is_nan() || c <= 0.0) {
             return 0.0;
         }
         match marginal {
@@ -295,7 +295,7 @@ impl ImageTables {
             Marginal::Affine => {
                 let restricted = self.marginal_at(w.s1) - self.marginal_at(w.s0);
                 let column = self.windowed_column(i, w);
-                if !(column > 0.0) || !(restricted > 0.0) {
+                if (column.is_nan() || column <= 0.0) || (restricted.is_nan() || restricted <= 0.0) {
                     return 0.0;
                 }
                 self.whole_column(i) / restricted * c / column
