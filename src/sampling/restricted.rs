@@ -295,7 +295,8 @@ impl ImageTables {
             Marginal::Affine => {
                 let restricted = self.marginal_at(w.s1) - self.marginal_at(w.s0);
                 let column = self.windowed_column(i, w);
-                if (column.is_nan() || column <= 0.0) || (restricted.is_nan() || restricted <= 0.0) {
+                if (column.is_nan() || column <= 0.0) || (restricted.is_nan() || restricted <= 0.0)
+                {
                     return 0.0;
                 }
                 self.whole_column(i) / restricted * c / column
