@@ -64,6 +64,57 @@ enum Command {
     /// Benchmarks that measure and print.
     #[command(subcommand)]
     Bench(Bench),
+    /// Light-field luminaires (Lu 14 ch. 4; format in README "Light-field luminaires").
+    #[command(subcommand)]
+    Luminaire(LuminaireCommand),
+}
+
+#[derive(Subcommand)]
+enum LuminaireCommand {
+    /// Build a luminaire from an analytic near-field emitter and write OUT/luminaire.toml
+    /// and OUT/images.exr. Each image at a texel is the emitter's radiance averaged over its
+    /// basis function's support, times delta^2 / |s - u_m|^4 (Eq. 4.1 at the node).
+    Generate {
+        /// disk: a uniform Lambertian disk (on its axis the irradiance has a closed form);
+        /// headlight: a ringed reflector disk with a lobe tilted down and a cut-off line.
+        #[arg(long, value_enum, default_value_t = EmitterArg::Headlight)]
+        emitter: EmitterArg,
+        /// Basis functions on the filter plane, WxH (the thesis's car headlight: 11x9).
+        #[arg(long, value_parser = parse_size, default_value = "11x9")]
+        grid: (u32, u32),
+        /// Texels per image, WxH (the thesis: 256x256).
+        #[arg(long, value_parser = parse_size, default_value = "64x64")]
+        resolution: (u32, u32),
+        #[arg(long, value_enum, default_value_t = BasisArg::QuadraticBspline)]
+        basis: BasisArg,
+        /// The emitter's radius in metres; the basis grid spans it.
+        #[arg(long, default_value_t = 0.06)]
+        radius: f64,
+        /// The emitter's peak radiance.
+        #[arg(long, default_value_t = 20.0)]
+        radiance: f64,
+        /// The image plane's distance from the filter plane, metres.
+        #[arg(long, default_value_t = 0.05)]
+        delta: f64,
+        /// The images' extent on the image plane, metres (square).
+        #[arg(long, default_value_t = 0.3)]
+        image_size: f64,
+        /// Output folder.
+        #[arg(short, long)]
+        out: PathBuf,
+    },
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum EmitterArg {
+    Disk,
+    Headlight,
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum BasisArg {
+    Bilinear,
+    QuadraticBspline,
 }
 
 #[derive(clap::Args)]
@@ -518,6 +569,19 @@ fn run(cli: Cli) -> Result<()> {
         Command::Render(args) => render(&options, args),
         Command::Selfcheck => run_selfcheck(&Context::new(&options)?),
         Command::Shaders { check } => shaders(check),
+        Command::Luminaire(LuminaireCommand::Generate {
+            emitter,
+            grid,
+            resolution,
+            basis,
+            radius,
+            radiance,
+            delta,
+            image_size,
+            out,
+        }) => generate_luminaire(
+            emitter, grid, resolution, basis, radius, radiance, delta, image_size, &out,
+        ),
         Command::Bench(Bench::Scan { repeats, sizes }) => {
             let ctx = Context::new(&options)?;
             let cases = if sizes.is_empty() {
@@ -1271,5 +1335,80 @@ fn shaders(check: bool) -> Result<()> {
         built.join(", ")
     );
     println!("rebuild irad (cargo build) to embed them");
+    Ok(())
+}
+
+#[allow(clippy::too_many_arguments)]
+fn generate_luminaire(
+    emitter: EmitterArg,
+    grid: (u32, u32),
+    resolution: (u32, u32),
+    basis: BasisArg,
+    radius: f64,
+    radiance: f64,
+    delta: f64,
+    image_size: f64,
+    out: &std::path::Path,
+) -> Result<()> {
+    use irad::scene::luminaire::{Basis, Emitter, Geometry, Luminaire};
+    let positive = |name: &str, x: f64| {
+        anyhow::ensure!(
+            x.is_finite() && x > 0.0,
+            "--{name} {x}: must be finite and > 0"
+        );
+        Ok(())
+    };
+    positive("radius", radius)?;
+    positive("radiance", radiance)?;
+    positive("delta", delta)?;
+    positive("image-size", image_size)?;
+    anyhow::ensure!(
+        grid.0 <= 64 && grid.1 <= 64 && resolution.0 <= 4096 && resolution.1 <= 4096,
+        "--grid at most 64x64 and --resolution at most 4096x4096"
+    );
+    let grid = [grid.0 as usize, grid.1 as usize];
+    // The grid spans the emitter's diameter (a single node sits at its centre).
+    let pitch = |n: usize| {
+        if n > 1 {
+            2.0 * radius / (n - 1) as f64
+        } else {
+            2.0 * radius
+        }
+    };
+    let geometry = Geometry {
+        grid,
+        pitch: [pitch(grid[0]), pitch(grid[1])],
+        basis: match basis {
+            BasisArg::Bilinear => Basis::Bilinear,
+            BasisArg::QuadraticBspline => Basis::QuadraticBSpline,
+        },
+        delta,
+        image_size: [image_size, image_size],
+        resolution: [resolution.0 as usize, resolution.1 as usize],
+    };
+    let emitter = match emitter {
+        EmitterArg::Disk => Emitter::Disk { radius, radiance },
+        EmitterArg::Headlight => Emitter::Headlight {
+            radius,
+            radiance,
+            sharpness: 12.0,
+            tilt: 3.0,
+        },
+    };
+    let luminaire = Luminaire::from_emitter(
+        geometry,
+        |u, s| emitter.radiance(u, s, delta),
+        &format!("{emitter:?}"),
+    );
+    let path = luminaire.write(out)?;
+    println!(
+        "wrote {} and {} ({}x{} images of {}x{} texels)",
+        path.display(),
+        out.join("images.exr").display(),
+        grid[0],
+        grid[1],
+        resolution.0,
+        resolution.1
+    );
     Ok(())
 }

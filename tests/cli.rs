@@ -207,3 +207,38 @@ fn render_errors_name_the_file() {
     assert_clean_error(&o, &["missing.exr"]);
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// `irad luminaire generate` writes a luminaire that loads back with the asked geometry, and
+/// refuses a bad value in one line.
+#[test]
+fn luminaire_generate_writes_a_loadable_luminaire() {
+    let dir = std::env::temp_dir().join(format!("irad-cli-luminaire-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let out = dir.to_str().unwrap();
+    let o = irad(
+        &[
+            "luminaire",
+            "generate",
+            "--emitter",
+            "disk",
+            "--grid",
+            "5x3",
+            "--resolution",
+            "16x8",
+            "--basis",
+            "bilinear",
+            "-o",
+            out,
+        ],
+        &[],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let lum = irad::scene::luminaire::Luminaire::load(&dir.join("luminaire.toml")).unwrap();
+    assert_eq!(lum.geometry.grid, [5, 3]);
+    assert_eq!(lum.geometry.resolution, [16, 8]);
+    assert_eq!(lum.geometry.basis, irad::scene::luminaire::Basis::Bilinear);
+    assert!(lum.images.iter().flatten().any(|t| t.x > 0.0));
+    let o = irad(&["luminaire", "generate", "--delta", "0", "-o", out], &[]);
+    assert_clean_error(&o, &["--delta 0", "> 0"]);
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -1,5 +1,6 @@
-//! The two-plane light-field luminaire of Lu 14 Chapter 4 (issue 9) in f64: the CPU mirror of
-//! what method `lightfield` will do on the GPU, and its tests.
+//! Sampling the two-plane light-field luminaire of Lu 14 Chapter 4 (issue 9; the model is
+//! src/scene/luminaire.rs) in f64: the CPU mirror of what method `lightfield` will do on the
+//! GPU, and its tests.
 //!
 //! In the luminaire's frame the filter plane U is z = 0 and the image plane S is z = delta;
 //! light leaves toward +z. W x H basis functions Phi_m sit on a grid of pitch (du, dv)
@@ -20,56 +21,15 @@
 //! K_m(p) = round(K A_m / A), at least 1 where A_m > 0 (so no image with energy is dropped:
 //! each I_m keeps its own unbiased estimate whatever K_m) and at most K_max; 0 where A_m = 0.
 
-use glam::DVec3;
+use glam::{DVec3, Vec3};
 
 use super::restricted::{ImageTables, Marginal, Search, Window};
+use crate::scene::luminaire::{Geometry, Luminaire};
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Basis {
-    /// Bilinear hats, support +-1 pitch (the canned light source).
-    Bilinear,
-    /// Quadratic B-splines, support +-1.5 pitches (Goesele et al.).
-    QuadraticBSpline,
-}
-
-impl Basis {
-    /// The 1D basis at x pitches from its node.
-    pub fn weight(self, x: f64) -> f64 {
-        let a = x.abs();
-        match self {
-            Basis::Bilinear => (1.0 - a).max(0.0),
-            Basis::QuadraticBSpline => {
-                if a < 0.5 {
-                    0.75 - a * a
-                } else if a < 1.5 {
-                    0.5 * (1.5 - a) * (1.5 - a)
-                } else {
-                    0.0
-                }
-            }
-        }
-    }
-
-    /// Half the support's width, in pitches.
-    pub fn reach(self) -> f64 {
-        match self {
-            Basis::Bilinear => 1.0,
-            Basis::QuadraticBSpline => 1.5,
-        }
-    }
-}
-
+/// A luminaire's sampling tables: per image the luminance tables of sampling/restricted.rs.
 #[derive(Clone, Debug)]
-pub struct Luminaire {
-    /// W x H basis functions.
-    pub grid: [usize; 2],
-    /// (du, dv).
-    pub pitch: [f64; 2],
-    pub basis: Basis,
-    pub delta: f64,
-    /// (sx, sy): the images' extent on S.
-    pub image_size: [f64; 2],
-    /// Per image m (row-major over the grid, m = j W + i): its sampling tables (luminance).
+pub struct LuminaireSampler {
+    pub geometry: Geometry,
     pub images: Vec<ImageTables>,
 }
 
@@ -82,95 +42,49 @@ pub struct Share {
     pub samples: u32,
 }
 
-impl Luminaire {
-    /// A luminaire from an emitter's radiance L(u -> s) (u on U, s on S): image m at texel
-    /// centre s is the mean of L(u -> s) over basis m's support weighted by Phi_m (an 8 x 8
-    /// midpoint rule), times delta^2 / |s - u_m|^4, so that Eq. 4.1 gives back L at the node
-    /// and, for an emitter that does not depend on s, the basis projection keeps its flux.
-    #[allow(clippy::too_many_arguments)]
-    pub fn from_emitter(
-        grid: [usize; 2],
-        pitch: [f64; 2],
-        basis: Basis,
-        delta: f64,
-        image_size: [f64; 2],
-        resolution: [usize; 2],
-        radiance: impl Fn((f64, f64), (f64, f64)) -> f64,
-    ) -> Luminaire {
-        let mut lum = Luminaire {
-            grid,
-            pitch,
-            basis,
-            delta,
-            image_size,
-            images: vec![],
-        };
-        let [rs, rt] = resolution;
-        let q = 8usize;
-        for m in 0..grid[0] * grid[1] {
-            let (x, y) = lum.node(m);
-            let reach = basis.reach();
-            let points: Vec<((f64, f64), f64)> = (0..q * q)
-                .map(|k| {
-                    let (a, b) = ((k % q) as f64 + 0.5, (k / q) as f64 + 0.5);
-                    let u = (
-                        x + (2.0 * a / q as f64 - 1.0) * reach * pitch[0],
-                        y + (2.0 * b / q as f64 - 1.0) * reach * pitch[1],
-                    );
-                    (u, lum.phi(m, u))
-                })
-                .collect();
-            let norm: f64 = points.iter().map(|p| p.1).sum();
-            let texels = (0..rs * rt)
-                .map(|k| {
-                    let s = (
-                        ((k % rs) as f64 + 0.5) / rs as f64 * image_size[0] - 0.5 * image_size[0],
-                        ((k / rs) as f64 + 0.5) / rt as f64 * image_size[1] - 0.5 * image_size[1],
-                    );
-                    let mean = points.iter().map(|&(u, w)| w * radiance(u, s)).sum::<f64>() / norm;
-                    let d2 = (s.0 - x).powi(2) + (s.1 - y).powi(2) + delta * delta;
-                    mean * delta * delta / (d2 * d2)
-                })
-                .collect();
-            lum.images.push(ImageTables::new(rs, rt, texels));
+impl LuminaireSampler {
+    /// The tables of `luminaire`'s images' luminance (Y = 0.2126 R + 0.7152 G + 0.0722 B).
+    pub fn new(luminaire: &Luminaire) -> LuminaireSampler {
+        let [rs, rt] = luminaire.geometry.resolution;
+        let y = |c: &Vec3| 0.2126 * c.x as f64 + 0.7152 * c.y as f64 + 0.0722 * c.z as f64;
+        LuminaireSampler {
+            geometry: luminaire.geometry,
+            images: luminaire
+                .images
+                .iter()
+                .map(|im| ImageTables::new(rs, rt, im.iter().map(y).collect()))
+                .collect(),
         }
-        lum
     }
 
-    /// Node u_m of basis m.
-    pub fn node(&self, m: usize) -> (f64, f64) {
-        let (i, j) = (m % self.grid[0], m / self.grid[0]);
-        let x = (i as f64 - (self.grid[0] - 1) as f64 / 2.0) * self.pitch[0];
-        let y = (j as f64 - (self.grid[1] - 1) as f64 / 2.0) * self.pitch[1];
-        (x, y)
+    fn node(&self, m: usize) -> (f64, f64) {
+        self.geometry.node(m)
     }
 
-    /// Phi_m(u).
-    pub fn phi(&self, m: usize, u: (f64, f64)) -> f64 {
-        let (x, y) = self.node(m);
-        self.basis.weight((u.0 - x) / self.pitch[0]) * self.basis.weight((u.1 - y) / self.pitch[1])
+    fn phi(&self, m: usize, u: (f64, f64)) -> f64 {
+        self.geometry.phi(m, u)
     }
 
     /// A point of S in texel units of the images, and back.
     fn plane_to_texels(&self, s: (f64, f64)) -> (f64, f64) {
         let r = (self.images[0].width as f64, self.images[0].height as f64);
         (
-            (s.0 / self.image_size[0] + 0.5) * r.0,
-            (s.1 / self.image_size[1] + 0.5) * r.1,
+            (s.0 / self.geometry.image_size[0] + 0.5) * r.0,
+            (s.1 / self.geometry.image_size[1] + 0.5) * r.1,
         )
     }
 
     fn texels_to_plane(&self, t: (f64, f64)) -> (f64, f64) {
         let r = (self.images[0].width as f64, self.images[0].height as f64);
         (
-            (t.0 / r.0 - 0.5) * self.image_size[0],
-            (t.1 / r.1 - 0.5) * self.image_size[1],
+            (t.0 / r.0 - 0.5) * self.geometry.image_size[0],
+            (t.1 / r.1 - 0.5) * self.geometry.image_size[1],
         )
     }
 
     /// m^2 of S per texel.
     fn texel_area(&self) -> f64 {
-        self.image_size[0] / self.images[0].width as f64 * self.image_size[1]
+        self.geometry.image_size[0] / self.images[0].width as f64 * self.geometry.image_size[1]
             / self.images[0].height as f64
     }
 
@@ -186,25 +100,26 @@ impl Luminaire {
 
     /// Where the line from p through s meets U.
     pub fn filter_point(&self, p: DVec3, s: (f64, f64)) -> (f64, f64) {
-        let tau = p.z / (p.z - self.delta);
+        let tau = p.z / (p.z - self.geometry.delta);
         (p.x + tau * (s.0 - p.x), p.y + tau * (s.1 - p.y))
     }
 
     /// Psi_m(u -> s) = Phi_m(u) |s - u|^4 / delta^2 (Eq. 4.1).
     pub fn psi(&self, m: usize, u: (f64, f64), s: (f64, f64)) -> f64 {
-        let d2 = (s.0 - u.0).powi(2) + (s.1 - u.1).powi(2) + self.delta * self.delta;
-        self.phi(m, u) * d2 * d2 / (self.delta * self.delta)
+        let d2 =
+            (s.0 - u.0).powi(2) + (s.1 - u.1).powi(2) + self.geometry.delta * self.geometry.delta;
+        self.phi(m, u) * d2 * d2 / (self.geometry.delta * self.geometry.delta)
     }
 
     /// Eq. 4.11: the window on S (texel units) through which p sees basis m's support.
     pub fn window(&self, m: usize, p: DVec3) -> Window {
         let (x, y) = self.node(m);
         let (rx, ry) = (
-            self.basis.reach() * self.pitch[0],
-            self.basis.reach() * self.pitch[1],
+            self.geometry.basis.reach() * self.geometry.pitch[0],
+            self.geometry.basis.reach() * self.geometry.pitch[1],
         );
         // s = p + (u - p) Delta / (Delta + delta), Delta + delta = p.z.
-        let k = (p.z - self.delta) / p.z;
+        let k = (p.z - self.geometry.delta) / p.z;
         let project =
             |u: (f64, f64)| self.plane_to_texels((p.x + (u.0 - p.x) * k, p.y + (u.1 - p.y) * k));
         let (a, b) = (project((x - rx, y - ry)), project((x + rx, y + ry)));
@@ -250,7 +165,7 @@ impl Luminaire {
         search: Search,
         mut next: impl FnMut() -> f64,
     ) -> (f64, u32) {
-        let delta_p = p.z - self.delta;
+        let delta_p = p.z - self.geometry.delta;
         let mut sum = 0.0;
         let mut drawn = 0;
         for (m, share) in self.shares(p, k, k_max).iter().enumerate() {
@@ -277,8 +192,8 @@ impl Luminaire {
 
     /// The brute-force reference of I(p): n x n midpoint points over the whole of S.
     pub fn irradiance_brute_force(&self, p: DVec3, n: usize) -> f64 {
-        let delta_p = p.z - self.delta;
-        let (sx, sy) = (self.image_size[0], self.image_size[1]);
+        let delta_p = p.z - self.geometry.delta;
+        let (sx, sy) = (self.geometry.image_size[0], self.geometry.image_size[1]);
         let mut sum = 0.0;
         for a in 0..n {
             for b in 0..n {
@@ -301,19 +216,20 @@ impl Luminaire {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::scene::luminaire::{Basis, Emitter};
 
-    /// A 3 x 3 luminaire, pitch 0.1, delta 0.5, 32 x 32 images over 2 x 2: each image a
+    /// A 3 x 3 luminaire, pitch 0.1, delta 0.5, 32 x 32 grey images over 2 x 2: each image a
     /// smooth lobe toward its own side plus a hot spot, one image black.
-    fn luminaire(basis: Basis) -> Luminaire {
+    fn luminaire(basis: Basis) -> LuminaireSampler {
         let (w, h) = (3usize, 3usize);
         let r = 32usize;
         let images = (0..w * h)
             .map(|m| {
                 let (i, j) = ((m % w) as f64 - 1.0, (m / w) as f64 - 1.0);
-                let texels = (0..r * r)
+                (0..r * r)
                     .map(|k| {
                         if m == 5 {
-                            return 0.0;
+                            return Vec3::ZERO;
                         }
                         let (a, b) = (
                             (k % r) as f64 / r as f64 - 0.5,
@@ -325,20 +241,23 @@ mod tests {
                         } else {
                             0.0
                         };
-                        lobe + spot
+                        Vec3::splat((lobe + spot) as f32)
                     })
-                    .collect();
-                ImageTables::new(r, r, texels)
+                    .collect()
             })
             .collect();
-        Luminaire {
-            grid: [w, h],
-            pitch: [0.1, 0.1],
-            basis,
-            delta: 0.5,
-            image_size: [2.0, 2.0],
+        LuminaireSampler::new(&Luminaire {
+            geometry: Geometry {
+                grid: [w, h],
+                pitch: [0.1, 0.1],
+                basis,
+                delta: 0.5,
+                image_size: [2.0, 2.0],
+                resolution: [r, r],
+            },
             images,
-        }
+            source: "test".into(),
+        })
     }
 
     fn rng(seed: u64) -> impl FnMut() -> f64 {
@@ -348,64 +267,6 @@ mod tests {
             x ^= x >> 7;
             x ^= x << 17;
             (x >> 11) as f64 / (1u64 << 53) as f64
-        }
-    }
-
-    /// The closed-form case: a uniform Lambertian disk of radius R and radiance L0 in the
-    /// filter plane, turned into a luminaire (9 x 9 bases over the disk, the image plane 0.2
-    /// above it, 32 x 32 images over 0.5 x 0.5);
-    /// on its axis at height h the scalar irradiance is L0 times the disk's solid angle,
-    /// 2 pi L0 (1 - h / sqrt(h^2 + R^2)). The restricted estimate matches within 1%.
-    #[test]
-    fn a_disk_luminaire_matches_the_closed_form() {
-        let (r, l0) = (0.1, 1.0);
-        for basis in [Basis::Bilinear, Basis::QuadraticBSpline] {
-            let lum = Luminaire::from_emitter(
-                [9, 9],
-                [2.0 * r / 8.0, 2.0 * r / 8.0],
-                basis,
-                0.2,
-                [0.5, 0.5],
-                [32, 32],
-                |u, _| {
-                    if u.0 * u.0 + u.1 * u.1 <= r * r {
-                        l0
-                    } else {
-                        0.0
-                    }
-                },
-            );
-            for h in [0.3f64, 1.0] {
-                let exact = 2.0 * std::f64::consts::PI * l0 * (1.0 - h / (h * h + r * r).sqrt());
-                let p = DVec3::new(0.0, 0.0, h);
-                let mut next = rng(3);
-                let runs = 2000;
-                let mean = (0..runs)
-                    .map(|_| lum.irradiance(p, 64, 16, Search::Secant, &mut next).0)
-                    .sum::<f64>()
-                    / runs as f64;
-                let brute = lum.irradiance_brute_force(p, 512);
-                eprintln!(
-                    "disk, {basis:?}, h {h}: restricted / exact {:.4}, brute force / exact {:.4}",
-                    mean / exact,
-                    brute / exact
-                );
-                assert!(
-                    (mean / exact - 1.0).abs() < 0.01,
-                    "{basis:?} h {h}: {mean} against {exact}"
-                );
-            }
-        }
-    }
-
-    #[test]
-    fn the_bases_are_partitions_of_unity() {
-        for basis in [Basis::Bilinear, Basis::QuadraticBSpline] {
-            for k in 0..100 {
-                let x = k as f64 / 100.0;
-                let sum: f64 = (-3..=3).map(|n| basis.weight(x - n as f64)).sum();
-                assert!((sum - 1.0).abs() < 1e-12, "{basis:?} at {x}: {sum}");
-            }
         }
     }
 
@@ -456,6 +317,55 @@ mod tests {
                 (0.0, 0)
             );
             assert_eq!(lum.irradiance_brute_force(far, 200), 0.0);
+        }
+    }
+
+    /// The closed-form case: a uniform Lambertian disk of radius R and radiance L0 in the
+    /// filter plane, turned into a luminaire (9 x 9 bases over the disk, the image plane 0.2
+    /// above it, 32 x 32 images over 0.5 x 0.5); on its axis at height h the scalar
+    /// irradiance is L0 times the disk's solid angle, 2 pi L0 (1 - h / sqrt(h^2 + R^2)). The
+    /// restricted estimate matches within 1%.
+    #[test]
+    fn a_disk_luminaire_matches_the_closed_form() {
+        let (r, l0) = (0.1, 1.0);
+        let disk = Emitter::Disk {
+            radius: r,
+            radiance: l0,
+        };
+        for basis in [Basis::Bilinear, Basis::QuadraticBSpline] {
+            let geometry = Geometry {
+                grid: [9, 9],
+                pitch: [2.0 * r / 8.0, 2.0 * r / 8.0],
+                basis,
+                delta: 0.2,
+                image_size: [0.5, 0.5],
+                resolution: [32, 32],
+            };
+            let lum = LuminaireSampler::new(&Luminaire::from_emitter(
+                geometry,
+                |u, s| disk.radiance(u, s, 0.2),
+                "disk",
+            ));
+            for h in [0.3f64, 1.0] {
+                let exact = 2.0 * std::f64::consts::PI * l0 * (1.0 - h / (h * h + r * r).sqrt());
+                let p = DVec3::new(0.0, 0.0, h);
+                let mut next = rng(3);
+                let runs = 2000;
+                let mean = (0..runs)
+                    .map(|_| lum.irradiance(p, 64, 16, Search::Secant, &mut next).0)
+                    .sum::<f64>()
+                    / runs as f64;
+                let brute = lum.irradiance_brute_force(p, 512);
+                eprintln!(
+                    "disk, {basis:?}, h {h}: restricted / exact {:.4}, brute force / exact {:.4}",
+                    mean / exact,
+                    brute / exact
+                );
+                assert!(
+                    (mean / exact - 1.0).abs() < 0.01,
+                    "{basis:?} h {h}: {mean} against {exact}"
+                );
+            }
         }
     }
 }

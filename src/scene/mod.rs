@@ -125,6 +125,7 @@ pub mod gpu;
 pub mod hash;
 mod lights;
 mod load;
+pub mod luminaire;
 mod mtl;
 mod obj;
 pub mod sky;

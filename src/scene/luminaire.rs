@@ -1,0 +1,457 @@
+//! Light-field luminaires (Lu 14 Chapter 4, issue 9): the two-plane model of Eq. 4.1, its
+//! on-disk format, and luminaires generated from analytic emitters.
+//!
+//! In the luminaire's frame the filter plane U is z = 0 and the image plane S is z = delta;
+//! light leaves toward +z. W x H basis functions Phi_m sit on a grid of pitch (du, dv) centred
+//! on U's origin, basis m = j W + i at ((i - (W-1)/2) du, (j - (H-1)/2) dv): bilinear hats
+//! (support +-1 pitch: Heidrich's canned light source) or quadratic B-splines (support +-1.5
+//! pitches: Goesele et al.). Image m, C_m, is RGB and piecewise constant over R_s x R_t
+//! texels covering [-sx/2, sx/2] x [-sy/2, sy/2] of S, texel row 0 at -sy/2. The radiance along
+//! the ray from u through s is Eq. 4.1,
+//!   L(u -> s) = |s - u|^4 / delta^2 * sum_m C_m(s) Phi_m(u).
+//! Samplers use the luminance of C_m and scale by its colour ratio (Section 4.4).
+//!
+//! On disk: a TOML file and one EXR atlas beside it,
+//! ```toml
+//! grid = [3, 3]                 # W x H basis functions
+//! pitch = [0.01, 0.01]          # metres between basis nodes on the filter plane
+//! basis = "bilinear"            # or "quadratic-bspline"
+//! delta = 0.05                  # metres from the filter plane to the image plane
+//! image_size = [0.2, 0.2]       # metres covered by every image on the image plane
+//! atlas = "images.exr"          # W R_s x H R_t texels: image (i, j) is tile (i, j)
+//! ```
+
+use std::path::{Path, PathBuf};
+
+use glam::Vec3;
+use serde::Deserialize;
+
+use super::SceneError;
+use crate::image::{exr, Image};
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Basis {
+    /// Bilinear hats, support +-1 pitch (the canned light source).
+    Bilinear,
+    /// Quadratic B-splines, support +-1.5 pitches (Goesele et al.).
+    QuadraticBSpline,
+}
+
+impl Basis {
+    pub fn name(self) -> &'static str {
+        match self {
+            Basis::Bilinear => "bilinear",
+            Basis::QuadraticBSpline => "quadratic-bspline",
+        }
+    }
+
+    /// The 1D basis at x pitches from its node.
+    pub fn weight(self, x: f64) -> f64 {
+        let a = x.abs();
+        match self {
+            Basis::Bilinear => (1.0 - a).max(0.0),
+            Basis::QuadraticBSpline => {
+                if a < 0.5 {
+                    0.75 - a * a
+                } else if a < 1.5 {
+                    0.5 * (1.5 - a) * (1.5 - a)
+                } else {
+                    0.0
+                }
+            }
+        }
+    }
+
+    /// Half the support's width, in pitches.
+    pub fn reach(self) -> f64 {
+        match self {
+            Basis::Bilinear => 1.0,
+            Basis::QuadraticBSpline => 1.5,
+        }
+    }
+}
+
+/// The luminaire's geometry: everything but the images.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Geometry {
+    /// W x H basis functions.
+    pub grid: [usize; 2],
+    /// (du, dv), metres.
+    pub pitch: [f64; 2],
+    pub basis: Basis,
+    /// The image plane's distance from the filter plane, metres.
+    pub delta: f64,
+    /// (sx, sy): the images' extent on the image plane, metres.
+    pub image_size: [f64; 2],
+    /// (R_s, R_t): texels per image.
+    pub resolution: [usize; 2],
+}
+
+impl Geometry {
+    /// Node u_m of basis m.
+    pub fn node(&self, m: usize) -> (f64, f64) {
+        let (i, j) = (m % self.grid[0], m / self.grid[0]);
+        let x = (i as f64 - (self.grid[0] - 1) as f64 / 2.0) * self.pitch[0];
+        let y = (j as f64 - (self.grid[1] - 1) as f64 / 2.0) * self.pitch[1];
+        (x, y)
+    }
+
+    /// Phi_m(u).
+    pub fn phi(&self, m: usize, u: (f64, f64)) -> f64 {
+        let (x, y) = self.node(m);
+        self.basis.weight((u.0 - x) / self.pitch[0]) * self.basis.weight((u.1 - y) / self.pitch[1])
+    }
+
+    /// The centre of texel (a, b) on the image plane.
+    pub fn texel_centre(&self, a: usize, b: usize) -> (f64, f64) {
+        (
+            ((a as f64 + 0.5) / self.resolution[0] as f64 - 0.5) * self.image_size[0],
+            ((b as f64 + 0.5) / self.resolution[1] as f64 - 0.5) * self.image_size[1],
+        )
+    }
+
+    pub fn images(&self) -> usize {
+        self.grid[0] * self.grid[1]
+    }
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Luminaire {
+    pub geometry: Geometry,
+    /// Per image m (m = j W + i), R_s x R_t RGB texels, row-major.
+    pub images: Vec<Vec<Vec3>>,
+    pub source: PathBuf,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct LuminaireFile {
+    grid: [i64; 2],
+    pitch: [f64; 2],
+    basis: String,
+    delta: f64,
+    image_size: [f64; 2],
+    atlas: String,
+}
+
+impl Luminaire {
+    /// A luminaire from an emitter's radiance L(u -> s) (u on U, s on S, RGB): image m at a
+    /// texel centre s is the mean of L(u -> s) over basis m's support weighted by Phi_m (an
+    /// 8 x 8 midpoint rule), times delta^2 / |s - u_m|^4, so that Eq. 4.1 gives L back at the
+    /// node and, for an emitter that does not depend on s, the projection keeps its flux.
+    pub fn from_emitter(
+        geometry: Geometry,
+        radiance: impl Fn((f64, f64), (f64, f64)) -> Vec3,
+        source: &str,
+    ) -> Luminaire {
+        let g = geometry;
+        let q = 8usize;
+        let reach = g.basis.reach();
+        let images = (0..g.images())
+            .map(|m| {
+                let (x, y) = g.node(m);
+                let points: Vec<((f64, f64), f64)> = (0..q * q)
+                    .map(|k| {
+                        let (a, b) = ((k % q) as f64 + 0.5, (k / q) as f64 + 0.5);
+                        let u = (
+                            x + (2.0 * a / q as f64 - 1.0) * reach * g.pitch[0],
+                            y + (2.0 * b / q as f64 - 1.0) * reach * g.pitch[1],
+                        );
+                        (u, g.phi(m, u))
+                    })
+                    .collect();
+                let norm: f64 = points.iter().map(|p| p.1).sum();
+                let [rs, rt] = g.resolution;
+                (0..rs * rt)
+                    .map(|k| {
+                        let s = g.texel_centre(k % rs, k / rs);
+                        let mean = points
+                            .iter()
+                            .fold(Vec3::ZERO, |acc, &(u, w)| acc + radiance(u, s) * w as f32)
+                            / norm as f32;
+                        let d2 = (s.0 - x).powi(2) + (s.1 - y).powi(2) + g.delta * g.delta;
+                        mean * (g.delta * g.delta / (d2 * d2)) as f32
+                    })
+                    .collect()
+            })
+            .collect();
+        Luminaire {
+            geometry,
+            images,
+            source: source.into(),
+        }
+    }
+
+    /// Reads `path` (the TOML) and its atlas; errors name the file, field and value.
+    pub fn load(path: &Path) -> Result<Luminaire, SceneError> {
+        let display = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|source| SceneError::Read {
+            path: display.clone(),
+            referenced_by: "the luminaire file".into(),
+            source,
+        })?;
+        let f: LuminaireFile = toml::from_str(&text).map_err(|e| SceneError::File {
+            file: display.clone(),
+            message: e.to_string(),
+        })?;
+        let invalid = |field: &str, value: String, problem: &str| SceneError::Invalid {
+            file: display.clone(),
+            field: field.into(),
+            value,
+            problem: problem.into(),
+        };
+        let [w, h] = f.grid;
+        if !(1..=64).contains(&w) || !(1..=64).contains(&h) {
+            return Err(invalid(
+                "grid",
+                format!("[{w}, {h}]"),
+                "each must be in 1..=64",
+            ));
+        }
+        let positive = |x: f64| x.is_finite() && x > 0.0;
+        if !positive(f.pitch[0]) || !positive(f.pitch[1]) {
+            return Err(invalid(
+                "pitch",
+                format!("{:?}", f.pitch),
+                "must be finite and > 0",
+            ));
+        }
+        if !positive(f.delta) {
+            return Err(invalid(
+                "delta",
+                f.delta.to_string(),
+                "must be finite and > 0",
+            ));
+        }
+        if !positive(f.image_size[0]) || !positive(f.image_size[1]) {
+            return Err(invalid(
+                "image_size",
+                format!("{:?}", f.image_size),
+                "must be finite and > 0",
+            ));
+        }
+        let basis = match f.basis.as_str() {
+            "bilinear" => Basis::Bilinear,
+            "quadratic-bspline" => Basis::QuadraticBSpline,
+            other => {
+                return Err(invalid(
+                    "basis",
+                    format!("{other:?}"),
+                    "must be \"bilinear\" or \"quadratic-bspline\"",
+                ))
+            }
+        };
+        let atlas_path = path.parent().unwrap_or(Path::new("")).join(&f.atlas);
+        let atlas = exr::read(&atlas_path).map_err(|e| SceneError::File {
+            file: atlas_path.display().to_string(),
+            message: format!("atlas (referenced by {display}): {e:#}"),
+        })?;
+        let (w, h) = (w as usize, h as usize);
+        let (aw, ah) = (atlas.width as usize, atlas.height as usize);
+        if aw % w != 0 || ah % h != 0 || aw == 0 || ah == 0 {
+            return Err(invalid(
+                "atlas",
+                format!("{:?} ({aw}x{ah})", f.atlas),
+                &format!("its size must be a multiple of the grid, {w}x{h}"),
+            ));
+        }
+        let resolution = [aw / w, ah / h];
+        if let Some(k) = atlas
+            .pixels
+            .iter()
+            .position(|p| !p.iter().all(|c| c.is_finite() && *c >= 0.0))
+        {
+            return Err(SceneError::Invalid {
+                file: atlas_path.display().to_string(),
+                field: format!("texel (x {}, y {})", k % aw, k / aw),
+                value: format!("{:?}", atlas.pixels[k]),
+                problem: "must be finite and >= 0 in every channel".into(),
+            });
+        }
+        let geometry = Geometry {
+            grid: [w, h],
+            pitch: f.pitch,
+            basis,
+            delta: f.delta,
+            image_size: f.image_size,
+            resolution,
+        };
+        let [rs, rt] = resolution;
+        let images = (0..w * h)
+            .map(|m| {
+                let (i, j) = (m % w, m / w);
+                (0..rs * rt)
+                    .map(|k| Vec3::from(atlas.pixels[(j * rt + k / rs) * aw + i * rs + k % rs]))
+                    .collect()
+            })
+            .collect();
+        Ok(Luminaire {
+            geometry,
+            images,
+            source: path.to_path_buf(),
+        })
+    }
+
+    /// Writes `<dir>/luminaire.toml` and `<dir>/images.exr`; returns the TOML's path.
+    pub fn write(&self, dir: &Path) -> anyhow::Result<PathBuf> {
+        std::fs::create_dir_all(dir)?;
+        let g = &self.geometry;
+        let [w, h] = g.grid;
+        let [rs, rt] = g.resolution;
+        let mut atlas = Image::new((w * rs) as u32, (h * rt) as u32);
+        for (m, image) in self.images.iter().enumerate() {
+            let (i, j) = (m % w, m / w);
+            for (k, texel) in image.iter().enumerate() {
+                atlas.pixels[(j * rt + k / rs) * w * rs + i * rs + k % rs] = texel.to_array();
+            }
+        }
+        exr::write(&dir.join("images.exr"), &atlas)?;
+        let toml_path = dir.join("luminaire.toml");
+        let text = format!(
+            "# A light-field luminaire (README \"Light-field luminaires\"); the images are images.exr.\n\
+             grid = [{w}, {h}]\npitch = [{:?}, {:?}]\nbasis = \"{}\"\ndelta = {:?}\n\
+             image_size = [{:?}, {:?}]\natlas = \"images.exr\"\n",
+            g.pitch[0],
+            g.pitch[1],
+            g.basis.name(),
+            g.delta,
+            g.image_size[0],
+            g.image_size[1]
+        );
+        std::fs::write(&toml_path, text)?;
+        Ok(toml_path)
+    }
+}
+
+/// The analytic emitters `irad luminaire generate` turns into luminaires.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Emitter {
+    /// A uniform Lambertian disk of `radius` and `radiance` in the filter plane: on its axis
+    /// at height h the scalar irradiance is 2 pi L (1 - h / sqrt(h^2 + r^2)).
+    Disk { radius: f64, radiance: f64 },
+    /// A headlight: a disk of `radius` with a reflector's rings of brightness, emitting a
+    /// lobe about +z tilted `tilt` degrees down (-y), exponent `sharpness`, cut off above the
+    /// horizontal (a low beam's cut-off line), warm white.
+    Headlight {
+        radius: f64,
+        radiance: f64,
+        sharpness: f64,
+        tilt: f64,
+    },
+}
+
+impl Emitter {
+    /// L(u -> s) for a luminaire whose image plane is `delta` above the filter plane.
+    pub fn radiance(&self, u: (f64, f64), s: (f64, f64), delta: f64) -> Vec3 {
+        match *self {
+            Emitter::Disk { radius, radiance } => {
+                if u.0 * u.0 + u.1 * u.1 <= radius * radius {
+                    Vec3::splat(radiance as f32)
+                } else {
+                    Vec3::ZERO
+                }
+            }
+            Emitter::Headlight {
+                radius,
+                radiance,
+                sharpness,
+                tilt,
+            } => {
+                let r2 = (u.0 * u.0 + u.1 * u.1) / (radius * radius);
+                if r2 > 1.0 {
+                    return Vec3::ZERO;
+                }
+                // The reflector's rings.
+                let rings = 0.6 + 0.4 * (r2.sqrt() * 5.0 * std::f64::consts::PI).cos().powi(2);
+                let d = glam::DVec3::new(s.0 - u.0, s.1 - u.1, delta).normalize();
+                if d.y > 0.02 {
+                    return Vec3::ZERO;
+                }
+                let t = tilt.to_radians();
+                let axis = glam::DVec3::new(0.0, -t.sin(), t.cos());
+                let lobe = d.dot(axis).max(0.0).powf(sharpness);
+                Vec3::new(1.0, 0.93, 0.8) * (radiance * rings * lobe) as f32
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_bases_are_partitions_of_unity() {
+        for basis in [Basis::Bilinear, Basis::QuadraticBSpline] {
+            for k in 0..100 {
+                let x = k as f64 / 100.0;
+                let sum: f64 = (-3..=3).map(|n| basis.weight(x - n as f64)).sum();
+                assert!((sum - 1.0).abs() < 1e-12, "{basis:?} at {x}: {sum}");
+            }
+        }
+    }
+
+    fn geometry() -> Geometry {
+        Geometry {
+            grid: [3, 2],
+            pitch: [0.02, 0.03],
+            basis: Basis::QuadraticBSpline,
+            delta: 0.1,
+            image_size: [0.4, 0.3],
+            resolution: [8, 6],
+        }
+    }
+
+    #[test]
+    fn written_luminaires_read_back_and_bad_files_are_refused() {
+        let dir = std::env::temp_dir().join(format!("irad-luminaire-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        let emitter = Emitter::Headlight {
+            radius: 0.04,
+            radiance: 10.0,
+            sharpness: 8.0,
+            tilt: 5.0,
+        };
+        let lum = Luminaire::from_emitter(geometry(), |u, s| emitter.radiance(u, s, 0.1), "test");
+        let path = lum.write(&dir).unwrap();
+        let back = Luminaire::load(&path).unwrap();
+        assert_eq!(back.geometry, lum.geometry);
+        assert_eq!(back.images, lum.images);
+        let toml = std::fs::read_to_string(&path).unwrap();
+        for (from, to, parts) in [
+            (
+                "basis = \"quadratic-bspline\"",
+                "basis = \"cubic\"",
+                vec!["basis = \"cubic\"", "bilinear"],
+            ),
+            (
+                "grid = [3, 2]",
+                "grid = [0, 2]",
+                vec!["grid = [0, 2]", "1..=64"],
+            ),
+            ("delta = 0.1", "delta = -1.0", vec!["delta = -1", "> 0"]),
+            (
+                "grid = [3, 2]",
+                "grid = [5, 2]",
+                vec!["atlas", "multiple of the grid, 5x2"],
+            ),
+            (
+                "atlas = \"images.exr\"",
+                "atlas = \"gone.exr\"",
+                vec!["gone.exr"],
+            ),
+            ("delta = 0.1", "delta = 0.1\ncolour = 1", vec!["colour"]),
+        ] {
+            std::fs::write(&path, toml.replace(from, to)).unwrap();
+            let e = Luminaire::load(&path).unwrap_err().to_string();
+            for part in parts {
+                assert!(e.contains(part), "`{part}` not in: {e}");
+            }
+            assert!(
+                e.contains("luminaire.toml") || e.contains("gone.exr"),
+                "{e}"
+            );
+        }
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}
