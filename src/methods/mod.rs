@@ -11,6 +11,7 @@ pub mod envmap;
 pub mod equirect_table;
 pub mod gbuffer;
 pub mod ir;
+pub mod lightfield;
 pub mod method;
 pub mod paths;
 pub mod progressive;

@@ -160,6 +160,21 @@ impl ImageTables {
         }
     }
 
+    /// Column i's integral over [0, j] (row knot j).
+    pub fn column_knot(&self, i: usize, j: usize) -> f64 {
+        self.column_cdf[i * (self.height + 1) + j]
+    }
+
+    /// M at column knot i: the integral over [0, i] x [0, H].
+    pub fn marginal_knot(&self, i: usize) -> f64 {
+        self.marginal[i]
+    }
+
+    /// The summed-area table at knot (i, j): the integral over [0, i] x [0, j].
+    pub fn sat_knot(&self, i: usize, j: usize) -> f64 {
+        self.sat[j * (self.width + 1) + i]
+    }
+
     pub fn texel(&self, i: usize, j: usize) -> f64 {
         self.texels[j * self.width + i]
     }

@@ -1,0 +1,113 @@
+//! The light-field luminaire's sampling tables, built on the GPU with the scan kernels (Lu 14
+//! Section 4.5; issue 9 item 3), and rebuilt whenever the images change:
+//! glsl/weigh_luminaire_columns.comp (each texel's luminance, column by column), the prefix sum
+//! over every column (the conditional CDFs in t, Eq. 4.10, and the column totals), the prefix
+//! sum over each image's column totals (the marginal CDF in s, and the image totals),
+//! glsl/transpose_luminaire_columns.comp, and the prefix sum along every row of the transposed
+//! column CDFs (the summed-area table). src/sampling/restricted.rs is the f64 mirror.
+
+use bytemuck::{Pod, Zeroable};
+use glam::Vec4;
+
+use crate::gpu::prefix_sum::PrefixSum;
+use crate::gpu::{bind, Buffer, Commands, Context, GpuResult, Kernel};
+use crate::scene::luminaire::Luminaire;
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct TableParams {
+    width: u32,
+    height: u32,
+    images: u32,
+}
+
+pub struct LuminaireTables {
+    weigh: Kernel,
+    transpose: Kernel,
+    over_columns: PrefixSum,
+    over_column_totals: PrefixSum,
+    over_rows: PrefixSum,
+    params: TableParams,
+    /// The images' RGB texels (image m, row t, column s); .w unused.
+    pub texels: Buffer<Vec4>,
+    columns: Buffer<f32>,
+    /// Per image and column, the inclusive scan over t: (m, s, t).
+    pub column_cdf: Buffer<f32>,
+    pub column_totals: Buffer<f32>,
+    /// Per image, the inclusive scan of the column totals: (m, s).
+    pub marginal_cdf: Buffer<f32>,
+    pub image_totals: Buffer<f32>,
+    rows: Buffer<f32>,
+    /// Per image, the inclusive summed-area table: (m, t, s) holds the integral over
+    /// [0, s + 1] x [0, t + 1] in texel units.
+    pub sat: Buffer<f32>,
+    row_totals: Buffer<f32>,
+}
+
+impl LuminaireTables {
+    pub fn new(ctx: &Context, luminaire: &Luminaire) -> GpuResult<Self> {
+        let [rs, rt] = luminaire.geometry.resolution;
+        let m = luminaire.images.len();
+        let n = m * rs * rt;
+        let texels: Vec<Vec4> = luminaire
+            .images
+            .iter()
+            .flat_map(|im| im.iter().map(|c| c.extend(0.0)))
+            .collect();
+        Ok(LuminaireTables {
+            weigh: Kernel::new(ctx, "weigh_luminaire_columns")?,
+            transpose: Kernel::new(ctx, "transpose_luminaire_columns")?,
+            over_columns: PrefixSum::new(ctx, rt, m * rs)?,
+            over_column_totals: PrefixSum::new(ctx, rs, m)?,
+            over_rows: PrefixSum::new(ctx, rs, m * rt)?,
+            params: TableParams {
+                width: rs as u32,
+                height: rt as u32,
+                images: m as u32,
+            },
+            texels: Buffer::from_slice(ctx, "LuminaireTexels", &texels)?,
+            columns: Buffer::zeroed(ctx, "ColumnValues", n)?,
+            column_cdf: Buffer::zeroed(ctx, "ColumnCdf", n)?,
+            column_totals: Buffer::zeroed(ctx, "luminaire column totals", m * rs)?,
+            marginal_cdf: Buffer::zeroed(ctx, "MarginalCdf", m * rs)?,
+            image_totals: Buffer::zeroed(ctx, "luminaire image totals", m)?,
+            rows: Buffer::zeroed(ctx, "RowValues", n)?,
+            sat: Buffer::zeroed(ctx, "LuminaireSat", n)?,
+            row_totals: Buffer::zeroed(ctx, "luminaire row totals", m * rt)?,
+        })
+    }
+
+    /// Pass "luminaire tables": every table from `texels`.
+    pub fn record<'a>(&'a self, cmd: &mut Commands<'a>) -> GpuResult<()> {
+        let p = self.params;
+        let threads = [p.width, p.height, p.images];
+        self.weigh.dispatch_threads(
+            cmd,
+            &[
+                bind("LuminaireTexels", &self.texels),
+                bind("ColumnValues", &self.columns),
+            ],
+            &p,
+            threads,
+        )?;
+        self.over_columns
+            .record(cmd, &self.columns, &self.column_cdf, &self.column_totals)?;
+        self.over_column_totals.record(
+            cmd,
+            &self.column_totals,
+            &self.marginal_cdf,
+            &self.image_totals,
+        )?;
+        self.transpose.dispatch_threads(
+            cmd,
+            &[
+                bind("ColumnCdf", &self.column_cdf),
+                bind("RowValues", &self.rows),
+            ],
+            &p,
+            threads,
+        )?;
+        self.over_rows
+            .record(cmd, &self.rows, &self.sat, &self.row_totals)
+    }
+}
