@@ -79,3 +79,140 @@ fn gpu_tables_match_the_f64_mirror() {
         assert!(lit >= 10, "only {lit} of 15 images carry light");
     });
 }
+
+/// The GPU's restricted sampler (glsl/include/luminaire_tables.glsl, through
+/// draw_luminaire_samples.comp) against the f64 mirror's pdf, C / A: for windows of several
+/// sizes and positions, one reaching past the image's border, and both searches, each draw's
+/// reported pdf matches the mirror's at its texel (or it lies within 1e-3 texel of a texel
+/// edge, where f32 may pick the neighbour), draws stay in the window, the histogram over the
+/// texels passes a chi-square test, and the secant search takes fewer steps than binary search.
+#[test]
+fn gpu_restricted_draws_follow_their_pdf() {
+    use irad::methods::lightfield::tables::RestrictedDraws;
+    use irad::sampling::restricted::{Marginal, Window};
+    with_gpu(|ctx| {
+        let geometry = Geometry {
+            grid: [3, 3],
+            pitch: [0.03, 0.03],
+            basis: Basis::Bilinear,
+            delta: 0.05,
+            image_size: [0.3, 0.3],
+            resolution: [32, 24],
+        };
+        let headlight = Emitter::Headlight {
+            radius: 0.04,
+            radiance: 20.0,
+            sharpness: 6.0,
+            tilt: 3.0,
+        };
+        let lum = Luminaire::from_emitter(geometry, |u, s| headlight.radiance(u, s, 0.05), "test");
+        let mirror = LuminaireSampler::new(&lum);
+        let tables = LuminaireTables::new(ctx, &lum).unwrap();
+        let n = 100_000u32;
+        let draws = RestrictedDraws::new(ctx, n).unwrap();
+        let m = 4usize;
+        let image = &mirror.images[m];
+        let (rs, rt) = (32usize, 24usize);
+        let mut steps = [0.0f64; 2];
+        for (k, w) in [
+            [0.0f32, 32.0, 0.0, 24.0],
+            [3.4, 27.9, 2.2, 13.6],
+            [-5.0, 7.5, -3.0, 8.2],
+            [14.3, 17.8, 8.6, 10.1],
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            let window = Window {
+                s0: w[0] as f64,
+                s1: w[1] as f64,
+                t0: w[2] as f64,
+                t1: w[3] as f64,
+            }
+            .clamped(rs, rt);
+            for (which, secant) in [false, true].into_iter().enumerate() {
+                let mut cmd = Commands::new(ctx).unwrap();
+                cmd.pass("luminaire tables", |cmd| tables.record(cmd))
+                    .unwrap();
+                cmd.pass("draws", |cmd| {
+                    draws.record(cmd, &tables, m as u32, w, secant, 40 + k as u32)
+                })
+                .unwrap();
+                cmd.submit_and_wait().unwrap();
+                let mut counts = vec![0u32; rs * rt];
+                for d in &draws.draws.read().unwrap() {
+                    let (s, t) = (d[0] as f64, d[1] as f64);
+                    assert!(
+                        d[2] > 0.0,
+                        "window {w:?}: a draw failed (A = {})",
+                        image.window_integral(window)
+                    );
+                    assert!(
+                        s >= window.s0 - 1e-4
+                            && s <= window.s1 + 1e-4
+                            && t >= window.t0 - 1e-4
+                            && t <= window.t1 + 1e-4,
+                        "({s}, {t}) outside {window:?}"
+                    );
+                    let texel = ((s as usize).min(rs - 1), (t as usize).min(rt - 1));
+                    let p = image.pdf(window, texel, Marginal::Windowed);
+                    let edge = |x: f64| (x - x.round()).abs() < 1e-3;
+                    assert!(
+                        (d[2] as f64 - p).abs() <= 1e-3 * p || edge(s) || edge(t),
+                        "window {w:?}: reported pdf {} against {p} at {texel:?}",
+                        d[2]
+                    );
+                    counts[texel.1 * rs + texel.0] += 1;
+                    steps[which] += d[3] as f64;
+                }
+                let (mut chi2, mut cells) = (0.0, 0);
+                for j in 0..rt {
+                    for i in 0..rs {
+                        let ds = (window.s1.min(i as f64 + 1.0) - window.s0.max(i as f64)).max(0.0);
+                        let dt = (window.t1.min(j as f64 + 1.0) - window.t0.max(j as f64)).max(0.0);
+                        let e = n as f64 * image.pdf(window, (i, j), Marginal::Windowed) * ds * dt;
+                        let o = counts[j * rs + i] as f64;
+                        if e == 0.0 {
+                            assert_eq!(
+                                o, 0.0,
+                                "window {w:?}: texel ({i}, {j}) has pdf 0 but {o} draws"
+                            );
+                        } else if e >= 5.0 {
+                            chi2 += (o - e).powi(2) / e;
+                            cells += 1;
+                        }
+                    }
+                }
+                let dof = (cells as f64 - 1.0).max(1.0);
+                eprintln!("window {w:?}, secant {secant}: chi^2 {chi2:.1} over {dof}");
+                assert!(chi2 / dof < 1.6, "window {w:?}: chi^2 {chi2:.1} / {dof}");
+            }
+        }
+        // Above the cut-off line the images are black: a window there holds nothing and every
+        // draw fails, with pdf 0.
+        let empty = [0.0f32, 32.0, 20.0, 24.0];
+        let e = Window {
+            s0: 0.0,
+            s1: 32.0,
+            t0: 20.0,
+            t1: 24.0,
+        };
+        assert!(image.window_integral(e) <= 1e-9 * image.marginal_knot(32));
+        let mut cmd = Commands::new(ctx).unwrap();
+        cmd.pass("luminaire tables", |cmd| tables.record(cmd))
+            .unwrap();
+        cmd.pass("draws", |cmd| {
+            draws.record(cmd, &tables, m as u32, empty, true, 9)
+        })
+        .unwrap();
+        cmd.submit_and_wait().unwrap();
+        assert!(draws.draws.read().unwrap().iter().all(|d| d[2] == 0.0));
+        let per_draw = |x: f64| x / (4.0 * n as f64);
+        eprintln!(
+            "search steps per draw: binary {:.2}, secant {:.2}",
+            per_draw(steps[0]),
+            per_draw(steps[1])
+        );
+        assert!(steps[1] < steps[0]);
+    });
+}

@@ -111,3 +111,70 @@ impl LuminaireTables {
             .record(cmd, &self.rows, &self.sat, &self.row_totals)
     }
 }
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct DrawParams {
+    window: [f32; 4],
+    m: u32,
+    width: u32,
+    height: u32,
+    count: u32,
+    seed: u32,
+    search: u32,
+    /// The block's size rounds up to its vec4's alignment.
+    pad: [u32; 2],
+}
+
+/// glsl/draw_luminaire_samples.comp: the restricted sampler of glsl/include/
+/// luminaire_tables.glsl on its own, for its tests: `count` draws in one image's window, each
+/// (s, t, realised pdf, search steps).
+pub struct RestrictedDraws {
+    kernel: Kernel,
+    pub draws: Buffer<[f32; 4]>,
+    count: u32,
+}
+
+impl RestrictedDraws {
+    pub fn new(ctx: &Context, count: u32) -> GpuResult<Self> {
+        Ok(RestrictedDraws {
+            kernel: Kernel::new(ctx, "draw_luminaire_samples")?,
+            draws: Buffer::zeroed(ctx, "LuminaireDraws", count.max(1) as usize)?,
+            count,
+        })
+    }
+
+    /// Draws in image `m`'s window (s0, s1, t0, t1) (texel units); `secant` picks Lu's
+    /// modified secant search over binary search.
+    pub fn record<'a>(
+        &'a self,
+        cmd: &mut Commands<'a>,
+        tables: &'a LuminaireTables,
+        m: u32,
+        window: [f32; 4],
+        secant: bool,
+        seed: u32,
+    ) -> GpuResult<()> {
+        let params = DrawParams {
+            window,
+            m,
+            width: tables.params.width,
+            height: tables.params.height,
+            count: self.count,
+            seed,
+            search: secant as u32,
+            pad: [0; 2],
+        };
+        self.kernel.dispatch_threads(
+            cmd,
+            &[
+                bind("LuminaireTexels", &tables.texels),
+                bind("ColumnCdf", &tables.column_cdf),
+                bind("LuminaireSat", &tables.sat),
+                bind("LuminaireDraws", &self.draws),
+            ],
+            &params,
+            [self.count, 1, 1],
+        )
+    }
+}
