@@ -16,6 +16,7 @@ use irad::methods::envmap::{EnvSettings, Strategy as EnvStrategy};
 use irad::methods::gbuffer::PixelSampling;
 use irad::methods::ir::schedule::Absorption;
 use irad::methods::ir::{DirectLight, IrSettings};
+use irad::methods::lightfield::{LightfieldSettings, Strategy as LightfieldStrategy};
 use irad::methods::reference::ReferenceSettings;
 use irad::methods::Method;
 use irad::render::{self, RenderJob};
@@ -205,6 +206,12 @@ struct RenderArgs {
     /// use it [default: half of --spp].
     #[arg(long, value_parser = clap::value_parser!(u32).range(0..=65536))]
     alpha_samples: Option<u32>,
+    /// lightfield: K_max, the most samples per pixel, frame and image (Lu's Fig. 4.11).
+    #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..=65536))]
+    k_max: u32,
+    /// lightfield: invert the CDFs by binary search instead of Lu's modified secant search.
+    #[arg(long)]
+    binary_search: bool,
     /// env: no shadow rays (every sample counted as visible), as in the thesis's timings; for
     /// timing comparisons only: the image is wrong wherever the map is occluded.
     #[arg(long)]
@@ -332,6 +339,8 @@ enum MethodArg {
     Bundles,
     /// Environment-map direct light with per-pixel dynamic cube-map sampling (Lu 14 ch. 3).
     Env,
+    /// Light-field luminaires' direct light by restricted-CDF sampling (Lu 14 ch. 4).
+    Lightfield,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -358,6 +367,14 @@ enum StrategyArg {
     Cosine,
     /// env: one table over the whole latitude-longitude map (pbrt, Mitsuba), MIS with BRDF.
     Latlong,
+    /// lightfield: Lu's restricted windows, A_m from the summed-area table, K_m by A_m.
+    Restricted,
+    /// lightfield: uniform over the restricted window.
+    Uniform,
+    /// lightfield: one CDF over each whole image, no restriction.
+    Precomputed,
+    /// lightfield: uniform over the whole image plane (the brute-force reference).
+    BruteForce,
     /// env: a luminance mip pyramid descended 2x2 per level (Falcor, Mitsuba 3), MIS with BRDF.
     Hierarchical,
     /// env: dynamic's samplers split per pixel by Lu 14 ch. 5's estimated alpha; writes
@@ -932,6 +949,23 @@ fn render(options: &ContextOptions, args: RenderArgs) -> Result<()> {
             integer_counts: args.integer_counts,
             alpha_samples: args.alpha_samples,
             shadows: !args.no_shadows,
+            pixels,
+        }),
+        MethodArg::Lightfield => Method::Lightfield(LightfieldSettings {
+            spp: args.spp,
+            frames: args.frames,
+            k_max: args.k_max,
+            strategy: match args.strategy {
+                Some(StrategyArg::Restricted) | None => LightfieldStrategy::Restricted,
+                Some(StrategyArg::Uniform) => LightfieldStrategy::Uniform,
+                Some(StrategyArg::Precomputed) => LightfieldStrategy::Precomputed,
+                Some(StrategyArg::BruteForce) => LightfieldStrategy::BruteForce,
+                Some(_) => bail!(
+                    "--strategy: lightfield takes restricted, uniform, precomputed or brute-force"
+                ),
+            },
+            secant: !args.binary_search,
+            seed: args.seed,
             pixels,
         }),
     };

@@ -446,16 +446,62 @@ fn procedural_sky_and_its_errors() {
 }
 
 #[test]
-fn luminaire_is_not_supported_yet() {
-    let toml = format!(
-        "{}[[luminaire]]\npath = \"headlight/luminaire.toml\"\nposition = [0, 1, 0]\n\
-         look_at = [0, 0, 0]\n",
-        good_toml()
+fn luminaires_are_placed_and_bad_placements_refused() {
+    use irad::scene::luminaire::{Basis, Emitter, Geometry, Luminaire};
+    let placement = |path: &str, look_at: &str| {
+        format!(
+            "{CAMERA}{MESH}[[luminaire]]\npath = \"{path}\"\nposition = [0, 1, 0]\nlook_at = {look_at}\n"
+        )
+    };
+    let s = scratch(
+        "luminaire",
+        &placement("headlight/luminaire.toml", "[0, 0, 0]"),
+        OBJ,
+        MTL,
     );
-    let s = scratch("luminaire", &toml, OBJ, MTL);
     s.error(&[
+        "headlight/luminaire.toml",
+        "cannot read it",
         "scene.toml: luminaire[0].path = \"headlight/luminaire.toml\"",
-        "light-field luminaires are not supported yet",
+    ]);
+    let geometry = Geometry {
+        grid: [2, 2],
+        pitch: [0.02, 0.02],
+        basis: Basis::Bilinear,
+        delta: 0.05,
+        image_size: [0.2, 0.2],
+        resolution: [4, 4],
+    };
+    let disk = Emitter::Disk {
+        radius: 0.02,
+        radiance: 1.0,
+    };
+    Luminaire::from_emitter(geometry, |u, t| disk.radiance(u, t, 0.05), "test")
+        .write(&s.path("headlight"))
+        .unwrap();
+    // Placed: z toward look_at (down), y the world's up made perpendicular to it.
+    let scene = s.load().unwrap();
+    assert_eq!(scene.luminaires.len(), 1);
+    let l = &scene.luminaires[0];
+    assert!(
+        (l.z - Vec3::new(0.0, -1.0, 0.0)).length() < 1e-6,
+        "{:?}",
+        l.z
+    );
+    assert!(l.x.dot(l.y).abs() < 1e-6 && l.x.cross(l.y).dot(l.z) > 0.999);
+    // A scene lit only by a luminaire is lit.
+    let s2 = scratch(
+        "luminaire-same",
+        &placement("headlight/luminaire.toml", "[0, 1, 0]"),
+        OBJ,
+        MTL,
+    );
+    Luminaire::from_emitter(geometry, |u, t| disk.radiance(u, t, 0.05), "test")
+        .write(&s2.path("headlight"))
+        .unwrap();
+    s2.error(&[
+        "scene.toml: luminaire[0].look_at = [0.0, 1.0, 0.0]",
+        "must differ from position",
     ]);
 }
 

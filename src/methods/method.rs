@@ -21,13 +21,16 @@ use crate::methods::envmap::{Env, EnvError, EnvSettings, Strategy as EnvStrategy
 use crate::methods::gbuffer::PixelSampling;
 use crate::methods::ir::schedule::Absorption;
 use crate::methods::ir::{DirectLight, InstantRadiosity, IrError, IrSettings};
+use crate::methods::lightfield::{
+    Lightfield, LightfieldError, LightfieldSettings, Strategy as LightfieldStrategy,
+};
 use crate::methods::reference::{Reference, ReferenceSettings};
 use crate::methods::RenderOutput;
 use crate::scene::gpu::GpuScene;
 use crate::scene::Scene;
 
 /// Every method irad has, by the name `--method` and suite files use.
-pub const METHOD_NAMES: &[&str] = &["reference", "ir", "bir", "bundles", "env"];
+pub const METHOD_NAMES: &[&str] = &["reference", "ir", "bir", "bundles", "env", "lightfield"];
 
 #[derive(Clone, Debug, PartialEq)]
 pub enum Method {
@@ -36,6 +39,7 @@ pub enum Method {
     Bir(BirSettings),
     Bundles(BundlesSettings),
     Env(EnvSettings),
+    Lightfield(LightfieldSettings),
 }
 
 /// A parameter a method cannot take: `method: key = value: problem`.
@@ -60,6 +64,7 @@ impl Method {
             Method::Bir(_) => "bir",
             Method::Bundles(_) => "bundles",
             Method::Env(_) => "env",
+            Method::Lightfield(_) => "lightfield",
         }
     }
 
@@ -70,6 +75,7 @@ impl Method {
             Method::Bir(s) => s.seed,
             Method::Bundles(s) => s.seed,
             Method::Env(s) => s.seed,
+            Method::Lightfield(s) => s.seed,
         }
     }
 
@@ -82,6 +88,7 @@ impl Method {
             Method::Bir(s) => s.seed = seed,
             Method::Bundles(s) => s.seed = seed,
             Method::Env(s) => s.seed = seed,
+            Method::Lightfield(s) => s.seed = seed,
         }
         m
     }
@@ -94,6 +101,7 @@ impl Method {
             Method::Bir(s) => s.frames as u64,
             Method::Bundles(s) => s.frames as u64,
             Method::Env(s) => s.frames as u64,
+            Method::Lightfield(s) => s.frames as u64,
         }
     }
 
@@ -106,6 +114,7 @@ impl Method {
             Method::Bir(s) => s.frames as f64 * s.vpls as f64,
             Method::Bundles(s) => s.frames as f64 * s.iterations as f64,
             Method::Env(s) => s.frames as f64 * s.spp as f64,
+            Method::Lightfield(s) => s.frames as f64 * s.spp as f64,
         }
     }
 
@@ -214,6 +223,20 @@ impl Method {
                     p.insert("alpha_samples".into(), json!(m));
                 }
                 p.insert("shadows".into(), json!(s.shadows));
+                p.insert(
+                    "pixel_centres".into(),
+                    json!(s.pixels == PixelSampling::Centres),
+                );
+            }
+            Method::Lightfield(s) => {
+                p.insert("spp".into(), json!(s.spp));
+                p.insert("frames".into(), json!(s.frames));
+                p.insert("k_max".into(), json!(s.k_max));
+                p.insert("strategy".into(), json!(s.strategy.name()));
+                p.insert(
+                    "search".into(),
+                    json!(if s.secant { "secant" } else { "binary" }),
+                );
                 p.insert(
                     "pixel_centres".into(),
                     json!(s.pixels == PixelSampling::Centres),
@@ -378,6 +401,28 @@ impl Method {
                     pixels: reader.pixels()?,
                 })
             }
+            "lightfield" => {
+                let d = LightfieldSettings::default();
+                let names: Vec<&str> = LightfieldStrategy::ALL.iter().map(|s| s.name()).collect();
+                Method::Lightfield(LightfieldSettings {
+                    spp: reader.uint("spp", d.spp, 1, 1 << 16)?,
+                    frames: reader.uint("frames", d.frames, 1, u32::MAX)?,
+                    k_max: reader.uint("k_max", d.k_max, 1, 1 << 16)?,
+                    seed: reader.uint("seed", d.seed, 0, u32::MAX)?,
+                    strategy: match reader.choice("strategy", &names)? {
+                        Some(c) => *LightfieldStrategy::ALL
+                            .iter()
+                            .find(|s| s.name() == c)
+                            .unwrap(),
+                        None => d.strategy,
+                    },
+                    secant: match reader.choice("search", &["binary", "secant"])? {
+                        Some(c) => c == "secant",
+                        None => d.secant,
+                    },
+                    pixels: reader.pixels()?,
+                })
+            }
             _ => return Err(ParamError::UnknownMethod(name.to_string())),
         };
         reader.refuse_unknown()?;
@@ -386,6 +431,13 @@ impl Method {
 
     /// Why this method cannot render `scene`, in one line, or None when it can.
     pub fn declines(&self, scene: &Scene) -> Option<String> {
+        if !scene.luminaires.is_empty() && !matches!(self, Method::Lightfield(_)) {
+            return Some(format!(
+                "{} does not render light-field luminaires (the scene places {}); use --method lightfield",
+                self.name(),
+                scene.luminaires.len()
+            ));
+        }
         match self {
             Method::Reference(_) => None,
             Method::Ir(_) => scene
@@ -398,6 +450,7 @@ impl Method {
                 .then(|| BirError::Environment.to_string()),
             Method::Bundles(_) => Bundles::declines(scene).map(|e| e.to_string()),
             Method::Env(_) => Env::declines(scene).map(|e| e.to_string()),
+            Method::Lightfield(_) => Lightfield::declines(scene).map(|e| e.to_string()),
         }
     }
 }
@@ -507,6 +560,15 @@ impl<'a> Params<'a> {
                 "adaptive",
                 "pixel_centres",
             ],
+            "lightfield" => &[
+                "spp",
+                "frames",
+                "k_max",
+                "seed",
+                "strategy",
+                "search",
+                "pixel_centres",
+            ],
             "env" => &[
                 "spp",
                 "frames",
@@ -569,6 +631,7 @@ pub struct Renderers {
     bir: OnceCell<Bir>,
     bundles: OnceCell<Bundles>,
     env: OnceCell<Env>,
+    lightfield: OnceCell<Lightfield>,
 }
 
 #[derive(Debug, Error)]
@@ -628,6 +691,14 @@ impl Renderers {
                 env.render(ctx, scene, gpu_scene, settings, progress)
                     .map_err(|e| match e {
                         EnvError::Gpu(g) => RunError::Gpu(g),
+                        e => RunError::Declined(e.to_string()),
+                    })
+            }
+            Method::Lightfield(settings) => {
+                let lf = get_or_try_init(&self.lightfield, || Lightfield::new(ctx))?;
+                lf.render(ctx, scene, gpu_scene, settings, progress)
+                    .map_err(|e| match e {
+                        LightfieldError::Gpu(g) => RunError::Gpu(g),
                         e => RunError::Declined(e.to_string()),
                     })
             }

@@ -14,10 +14,9 @@ pub struct SceneFile {
     #[serde(default)]
     pub light: Vec<LightFile>,
     pub environment: Option<EnvironmentFile>,
-    /// Light-field luminaires: any table is accepted here and refused by the loader until
-    /// their issue defines the format.
+    /// Light-field luminaires (scene/luminaire.rs), placed in the scene.
     #[serde(default)]
-    pub luminaire: Vec<toml::Table>,
+    pub luminaire: Vec<LuminairePlacementFile>,
     pub failure: Option<FailureFile>,
 }
 
@@ -52,6 +51,20 @@ pub struct LightFile {
     pub direction: Option<[f32; 3]>,
     pub cone_angle: Option<f32>,
     pub falloff_angle: Option<f32>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LuminairePlacementFile {
+    /// The luminaire's TOML, relative to the scene file.
+    pub path: String,
+    /// Where the luminaire's filter-plane origin sits.
+    pub position: [f32; 3],
+    /// A point the luminaire's +z (its emission axis) points at.
+    pub look_at: [f32; 3],
+    /// The world direction the luminaire's +y leans toward (default +Y; -Z when aimed
+    /// straight up or down).
+    pub up: Option<[f32; 3]>,
 }
 
 #[derive(Debug, Deserialize)]

@@ -8,7 +8,7 @@ use glam::Vec3;
 
 use super::hash::Fnv1a64;
 use super::sky::MovingSun;
-use super::{camera, environment, failure, file, lights, obj};
+use super::{camera, environment, failure, file, lights, luminaire, obj};
 use super::{Environment, Material, Scene, SceneError, Triangle};
 
 /// A triangle whose area is at most this times the squared diagonal of the scene's bounding
@@ -141,17 +141,30 @@ fn build(file: &str, toml_text: &str, files: &Files) -> Result<Scene, SceneError
     hash.write(toml_text.as_bytes());
     let f = file::parse(file, toml_text)?;
 
-    if let Some(l) = f.luminaire.first() {
-        let (field, value) = match l.get("path") {
-            Some(p) => ("luminaire[0].path", p.to_string()),
-            None => ("luminaire[0]", "{ ... }".to_string()),
+    let mut luminaires = vec![];
+    for (k, l) in f.luminaire.iter().enumerate() {
+        let rel = Path::new(&l.path);
+        let (_, bytes) = files.read(
+            rel,
+            format!("referenced by {file}: luminaire[{k}].path = {:?}", l.path),
+        )?;
+        hash.write(&bytes);
+        let Some(path) = files.disk_path(rel) else {
+            return Err(SceneError::Unsupported {
+                file: file.to_string(),
+                field: format!("luminaire[{k}].path"),
+                value: format!("{:?}", l.path),
+                what: "luminaires in embedded scenes".into(),
+            });
         };
-        return Err(SceneError::Unsupported {
-            file: file.to_string(),
-            field: field.into(),
-            value,
-            what: "light-field luminaires".into(),
-        });
+        let luminaire = luminaire::Luminaire::load(&path)?;
+        // The atlas's texels are part of the content.
+        for texel in luminaire.images.iter().flatten() {
+            for c in texel.to_array() {
+                hash.write(&c.to_le_bytes());
+            }
+        }
+        luminaires.push(luminaire::PlacedLuminaire::place(file, k, luminaire, l)?);
     }
     let camera = camera::build(file, &f.camera)?;
     let lights = f
@@ -246,7 +259,14 @@ fn build(file: &str, toml_text: &str, files: &Files) -> Result<Scene, SceneError
         || environment
             .iter()
             .chain(&environment_sequence)
-            .any(|e| e.texels.iter().any(|t| t.max_element() > 0.0));
+            .any(|e| e.texels.iter().any(|t| t.max_element() > 0.0))
+        || luminaires.iter().any(|l| {
+            l.luminaire
+                .images
+                .iter()
+                .flatten()
+                .any(|t| t.max_element() > 0.0)
+        });
     if !emits {
         return Err(SceneError::NoLight {
             file: file.to_string(),
@@ -263,6 +283,7 @@ fn build(file: &str, toml_text: &str, files: &Files) -> Result<Scene, SceneError
         lights,
         environment,
         environment_sequence,
+        luminaires,
         failure,
         warnings,
     })

@@ -323,6 +323,72 @@ impl Luminaire {
     }
 }
 
+/// A luminaire placed in a scene: its filter-plane origin at `position`, its axes in world
+/// space (z the emission axis toward `look_at`, y toward `up`, x = y cross z).
+#[derive(Clone, Debug, PartialEq)]
+pub struct PlacedLuminaire {
+    pub luminaire: Luminaire,
+    pub position: Vec3,
+    pub x: Vec3,
+    pub y: Vec3,
+    pub z: Vec3,
+}
+
+impl PlacedLuminaire {
+    /// Places `luminaire` as `[[luminaire]]` entry k of scene `file` says.
+    pub fn place(
+        file: &str,
+        k: usize,
+        luminaire: Luminaire,
+        f: &super::file::LuminairePlacementFile,
+    ) -> Result<PlacedLuminaire, SceneError> {
+        let invalid = |field: &str, value: String, problem: &str| SceneError::Invalid {
+            file: file.to_string(),
+            field: format!("luminaire[{k}].{field}"),
+            value,
+            problem: problem.into(),
+        };
+        let position = Vec3::from(f.position);
+        let look_at = Vec3::from(f.look_at);
+        if !position.is_finite() || !look_at.is_finite() {
+            return Err(invalid(
+                "position",
+                format!("{:?}", f.position),
+                "must be finite",
+            ));
+        }
+        let z = (look_at - position).normalize_or_zero();
+        if z == Vec3::ZERO {
+            return Err(invalid(
+                "look_at",
+                format!("{:?}", f.look_at),
+                "must differ from position",
+            ));
+        }
+        // Without `up`, +Y, or -Z for a luminaire aimed straight up or down.
+        let up = match f.up {
+            Some(up) => Vec3::from(up),
+            None if z.y.abs() > 0.999 => Vec3::new(0.0, 0.0, -1.0),
+            None => Vec3::Y,
+        };
+        let y = (up - up.dot(z) * z).normalize_or_zero();
+        if y == Vec3::ZERO || !y.is_finite() {
+            return Err(invalid(
+                "up",
+                format!("{:?}", up.to_array()),
+                "must be finite and not parallel to look_at - position",
+            ));
+        }
+        Ok(PlacedLuminaire {
+            luminaire,
+            position,
+            x: y.cross(z),
+            y,
+            z,
+        })
+    }
+}
+
 /// The analytic emitters `irad luminaire generate` turns into luminaires.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Emitter {

@@ -110,6 +110,8 @@ pub struct Scene {
     /// A dynamic map's frames (an `exr` glob or a procedural sky), all of one size; frame f
     /// of a render shows map f mod len. Empty for a still map.
     pub environment_sequence: Vec<Environment>,
+    /// Light-field luminaires placed in the scene.
+    pub luminaires: Vec<luminaire::PlacedLuminaire>,
     /// The scene's `[failure]` table, for scenes under scenes/failure/; None elsewhere.
     pub failure: Option<FailureNote>,
     /// Things the loader fixed and reports (for example "dropped 2 degenerate triangles").

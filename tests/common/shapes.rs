@@ -113,6 +113,7 @@ pub fn scene(
         lights: Vec::new(),
         environment: None,
         environment_sequence: vec![],
+        luminaires: vec![],
         failure: None,
         warnings: Vec::new(),
     }

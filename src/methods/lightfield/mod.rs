@@ -1,5 +1,283 @@
-//! Light-field luminaires (Lu 14 Chapter 4, issue 9; in progress): the GPU sampling tables.
-//! The method itself (`lightfield`: restricted windows, A_m from the summed-area table, K_m,
-//! restricted-CDF sampling, Eq. 4.18) follows src/sampling/luminaire.rs, its f64 mirror.
+//! Light-field luminaires (Lu 14 Chapter 4, issue 9), method `lightfield`: per frame the
+//! G-buffer and the direct light of the scene's other lights (the reference's direct-light
+//! pass), then per placed luminaire glsl/shade_lightfield.comp (its direct light with a shadow
+//! ray per sample, by the chosen strategy). The luminaires' sampling tables are built on the
+//! GPU once per render (tables.rs). src/sampling/luminaire.rs is the f64 mirror.
 
 pub mod tables;
+
+use std::time::Instant;
+
+use bytemuck::{Pod, Zeroable};
+use glam::Vec4;
+use thiserror::Error;
+
+use crate::gpu::{bind, Buffer, Context, GpuError, Kernel};
+use crate::methods::accumulation::Accumulation;
+use crate::methods::direct::GBufferAndDirectLight;
+use crate::methods::gbuffer::{GBuffer, PixelSampling};
+use crate::methods::progressive;
+use crate::methods::RenderOutput;
+use crate::sampling::pcg;
+use crate::scene::gpu::GpuScene;
+use crate::scene::luminaire::{Basis, PlacedLuminaire};
+use crate::scene::Scene;
+
+use tables::LuminaireTables;
+
+/// How each image's samples are placed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Strategy {
+    /// Lu's: restricted windows, A_m from the summed-area table, K_m by A_m (Eq. 4.11-4.17).
+    Restricted,
+    /// Uniform over the restricted window (Fig. 4.14's baseline).
+    Uniform,
+    /// One CDF over the whole image, no restriction (Fig. 4.13's baseline).
+    Precomputed,
+    /// Uniform over the whole image plane, K / M per image: the brute-force reference.
+    BruteForce,
+}
+
+impl Strategy {
+    pub const ALL: [Strategy; 4] = [
+        Strategy::Restricted,
+        Strategy::Uniform,
+        Strategy::Precomputed,
+        Strategy::BruteForce,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Strategy::Restricted => "restricted",
+            Strategy::Uniform => "uniform",
+            Strategy::Precomputed => "precomputed",
+            Strategy::BruteForce => "brute-force",
+        }
+    }
+
+    fn code(self) -> u32 {
+        match self {
+            Strategy::Restricted => 0,
+            Strategy::Uniform => 1,
+            Strategy::Precomputed => 2,
+            Strategy::BruteForce => 3,
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LightfieldSettings {
+    /// K: samples per pixel, luminaire and frame, spread over the images (Eq. 4.16).
+    pub spp: u32,
+    pub frames: u32,
+    /// K_max: most samples per image.
+    pub k_max: u32,
+    pub strategy: Strategy,
+    /// Lu's modified secant search (true) or binary search.
+    pub secant: bool,
+    pub seed: u32,
+    pub pixels: PixelSampling,
+}
+
+impl Default for LightfieldSettings {
+    fn default() -> Self {
+        LightfieldSettings {
+            spp: 200,
+            frames: 4,
+            k_max: 64,
+            strategy: Strategy::Restricted,
+            secant: true,
+            seed: 0,
+            pixels: PixelSampling::Jittered,
+        }
+    }
+}
+
+#[derive(Debug, Error)]
+pub enum LightfieldError {
+    #[error("lightfield renders light-field luminaires, and this scene places none (add a [[luminaire]])")]
+    NoLuminaire,
+    #[error(transparent)]
+    Gpu(#[from] GpuError),
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct LuminaireFrame {
+    position: Vec4,
+    x: Vec4,
+    y: Vec4,
+    z: Vec4,
+    plane: Vec4,
+    image_size: Vec4,
+    grid: [u32; 4],
+    options: [u32; 4],
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct ShadeParams {
+    frame: u32,
+    seed: u32,
+    search: u32,
+}
+
+/// One placed luminaire on the GPU: its tables and its frame.
+struct GpuLuminaire {
+    tables: LuminaireTables,
+    frame: Buffer<LuminaireFrame>,
+}
+
+impl GpuLuminaire {
+    fn new(
+        ctx: &Context,
+        placed: &PlacedLuminaire,
+        settings: &LightfieldSettings,
+    ) -> Result<Self, GpuError> {
+        let g = &placed.luminaire.geometry;
+        let texels_per_m2 =
+            (g.resolution[0] * g.resolution[1]) as f64 / (g.image_size[0] * g.image_size[1]);
+        let frame = LuminaireFrame {
+            position: placed.position.extend(1.0),
+            x: placed.x.extend(0.0),
+            y: placed.y.extend(0.0),
+            z: placed.z.extend(0.0),
+            plane: Vec4::new(
+                g.pitch[0] as f32,
+                g.pitch[1] as f32,
+                g.delta as f32,
+                g.basis.reach() as f32,
+            ),
+            image_size: Vec4::new(
+                g.image_size[0] as f32,
+                g.image_size[1] as f32,
+                texels_per_m2 as f32,
+                0.0,
+            ),
+            grid: [
+                g.grid[0] as u32,
+                g.grid[1] as u32,
+                g.resolution[0] as u32,
+                g.resolution[1] as u32,
+            ],
+            options: [
+                (g.basis == Basis::QuadraticBSpline) as u32,
+                settings.strategy.code(),
+                settings.spp.max(1),
+                settings.k_max.max(1),
+            ],
+        };
+        Ok(GpuLuminaire {
+            tables: LuminaireTables::new(ctx, &placed.luminaire)?,
+            frame: Buffer::from_slice(ctx, "LuminaireParams", &[frame])?,
+        })
+    }
+}
+
+pub struct Lightfield {
+    direct: GBufferAndDirectLight,
+    shade: Kernel,
+}
+
+impl Lightfield {
+    pub fn new(ctx: &Context) -> Result<Self, GpuError> {
+        Ok(Lightfield {
+            direct: GBufferAndDirectLight::new(ctx)?,
+            shade: Kernel::new(ctx, "shade_lightfield")?,
+        })
+    }
+
+    pub fn declines(scene: &Scene) -> Option<LightfieldError> {
+        scene
+            .luminaires
+            .is_empty()
+            .then_some(LightfieldError::NoLuminaire)
+    }
+
+    pub fn render(
+        &self,
+        ctx: &Context,
+        scene: &Scene,
+        gpu_scene: &GpuScene,
+        settings: &LightfieldSettings,
+        progress: impl FnMut(u32, u32),
+    ) -> Result<RenderOutput, LightfieldError> {
+        if let Some(e) = Self::declines(scene) {
+            return Err(e);
+        }
+        let start = Instant::now();
+        let gbuffer = GBuffer::new(ctx, gpu_scene)?;
+        let accumulation = Accumulation::new(ctx, gpu_scene.width, gpu_scene.height)?;
+        let luminaires = scene
+            .luminaires
+            .iter()
+            .map(|l| GpuLuminaire::new(ctx, l, settings))
+            .collect::<Result<Vec<_>, _>>()?;
+        let counts = Buffer::<f32>::zeroed(ctx, "LuminaireSampleCounts", gpu_scene.pixel_count())?;
+        let seed = pcg::hash(&[settings.seed, 0x6c66]);
+        let frames = settings.frames.max(1);
+        let passes = progressive::run(
+            ctx,
+            gpu_scene,
+            frames,
+            &accumulation,
+            |cmd, frame| {
+                if frame == 0 {
+                    for l in &luminaires {
+                        cmd.pass("luminaire tables", |cmd| l.tables.record(cmd))?;
+                    }
+                }
+                // The G-buffer, the emission seen and the other lights' direct light.
+                self.direct.record(
+                    cmd,
+                    gpu_scene,
+                    &gbuffer,
+                    &accumulation,
+                    frame,
+                    settings.seed,
+                    settings.pixels,
+                    1,
+                    true,
+                )?;
+                for l in &luminaires {
+                    cmd.pass("shade", |cmd| {
+                        let mut bindings = gpu_scene.bindings();
+                        bindings.push(bind("GBuffer", &gbuffer.texels));
+                        bindings.extend(accumulation.bindings());
+                        bindings.push(bind("LuminaireTexels", &l.tables.texels));
+                        bindings.push(bind("ColumnCdf", &l.tables.column_cdf));
+                        bindings.push(bind("LuminaireSat", &l.tables.sat));
+                        bindings.push(bind("LuminaireParams", &l.frame));
+                        bindings.push(bind("LuminaireSampleCounts", &counts));
+                        let params = ShadeParams {
+                            frame,
+                            seed,
+                            search: settings.secant as u32,
+                        };
+                        self.shade
+                            .dispatch(cmd, &bindings, &params, gpu_scene.image_workgroups())
+                    })?;
+                }
+                Ok(())
+            },
+            progress,
+        )?;
+        let counts = counts.read()?;
+        let lit = counts.iter().filter(|&&c| c > 0.0).count();
+        let drawn: f64 = counts.iter().map(|&c| c as f64).sum();
+        Ok(RenderOutput {
+            image: accumulation.resolve(frames),
+            passes,
+            wall_ms: start.elapsed().as_secs_f64() * 1e3,
+            nonfinite_estimates: accumulation.nonfinite_estimates()?,
+            stats: vec![
+                (
+                    "luminaire_samples_per_pixel".into(),
+                    drawn / (lit.max(1) as f64 * frames as f64),
+                ),
+                ("pixels_with_luminaire_samples".into(), lit as f64),
+            ],
+            maps: vec![],
+        })
+    }
+}
