@@ -295,3 +295,67 @@ fn every_lightfield_strategy_matches_the_brute_force() {
         );
     });
 }
+
+/// Lu 14 Fig. 4.13-4.14 at equal samples on the near-field headlight scene (48 x 36, K = 64,
+/// 4 frames, 4 seeds): the relMSE of each strategy against a split reference (restricted at
+/// K = 1024, 8 frames, two seeds). Restricted has the lowest error, and uniform at 3x the
+/// samples still has more (the issue: uniform needs at least 3x at equal error); the ratios are
+/// printed.
+#[test]
+fn restricted_sampling_has_the_lowest_error_at_equal_samples() {
+    use irad::image::metrics;
+    use irad::methods::gbuffer::PixelSampling;
+    use irad::methods::lightfield::{Lightfield, LightfieldSettings, Strategy};
+    use irad::scene::gpu::GpuScene;
+    with_gpu(|ctx| {
+        let scene = headlight_wall(48, 36);
+        let gpu = GpuScene::upload(ctx, &scene).unwrap();
+        let lf = Lightfield::new(ctx).unwrap();
+        let render = |strategy: Strategy, spp: u32, frames: u32, seed: u32| {
+            let settings = LightfieldSettings {
+                spp,
+                frames,
+                strategy,
+                k_max: spp,
+                seed,
+                pixels: PixelSampling::Centres,
+                ..Default::default()
+            };
+            lf.render(ctx, &scene, &gpu, &settings, |_, _| {})
+                .unwrap()
+                .image
+        };
+        let a = render(Strategy::Restricted, 1024, 8, 1);
+        let b = render(Strategy::Restricted, 1024, 8, 2);
+        let error = |strategy: Strategy, spp: u32| {
+            (0..4)
+                .map(|s| {
+                    metrics::rel_mse_against_split_reference(
+                        &render(strategy, spp, 4, 50 + s),
+                        &a,
+                        &b,
+                    )
+                    .unwrap()
+                })
+                .sum::<f64>()
+                / 4.0
+        };
+        let restricted = error(Strategy::Restricted, 64);
+        let uniform = error(Strategy::Uniform, 64);
+        let uniform3 = error(Strategy::Uniform, 192);
+        let precomputed = error(Strategy::Precomputed, 64);
+        eprintln!(
+            "relMSE at K = 64: restricted {restricted:.3e}, uniform {uniform:.3e} ({:.1}x; at 3x the samples {uniform3:.3e}), precomputed {precomputed:.3e} ({:.1}x)",
+            uniform / restricted,
+            precomputed / restricted
+        );
+        // Restricted is best; uniform needs more than 3x its samples for its error (the
+        // issue's figure; the thesis: 4x). Precomputed's gap depends on how much of each
+        // image lies outside the windows (here 2.1x, the issue asks 10x: see the closing note).
+        assert!(restricted < uniform && restricted < precomputed);
+        assert!(
+            uniform3 > restricted,
+            "uniform at 3x: {uniform3:.3e} against {restricted:.3e}"
+        );
+    });
+}
