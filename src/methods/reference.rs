@@ -139,7 +139,14 @@ impl Reference {
 
 /// The kernels a reference image depends on: a change to any of them makes cached references
 /// stale (the benchmark harness keys its reference cache on `kernel_hash`).
-pub const KERNELS: &[&str] = &["write_gbuffer", "trace_reference_paths"];
+pub const KERNELS: &[&str] = &[
+    "write_gbuffer",
+    "trace_reference_paths",
+    // The reference of a scene with light-field luminaires is lightfield's brute force.
+    "shade_lightfield",
+    "weigh_luminaire_columns",
+    "transpose_luminaire_columns",
+];
 
 /// FNV-1a 64 of the embedded SPIR-V of `KERNELS`, in order.
 pub fn kernel_hash() -> u64 {

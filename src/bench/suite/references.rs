@@ -25,6 +25,7 @@ use serde::{Deserialize, Serialize};
 use crate::gpu::Context;
 use crate::image::metrics::REL_MSE_EPSILON;
 use crate::image::{exr, Image};
+use crate::methods::lightfield::{LightfieldSettings, Strategy as LightfieldStrategy};
 use crate::methods::{reference, Method, Renderers};
 use crate::scene::gpu::GpuScene;
 use crate::scene::hash::fnv1a64;
@@ -134,11 +135,30 @@ pub fn get_or_render(
     let n_a = (total / 2).max(1);
     let n_b = total - n_a;
     let context = || format!("rendering the reference of {}", scene.name);
-    let half = |spp: u32, seed: u32| {
-        let mut s = *settings;
-        s.spp = spp;
-        s.seed = seed;
-        Method::Reference(s)
+    // The path tracer does not model light-field luminaires: for a scene that places some,
+    // the reference is lightfield's brute force (uniform over every whole image plane, 64
+    // samples per image and frame), one frame per reference sample.
+    let luminaire_images = scene
+        .luminaires
+        .iter()
+        .map(|l| l.luminaire.images.len() as u32)
+        .max();
+    let half = |spp: u32, seed: u32| match luminaire_images {
+        Some(images) => Method::Lightfield(LightfieldSettings {
+            spp: 64 * images,
+            frames: spp,
+            k_max: 64,
+            strategy: LightfieldStrategy::BruteForce,
+            seed,
+            pixels: settings.pixels,
+            ..Default::default()
+        }),
+        None => {
+            let mut s = *settings;
+            s.spp = spp;
+            s.seed = seed;
+            Method::Reference(s)
+        }
     };
     let a = renderers
         .run(ctx, &half(n_a, settings.seed), scene, gpu_scene, |d, _| {
