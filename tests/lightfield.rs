@@ -218,8 +218,8 @@ fn gpu_restricted_draws_follow_their_pdf() {
 }
 
 fn headlight_wall(width: u32, height: u32) -> irad::scene::Scene {
-    let path =
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/failure/headlight-wall/scene.toml");
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("scenes/failure/headlight-wall/scene.toml");
     let mut scene = irad::scene::load(&path).unwrap();
     scene.camera.width = width;
     scene.camera.height = height;
