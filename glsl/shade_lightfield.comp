@@ -15,7 +15,11 @@
 //   f(wo, wi) cos(n, wi) C_m(s) Psi_m(u -> s) Delta / |s - p|^3 / (q texels_per_m2) / K_m,
 // Psi_m = Phi_m(u) |s - u|^4 / delta^2 (Eq. 4.1), C_m RGB (its luminance drives the pdf, so
 // the colour ratio of Section 4.4 comes out of RGB / Y). Points at or behind the image plane
-// get nothing here. Random numbers per (seed, pixel, frame, sample).
+// get nothing here. Samples: random per (seed, pixel, frame, sample), or (shared) image m's
+// K_m samples are the first K_m points of a scrambled Halton sequence that every pixel shares
+// in the frame (Section 4.5.3: prefixes stay well spread). Visibility: a shadow ray per sample,
+// or (averaged, Section 4.5.2's approximation) one per image toward the image's median point
+// (its CDFs at 1/2), standing for all of that image's samples.
 
 #extension GL_GOOGLE_include_directive : require
 
@@ -27,6 +31,7 @@ layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 #include "bsdf.glsl"
 #include "gbuffer.glsl"
 #include "radiance.glsl"
+#include "halton.glsl"
 #include "luminaire_tables.glsl"
 
 struct LuminaireFrame {
@@ -47,6 +52,8 @@ layout(push_constant) uniform ShadeParams {
     uint frame;
     uint seed;
     uint search;
+    uint shared_samples;  // 1: Halton prefixes shared by every pixel
+    uint averaged;        // 1: one shadow ray per image (Section 4.5.2)
 } params;
 
 #define STRATEGY_RESTRICTED 0u
@@ -152,10 +159,26 @@ void main() {
         vec4 area = strategy == STRATEGY_RESTRICTED || strategy == STRATEGY_UNIFORM ? w : whole;
         float window_texels = (area.y - area.x) * (area.w - area.z);
         if (!(window_texels > 0.0)) continue;
+        // Averaged visibility: one shadow ray toward the image's median point.
+        bool image_visible = true;
+        if (params.averaged != 0u) {
+            vec2 st;
+            uvec2 texel;
+            float q;
+            uint steps;
+            if (draw_restricted(im, whole, vec2(0.5), SEARCH_BINARY, st, texel, q, steps)) {
+                vec2 s = texels_to_plane(st);
+                vec3 sw = lf.position.xyz + s.x * lf.x.xyz + s.y * lf.y.xyz + delta * lf.z.xyz;
+                image_visible = !trace_any(origin, sw - origin, 0.9999);
+            }
+        }
+        uint scramble = pcg_hash(params.seed ^ pcg_hash(params.frame * 977u + m));
         vec3 image_sum = vec3(0.0);
         for (uint k = 0u; k < count; ++k) {
             uint si = sample_base + sample_index++;
-            vec2 u = vec2(random(params.seed, index, si, 0u), random(params.seed, index, si, 1u));
+            vec2 u = params.shared_samples != 0u
+                         ? vec2(halton(0u, k, scramble), halton(1u, k, scramble))
+                         : vec2(random(params.seed, index, si, 0u), random(params.seed, index, si, 1u));
             drawn += 1.0;
             vec2 st;
             float q;
@@ -186,7 +209,9 @@ void main() {
             if (cos_i <= 0.0 || dot(side, wi) <= 0.0) continue;
             vec3 f = bsdf_eval(mat, n, wo, wi);
             if (!(max(max(f.r, f.g), f.b) > 0.0)) continue;
-            if (trace_any(origin, sw - origin, 0.9999)) continue;
+            if (params.averaged != 0u ? !image_visible : trace_any(origin, sw - origin, 0.9999)) {
+                continue;
+            }
             image_sum += f * cos_i * c * psi * big_delta / (r * r * r) / (q * texels_per_m2);
         }
         sum += image_sum / float(count);

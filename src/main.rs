@@ -212,6 +212,14 @@ struct RenderArgs {
     /// lightfield: invert the CDFs by binary search instead of Lu's modified secant search.
     #[arg(long)]
     binary_search: bool,
+    /// lightfield: every pixel takes the same scrambled Halton prefixes (Lu Section 4.5.3)
+    /// instead of its own random numbers.
+    #[arg(long)]
+    shared_samples: bool,
+    /// lightfield: one shadow ray per image toward its median point instead of one per sample
+    /// (Lu Section 4.5.2's approximation; biased at shadow edges).
+    #[arg(long)]
+    averaged_visibility: bool,
     /// env: no shadow rays (every sample counted as visible), as in the thesis's timings; for
     /// timing comparisons only: the image is wrong wherever the map is occluded.
     #[arg(long)]
@@ -965,6 +973,8 @@ fn render(options: &ContextOptions, args: RenderArgs) -> Result<()> {
                 ),
             },
             secant: !args.binary_search,
+            shared_samples: args.shared_samples,
+            averaged_visibility: args.averaged_visibility,
             seed: args.seed,
             pixels,
         }),

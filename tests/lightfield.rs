@@ -229,7 +229,8 @@ fn headlight_wall(width: u32, height: u32) -> irad::scene::Scene {
 /// Every strategy of `lightfield` against the brute force (uniform over each whole image, the
 /// reference): on the near-field headlight scene (32 x 24, 8 frames, K = 64 and K_max = 64), the
 /// image mean over 8 seeds within 1% of the brute force's (8 seeds of 2240 samples per pixel
-/// and frame, standard error 0.3%); the other methods decline the scene.
+/// and frame, standard error 0.3%), restricted also with Halton samples shared by every pixel;
+/// the other methods decline the scene.
 #[test]
 fn every_lightfield_strategy_matches_the_brute_force() {
     use irad::methods::gbuffer::PixelSampling;
@@ -239,19 +240,23 @@ fn every_lightfield_strategy_matches_the_brute_force() {
         let scene = headlight_wall(32, 24);
         let gpu = GpuScene::upload(ctx, &scene).unwrap();
         let lf = Lightfield::new(ctx).unwrap();
-        let render = |strategy: Strategy, spp: u32, frames: u32, seed: u32| {
+        let render_with = |strategy: Strategy, spp: u32, frames: u32, seed: u32, shared: bool| {
             let settings = LightfieldSettings {
                 spp,
                 frames,
                 strategy,
                 k_max: spp,
                 seed,
+                shared_samples: shared,
                 pixels: PixelSampling::Centres,
                 ..Default::default()
             };
             let out = lf.render(ctx, &scene, &gpu, &settings, |_, _| {}).unwrap();
             assert_eq!(out.nonfinite_estimates, 0);
             common::luminance_mean(&out.image)
+        };
+        let render = |strategy: Strategy, spp: u32, frames: u32, seed: u32| {
+            render_with(strategy, spp, frames, seed, false)
         };
         let brute: Vec<f64> = (0..8)
             .map(|s| render(Strategy::BruteForce, 35 * 64, 8, 900 + s))
@@ -261,18 +266,24 @@ fn every_lightfield_strategy_matches_the_brute_force() {
             "brute force: {reference:.5e} ± {:.4}",
             reference_error / reference
         );
-        for strategy in [
-            Strategy::Restricted,
-            Strategy::Uniform,
-            Strategy::Precomputed,
+        for (strategy, shared) in [
+            (Strategy::Restricted, false),
+            (Strategy::Uniform, false),
+            (Strategy::Precomputed, false),
+            (Strategy::Restricted, true),
         ] {
             let means: Vec<f64> = (0..8)
-                .map(|s| render(strategy, 64, 8, 100 + s) / reference)
+                .map(|s| render_with(strategy, 64, 8, 100 + s, shared) / reference)
                 .collect();
             let (mean, stderr) = common::mean_and_stderr(&means);
             eprintln!(
-                "{}: mean / brute force {mean:.4} ± {stderr:.4}",
-                strategy.name()
+                "{}{}: mean / brute force {mean:.4} ± {stderr:.4}",
+                strategy.name(),
+                if shared {
+                    " (shared Halton samples)"
+                } else {
+                    ""
+                }
             );
             assert!(
                 stderr < 0.005,

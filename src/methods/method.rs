@@ -237,6 +237,8 @@ impl Method {
                     "search".into(),
                     json!(if s.secant { "secant" } else { "binary" }),
                 );
+                p.insert("shared_samples".into(), json!(s.shared_samples));
+                p.insert("averaged_visibility".into(), json!(s.averaged_visibility));
                 p.insert(
                     "pixel_centres".into(),
                     json!(s.pixels == PixelSampling::Centres),
@@ -420,6 +422,9 @@ impl Method {
                         Some(c) => c == "secant",
                         None => d.secant,
                     },
+                    shared_samples: reader.flag("shared_samples", d.shared_samples)?,
+                    averaged_visibility: reader
+                        .flag("averaged_visibility", d.averaged_visibility)?,
                     pixels: reader.pixels()?,
                 })
             }
@@ -567,6 +572,8 @@ impl<'a> Params<'a> {
                 "seed",
                 "strategy",
                 "search",
+                "shared_samples",
+                "averaged_visibility",
                 "pixel_centres",
             ],
             "env" => &[

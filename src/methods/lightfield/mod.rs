@@ -75,6 +75,12 @@ pub struct LightfieldSettings {
     pub strategy: Strategy,
     /// Lu's modified secant search (true) or binary search.
     pub secant: bool,
+    /// Halton prefixes shared by every pixel (Section 4.5.3) instead of per-pixel random
+    /// numbers.
+    pub shared_samples: bool,
+    /// One shadow ray per image toward its median point instead of one per sample (Section
+    /// 4.5.2's approximation: biased at shadow edges).
+    pub averaged_visibility: bool,
     pub seed: u32,
     pub pixels: PixelSampling,
 }
@@ -87,6 +93,8 @@ impl Default for LightfieldSettings {
             k_max: 64,
             strategy: Strategy::Restricted,
             secant: true,
+            shared_samples: false,
+            averaged_visibility: false,
             seed: 0,
             pixels: PixelSampling::Jittered,
         }
@@ -120,6 +128,8 @@ struct ShadeParams {
     frame: u32,
     seed: u32,
     search: u32,
+    shared_samples: u32,
+    averaged: u32,
 }
 
 /// One placed luminaire on the GPU: its tables and its frame.
@@ -253,6 +263,8 @@ impl Lightfield {
                             frame,
                             seed,
                             search: settings.secant as u32,
+                            shared_samples: settings.shared_samples as u32,
+                            averaged: settings.averaged_visibility as u32,
                         };
                         self.shade
                             .dispatch(cmd, &bindings, &params, gpu_scene.image_workgroups())
