@@ -404,6 +404,21 @@ pub enum Emitter {
         sharpness: f64,
         tilt: f64,
     },
+    /// A headlight with a faceted reflector and a cut-off (a bike light's, say): the disk of
+    /// `radius` is cut into square facets of side `facet`, and each throws a narrow Gaussian
+    /// beam (standard deviation `beam` degrees) in its own direction, chosen by a hash of the
+    /// facet, uniformly within +-`spread` degrees horizontally and 0 to `spread` degrees
+    /// down, with a brightness from 0.5 to 1. Nothing leaves above the horizontal (the
+    /// cut-off line). The beam pattern is the sum of the facets' beams, as with real
+    /// reflectors, so each basis function's image is a spray of spots over the image plane,
+    /// and a point sees few of them: the case Lu's restriction is made for.
+    Reflector {
+        radius: f64,
+        radiance: f64,
+        facet: f64,
+        beam: f64,
+        spread: f64,
+    },
 }
 
 impl Emitter {
@@ -438,8 +453,41 @@ impl Emitter {
                 let lobe = d.dot(axis).max(0.0).powf(sharpness);
                 Vec3::new(1.0, 0.93, 0.8) * (radiance * rings * lobe) as f32
             }
+            Emitter::Reflector {
+                radius,
+                radiance,
+                facet,
+                beam,
+                spread,
+            } => {
+                if u.0 * u.0 + u.1 * u.1 > radius * radius {
+                    return Vec3::ZERO;
+                }
+                let (fx, fy) = ((u.0 / facet).floor(), (u.1 / facet).floor());
+                let (ax, ay, brightness) = facet_aim(fx as i64, fy as i64, spread);
+                let (dx, dy) = (s.0 - u.0, s.1 - u.1);
+                let (tx, ty) = (dx.atan2(delta).to_degrees(), dy.atan2(delta).to_degrees());
+                if ty > 0.0 {
+                    return Vec3::ZERO;
+                }
+                let (ex, ey) = ((tx - ax) / beam, (ty - ay) / beam);
+                let lobe = (-0.5 * (ex * ex + ey * ey)).exp();
+                Vec3::new(1.0, 0.95, 0.85) * (radiance * brightness * lobe) as f32
+            }
         }
     }
+}
+
+/// A reflector facet's aim (horizontal and vertical degrees, + right and up) and brightness,
+/// from a hash of its grid cell.
+fn facet_aim(i: i64, j: i64, spread: f64) -> (f64, f64, f64) {
+    let h = crate::sampling::pcg::hash(&[i as u32, j as u32, 0x6661]);
+    let unit = |k: u32| crate::sampling::pcg::hash(&[h, k]) as f64 / 4294967296.0;
+    (
+        spread * (2.0 * unit(0) - 1.0),
+        -spread * unit(1),
+        0.5 + 0.5 * unit(2),
+    )
 }
 
 #[cfg(test)]
