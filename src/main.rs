@@ -75,41 +75,57 @@ enum LuminaireCommand {
     /// Build a luminaire from an analytic near-field emitter and write OUT/luminaire.toml
     /// and OUT/images.exr. Each image at a texel is the emitter's radiance averaged over its
     /// basis function's support, times delta^2 / |s - u_m|^4 (Eq. 4.1 at the node).
-    Generate {
-        /// disk: a uniform Lambertian disk (on its axis the irradiance has a closed form);
-        /// headlight: a ringed reflector disk with a lobe tilted down and a cut-off line.
-        #[arg(long, value_enum, default_value_t = EmitterArg::Headlight)]
-        emitter: EmitterArg,
-        /// Basis functions on the filter plane, WxH (the thesis's car headlight: 11x9).
-        #[arg(long, value_parser = parse_size, default_value = "11x9")]
-        grid: (u32, u32),
-        /// Texels per image, WxH (the thesis: 256x256).
-        #[arg(long, value_parser = parse_size, default_value = "64x64")]
-        resolution: (u32, u32),
-        #[arg(long, value_enum, default_value_t = BasisArg::QuadraticBspline)]
-        basis: BasisArg,
-        /// The emitter's radius in metres; the basis grid spans it.
-        #[arg(long, default_value_t = 0.06)]
-        radius: f64,
-        /// The emitter's peak radiance.
-        #[arg(long, default_value_t = 20.0)]
-        radiance: f64,
-        /// The image plane's distance from the filter plane, metres.
-        #[arg(long, default_value_t = 0.05)]
-        delta: f64,
-        /// The images' extent on the image plane, metres (square).
-        #[arg(long, default_value_t = 0.3)]
-        image_size: f64,
-        /// Output folder.
-        #[arg(short, long)]
-        out: PathBuf,
-    },
+    Generate(GenerateArgs),
+}
+
+#[derive(clap::Args)]
+struct GenerateArgs {
+    /// disk: a uniform Lambertian disk (on its axis the irradiance has a closed form);
+    /// headlight: a ringed reflector disk with a lobe tilted down and a cut-off line;
+    /// reflector: a faceted reflector with a cut-off, each facet throwing a narrow beam
+    /// its own way (--facet, --beam, --spread).
+    #[arg(long, value_enum, default_value_t = EmitterArg::Headlight)]
+    emitter: EmitterArg,
+    /// Basis functions on the filter plane, WxH (the thesis's car headlight: 11x9).
+    #[arg(long, value_parser = parse_size, default_value = "11x9")]
+    grid: (u32, u32),
+    /// Texels per image, WxH (the thesis: 256x256).
+    #[arg(long, value_parser = parse_size, default_value = "64x64")]
+    resolution: (u32, u32),
+    #[arg(long, value_enum, default_value_t = BasisArg::QuadraticBspline)]
+    basis: BasisArg,
+    /// The emitter's radius in metres; the basis grid spans it.
+    #[arg(long, default_value_t = 0.06)]
+    radius: f64,
+    /// The emitter's peak radiance.
+    #[arg(long, default_value_t = 20.0)]
+    radiance: f64,
+    /// reflector: the facets' side, metres.
+    #[arg(long, default_value_t = 0.012)]
+    facet: f64,
+    /// reflector: each facet's beam width (Gaussian standard deviation), degrees.
+    #[arg(long, default_value_t = 2.0)]
+    beam: f64,
+    /// reflector: the facets aim within +-spread degrees horizontally and up to spread
+    /// degrees down.
+    #[arg(long, default_value_t = 30.0)]
+    spread: f64,
+    /// The image plane's distance from the filter plane, metres.
+    #[arg(long, default_value_t = 0.05)]
+    delta: f64,
+    /// The images' extent on the image plane, metres (square).
+    #[arg(long, default_value_t = 0.3)]
+    image_size: f64,
+    /// Output folder.
+    #[arg(short, long)]
+    out: PathBuf,
 }
 
 #[derive(Clone, Copy, clap::ValueEnum)]
 enum EmitterArg {
     Disk,
     Headlight,
+    Reflector,
 }
 
 #[derive(Clone, Copy, clap::ValueEnum)]
@@ -212,16 +228,16 @@ struct RenderArgs {
     /// lightfield: invert the CDFs by binary search instead of Lu's modified secant search.
     #[arg(long)]
     binary_search: bool,
-    /// lightfield: every pixel takes the same scrambled Halton prefixes (Lu Section 4.5.3)
-    /// instead of its own random numbers.
+    /// lightfield: every pixel takes the same Halton prefixes (Lu Section 4.5.3) instead of
+    /// its own rotation of them (biased per pixel pattern, not in the mean).
     #[arg(long)]
     shared_samples: bool,
     /// lightfield: one shadow ray per image toward its median point instead of one per sample
     /// (Lu Section 4.5.2's approximation; biased at shadow edges).
     #[arg(long)]
     averaged_visibility: bool,
-    /// env: no shadow rays (every sample counted as visible), as in the thesis's timings; for
-    /// timing comparisons only: the image is wrong wherever the map is occluded.
+    /// env, lightfield: no shadow rays (every sample counted as visible), as in the thesis's
+    /// timings; for timing comparisons only: the image is wrong wherever light is occluded.
     #[arg(long)]
     no_shadows: bool,
     /// bundles: iterations per frame, each one VPL and one global ray bundle (the paper's 21).
@@ -594,19 +610,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::Render(args) => render(&options, args),
         Command::Selfcheck => run_selfcheck(&Context::new(&options)?),
         Command::Shaders { check } => shaders(check),
-        Command::Luminaire(LuminaireCommand::Generate {
-            emitter,
-            grid,
-            resolution,
-            basis,
-            radius,
-            radiance,
-            delta,
-            image_size,
-            out,
-        }) => generate_luminaire(
-            emitter, grid, resolution, basis, radius, radiance, delta, image_size, &out,
-        ),
+        Command::Luminaire(LuminaireCommand::Generate(args)) => generate_luminaire(&args),
         Command::Bench(Bench::Scan { repeats, sizes }) => {
             let ctx = Context::new(&options)?;
             let cases = if sizes.is_empty() {
@@ -975,6 +979,8 @@ fn render(options: &ContextOptions, args: RenderArgs) -> Result<()> {
             secant: !args.binary_search,
             shared_samples: args.shared_samples,
             averaged_visibility: args.averaged_visibility,
+            shadows: !args.no_shadows,
+            sampling_only: false,
             seed: args.seed,
             pixels,
         }),
@@ -1382,18 +1388,7 @@ fn shaders(check: bool) -> Result<()> {
     Ok(())
 }
 
-#[allow(clippy::too_many_arguments)]
-fn generate_luminaire(
-    emitter: EmitterArg,
-    grid: (u32, u32),
-    resolution: (u32, u32),
-    basis: BasisArg,
-    radius: f64,
-    radiance: f64,
-    delta: f64,
-    image_size: f64,
-    out: &std::path::Path,
-) -> Result<()> {
+fn generate_luminaire(args: &GenerateArgs) -> Result<()> {
     use irad::scene::luminaire::{Basis, Emitter, Geometry, Luminaire};
     let positive = |name: &str, x: f64| {
         anyhow::ensure!(
@@ -1402,10 +1397,20 @@ fn generate_luminaire(
         );
         Ok(())
     };
+    let (grid, resolution, radius, radiance, delta) = (
+        args.grid,
+        args.resolution,
+        args.radius,
+        args.radiance,
+        args.delta,
+    );
     positive("radius", radius)?;
     positive("radiance", radiance)?;
     positive("delta", delta)?;
-    positive("image-size", image_size)?;
+    positive("image-size", args.image_size)?;
+    positive("facet", args.facet)?;
+    positive("beam", args.beam)?;
+    positive("spread", args.spread)?;
     anyhow::ensure!(
         grid.0 <= 64 && grid.1 <= 64 && resolution.0 <= 4096 && resolution.1 <= 4096,
         "--grid at most 64x64 and --resolution at most 4096x4096"
@@ -1422,15 +1427,15 @@ fn generate_luminaire(
     let geometry = Geometry {
         grid,
         pitch: [pitch(grid[0]), pitch(grid[1])],
-        basis: match basis {
+        basis: match args.basis {
             BasisArg::Bilinear => Basis::Bilinear,
             BasisArg::QuadraticBspline => Basis::QuadraticBSpline,
         },
         delta,
-        image_size: [image_size, image_size],
+        image_size: [args.image_size, args.image_size],
         resolution: [resolution.0 as usize, resolution.1 as usize],
     };
-    let emitter = match emitter {
+    let emitter = match args.emitter {
         EmitterArg::Disk => Emitter::Disk { radius, radiance },
         EmitterArg::Headlight => Emitter::Headlight {
             radius,
@@ -1438,17 +1443,24 @@ fn generate_luminaire(
             sharpness: 12.0,
             tilt: 3.0,
         },
+        EmitterArg::Reflector => Emitter::Reflector {
+            radius,
+            radiance,
+            facet: args.facet,
+            beam: args.beam,
+            spread: args.spread,
+        },
     };
     let luminaire = Luminaire::from_emitter(
         geometry,
         |u, s| emitter.radiance(u, s, delta),
         &format!("{emitter:?}"),
     );
-    let path = luminaire.write(out)?;
+    let path = luminaire.write(&args.out)?;
     println!(
         "wrote {} and {} ({}x{} images of {}x{} texels)",
         path.display(),
-        out.join("images.exr").display(),
+        args.out.join("images.exr").display(),
         grid[0],
         grid[1],
         resolution.0,

@@ -1,5 +1,6 @@
-//! Light-field luminaires (issue 9, in progress): the GPU sampling tables against the f64
-//! mirror.
+//! Light-field luminaires (Lu 14 ch. 4, issue 9): the GPU sampling tables and sampler against
+//! the f64 mirror, every strategy's mean against the brute force, the strategies at equal
+//! error, the closed-form disk, where samples go, and the estimator near the image plane.
 
 mod common;
 
@@ -226,18 +227,54 @@ fn headlight_wall(width: u32, height: u32) -> irad::scene::Scene {
     scene
 }
 
+/// A smooth headlight (one lobe, image plane 5 cm out, 7 x 5 images of 32 x 32): images that
+/// fill much of the image plane, so that the brute force converges in a test's time.
+fn smooth_headlight() -> Luminaire {
+    let geometry = Geometry {
+        grid: [7, 5],
+        pitch: [0.02, 0.03],
+        basis: Basis::QuadraticBSpline,
+        delta: 0.05,
+        image_size: [0.4, 0.4],
+        resolution: [32, 32],
+    };
+    let headlight = Emitter::Headlight {
+        radius: 0.06,
+        radiance: 20.0,
+        sharpness: 12.0,
+        tilt: 3.0,
+    };
+    Luminaire::from_emitter(geometry, |u, s| headlight.radiance(u, s, 0.05), "smooth")
+}
+
+fn render_lightfield(
+    ctx: &irad::gpu::Context,
+    scene: &irad::scene::Scene,
+    settings: irad::methods::lightfield::LightfieldSettings,
+) -> irad::methods::RenderOutput {
+    use irad::methods::lightfield::Lightfield;
+    let gpu = irad::scene::gpu::GpuScene::upload(ctx, scene).unwrap();
+    let out = Lightfield::new(ctx)
+        .unwrap()
+        .render(ctx, scene, &gpu, &settings, |_, _| {})
+        .unwrap();
+    assert_eq!(out.nonfinite_estimates, 0);
+    out
+}
+
 /// Every strategy of `lightfield` against the brute force (uniform over each whole image, the
-/// reference): on the near-field headlight scene (32 x 24, 8 frames, K = 64 and K_max = 64), the
-/// image mean over 8 seeds within 1% of the brute force's (8 seeds of 2240 samples per pixel
-/// and frame, standard error 0.3%), restricted also with Halton samples shared by every pixel;
-/// the other methods decline the scene.
+/// reference): on the near-field headlight scene with the smooth headlight (32 x 24, 8 frames,
+/// K = 64 and K_max = 64), the image mean over 8 seeds within 1% of the brute force's (12
+/// seeds of 2240 samples per pixel and frame), restricted also with the Halton points shared
+/// by every pixel; the other methods decline the scene.
 #[test]
 fn every_lightfield_strategy_matches_the_brute_force() {
     use irad::methods::gbuffer::PixelSampling;
     use irad::methods::lightfield::{Lightfield, LightfieldSettings, Strategy};
     use irad::scene::gpu::GpuScene;
     with_gpu(|ctx| {
-        let scene = headlight_wall(32, 24);
+        let mut scene = headlight_wall(32, 24);
+        scene.luminaires[0].luminaire = smooth_headlight();
         let gpu = GpuScene::upload(ctx, &scene).unwrap();
         let lf = Lightfield::new(ctx).unwrap();
         let render_with = |strategy: Strategy, spp: u32, frames: u32, seed: u32, shared: bool| {
@@ -258,7 +295,7 @@ fn every_lightfield_strategy_matches_the_brute_force() {
         let render = |strategy: Strategy, spp: u32, frames: u32, seed: u32| {
             render_with(strategy, spp, frames, seed, false)
         };
-        let brute: Vec<f64> = (0..8)
+        let brute: Vec<f64> = (0..12)
             .map(|s| render(Strategy::BruteForce, 35 * 64, 8, 900 + s))
             .collect();
         let (reference, reference_error) = common::mean_and_stderr(&brute);
@@ -280,7 +317,7 @@ fn every_lightfield_strategy_matches_the_brute_force() {
                 "{}{}: mean / brute force {mean:.4} ± {stderr:.4}",
                 strategy.name(),
                 if shared {
-                    " (shared Halton samples)"
+                    " (shared Halton points)"
                 } else {
                     ""
                 }
@@ -307,13 +344,13 @@ fn every_lightfield_strategy_matches_the_brute_force() {
     });
 }
 
-/// Lu 14 Fig. 4.13-4.14 at equal samples on the near-field headlight scene (48 x 36, K = 64,
-/// 4 frames, 4 seeds): the relMSE of each strategy against a split reference (restricted at
-/// K = 1024, 8 frames, two seeds). Restricted has the lowest error, and uniform at 3x the
-/// samples still has more (the issue: uniform needs at least 3x at equal error); the ratios are
-/// printed.
+/// Lu 14 Fig. 4.13-4.14 on the near-field scene's faceted headlight (48 x 36, 4 frames, 4
+/// seeds), relMSE against a split reference (restricted at K = 1024, 8 frames, two seeds):
+/// uniform needs more than 3x restricted's samples for restricted's error at K = 64 (its error
+/// at 3x is still above; the thesis: 4x), and precomputed at equal samples has more than 10x
+/// the error (the thesis's Fig. 4.13 gap). The equal-error ratio is interpolated and printed.
 #[test]
-fn restricted_sampling_has_the_lowest_error_at_equal_samples() {
+fn strategies_at_equal_error() {
     use irad::image::metrics;
     use irad::methods::gbuffer::PixelSampling;
     use irad::methods::lightfield::{Lightfield, LightfieldSettings, Strategy};
@@ -352,21 +389,251 @@ fn restricted_sampling_has_the_lowest_error_at_equal_samples() {
                 / 4.0
         };
         let restricted = error(Strategy::Restricted, 64);
-        let uniform = error(Strategy::Uniform, 64);
-        let uniform3 = error(Strategy::Uniform, 192);
         let precomputed = error(Strategy::Precomputed, 64);
+        let uniform: Vec<(u32, f64)> = [64u32, 128, 192, 256, 384]
+            .into_iter()
+            .map(|spp| (spp, error(Strategy::Uniform, spp)))
+            .collect();
+        // Where uniform's error (log-log interpolated) falls to restricted's at K = 64.
+        let equal = uniform.windows(2).find_map(|w| {
+            let ((k0, e0), (k1, e1)) = (w[0], w[1]);
+            (e0 >= restricted && e1 < restricted).then(|| {
+                let t = (e0 / restricted).ln() / (e0 / e1).ln();
+                (k0 as f64).ln() + t * ((k1 as f64).ln() - (k0 as f64).ln())
+            })
+        });
         eprintln!(
-            "relMSE at K = 64: restricted {restricted:.3e}, uniform {uniform:.3e} ({:.1}x; at 3x the samples {uniform3:.3e}), precomputed {precomputed:.3e} ({:.1}x)",
-            uniform / restricted,
-            precomputed / restricted
+            "relMSE at K = 64: restricted {restricted:.3e}, precomputed {precomputed:.3e} ({:.1}x); uniform at K = {uniform:?}; uniform reaches restricted's error at {}",
+            precomputed / restricted,
+            equal.map_or("more than 384 samples".into(), |l| format!("{:.2}x the samples", l.exp() / 64.0))
         );
-        // Restricted is best; uniform needs more than 3x its samples for its error (the
-        // issue's figure; the thesis: 4x). Precomputed's gap depends on how much of each
-        // image lies outside the windows (here 2.1x, the issue asks 10x: see the closing note).
-        assert!(restricted < uniform && restricted < precomputed);
         assert!(
-            uniform3 > restricted,
-            "uniform at 3x: {uniform3:.3e} against {restricted:.3e}"
+            precomputed > 10.0 * restricted,
+            "precomputed {precomputed:.3e} against restricted {restricted:.3e}"
         );
+        let at_3x = uniform.iter().find(|(k, _)| *k == 192).unwrap().1;
+        assert!(
+            at_3x > restricted,
+            "uniform at 3x the samples: {at_3x:.3e} against {restricted:.3e}"
+        );
+    });
+}
+
+const DISK_RADIUS: f64 = 0.1;
+
+/// A uniform Lambertian disk of radius 0.1 and radiance 1 turned into a luminaire (9 x 9
+/// quadratic B-splines over the disk, image plane 0.2 out, 32 x 32 images over `image_size`).
+fn disk_luminaire(image_size: f64) -> Luminaire {
+    let r = DISK_RADIUS;
+    let disk = Emitter::Disk {
+        radius: r,
+        radiance: 1.0,
+    };
+    let geometry = Geometry {
+        grid: [9, 9],
+        pitch: [2.0 * r / 8.0, 2.0 * r / 8.0],
+        basis: Basis::QuadraticBSpline,
+        delta: 0.2,
+        image_size: [image_size, image_size],
+        resolution: [32, 32],
+    };
+    Luminaire::from_emitter(geometry, |u, s| disk.radiance(u, s, 0.2), "disk")
+}
+
+/// The luminaire `height` above a grey (albedo 0.5) floor, aimed straight down, seen by a
+/// camera 3 above the floor looking down with `fov` degrees.
+fn disk_over_floor(luminaire: Luminaire, height: f32, fov: f32, size: u32) -> irad::scene::Scene {
+    use common::shapes;
+    use glam::Vec3;
+    let camera = shapes::camera(
+        Vec3::new(0.0, 3.0, 0.0),
+        Vec3::ZERO,
+        Vec3::new(0.0, 0.0, -1.0),
+        fov,
+        size,
+    );
+    let mut scene = shapes::scene(
+        "disk-over-floor",
+        camera,
+        shapes::plane_y(4.0, 0.0, 0),
+        vec![shapes::material("floor", 0.5, 0.0, 1.0, 0.0)],
+    );
+    scene
+        .luminaires
+        .push(irad::scene::luminaire::PlacedLuminaire {
+            luminaire,
+            position: Vec3::new(0.0, height, 0.0),
+            x: Vec3::new(-1.0, 0.0, 0.0),
+            y: Vec3::new(0.0, 0.0, -1.0),
+            z: Vec3::new(0.0, -1.0, 0.0),
+        });
+    scene
+}
+
+/// The 4 x 4 pixels about the image centre.
+fn centre_pixels(scene: &irad::scene::Scene) -> Vec<(u32, u32)> {
+    let (w, h) = (scene.camera.width, scene.camera.height);
+    (h / 2 - 2..h / 2 + 2)
+        .flat_map(|y| (w / 2 - 2..w / 2 + 2).map(move |x| (x, y)))
+        .collect()
+}
+
+/// Their mean radiance.
+fn centre_radiance(scene: &irad::scene::Scene, image: &irad::image::Image) -> f64 {
+    let pixels = centre_pixels(scene);
+    pixels
+        .iter()
+        .map(|&(x, y)| image.pixels[(y * image.width + x) as usize][1] as f64)
+        .sum::<f64>()
+        / pixels.len() as f64
+}
+
+/// Where pixel (x, y)'s centre sees the floor, in the frame of the scene's luminaire.
+fn floor_point(scene: &irad::scene::Scene, x: u32, y: u32) -> glam::DVec3 {
+    let d = scene.camera.direction(x as f32 + 0.5, y as f32 + 0.5);
+    let o = scene.camera.position;
+    let p = o + d * (-o.y / d.y);
+    let placed = &scene.luminaires[0];
+    let l = p - placed.position;
+    glam::DVec3::new(
+        l.dot(placed.x) as f64,
+        l.dot(placed.y) as f64,
+        l.dot(placed.z) as f64,
+    )
+}
+
+/// The closed-form emitter through the whole GPU method: a uniform Lambertian disk (radius R,
+/// radiance 1) 0.5 above a floor of albedo 0.5, on its axis, gives the floor E = pi R^2 /
+/// (h^2 + R^2) and the radiance 0.5 E / pi; the restricted estimate (K = 64, 256 frames, 4
+/// seeds, the 4 x 4 pixels about the axis: 13 mm of floor) is within 1% of it.
+#[test]
+fn a_disk_luminaire_lights_the_floor_as_the_closed_form_says() {
+    use irad::methods::gbuffer::PixelSampling;
+    use irad::methods::lightfield::LightfieldSettings;
+    with_gpu(|ctx| {
+        let h = 0.5f64;
+        let scene = disk_over_floor(disk_luminaire(0.5), h as f32, 1.0, 16);
+        let r = DISK_RADIUS;
+        let exact = 0.5 * r * r / (h * h + r * r);
+        let runs: Vec<f64> = (0..4)
+            .map(|seed| {
+                let out = render_lightfield(
+                    ctx,
+                    &scene,
+                    LightfieldSettings {
+                        spp: 64,
+                        frames: 256,
+                        seed,
+                        pixels: PixelSampling::Centres,
+                        ..Default::default()
+                    },
+                );
+                centre_radiance(&scene, &out.image) / exact
+            })
+            .collect();
+        let (mean, stderr) = common::mean_and_stderr(&runs);
+        eprintln!("disk on the floor's axis: lightfield / closed form {mean:.4} ± {stderr:.4}");
+        assert!(stderr < 0.003, "standard error {stderr}");
+        assert!((mean - 1.0).abs() < 0.01, "{mean:.4} of the closed form");
+    });
+}
+
+/// Where the samples go (Eq. 4.16, "no samples are spent where A(p) = 0"): over a wide view
+/// of the floor under the disk luminaire (images 0.3 wide, so the light ends on the floor),
+/// each pixel's samples against the f64 mirror's A(p) at the pixel centre's floor point:
+/// none wherever A(p) = 0, some wherever A(p) is above 1e-3 of its peak; both kinds occur.
+#[test]
+fn no_samples_where_no_window_holds_light() {
+    use irad::methods::gbuffer::PixelSampling;
+    use irad::methods::lightfield::LightfieldSettings;
+    with_gpu(|ctx| {
+        let size = 48u32;
+        let height = 1.0f32;
+        let luminaire = disk_luminaire(0.3);
+        let mirror = LuminaireSampler::new(&luminaire);
+        let scene = disk_over_floor(luminaire, height, 100.0, size);
+        let out = render_lightfield(
+            ctx,
+            &scene,
+            LightfieldSettings {
+                spp: 64,
+                frames: 1,
+                pixels: PixelSampling::Centres,
+                ..Default::default()
+            },
+        );
+        let samples = &out.maps.iter().find(|(n, _)| n == "samples").unwrap().1;
+        let areas: Vec<f64> = (0..size * size)
+            .map(|k| {
+                let p = floor_point(&scene, k % size, k / size);
+                mirror.shares(p, 64, 64).iter().map(|s| s.area).sum()
+            })
+            .collect();
+        let peak = areas.iter().cloned().fold(0.0, f64::max);
+        let (mut dark, mut lit) = (0, 0);
+        for (k, &area) in areas.iter().enumerate() {
+            let taken = samples.pixels[k][0];
+            if area == 0.0 {
+                dark += 1;
+                assert_eq!(taken, 0.0, "pixel {k}: A(p) = 0 but samples were taken");
+            } else if area > 1e-3 * peak {
+                lit += 1;
+                assert!(taken > 0.0, "pixel {k}: A(p) = {area:.3e} but no samples");
+            }
+        }
+        eprintln!("{dark} pixels with A(p) = 0, {lit} lit");
+        assert!(dark > 100 && lit > 100, "dark {dark}, lit {lit}");
+    });
+}
+
+/// Section 4.3.4: close to the image plane the restricted strategy integrates over the filter
+/// plane. The floor under the disk luminaire at two heights straddling the switch (every
+/// window 1.1 and 0.88 texels wide), and 0.2 mm beyond the image plane, where the image-plane
+/// estimator loses every image to f32 rounding (measured: 0 of the light): the centre pixels
+/// (K = 64, 256 frames, 4 seeds) against the f64 mirror's integral over U (a 48 x 48 midpoint
+/// rule per basis, 0.02% from 512 x 512) at the same floor points, within 1%. (The light
+/// field is piecewise constant in s, so near S the light changes by 5% from texel to texel:
+/// the expectation is taken at each pixel.)
+#[test]
+fn near_the_image_plane_the_filter_plane_estimator_takes_over() {
+    use irad::methods::gbuffer::PixelSampling;
+    use irad::methods::lightfield::LightfieldSettings;
+    with_gpu(|ctx| {
+        for above in [0.06f64, 0.045, 0.0002] {
+            let h = 0.2 + above;
+            let luminaire = disk_luminaire(0.5);
+            let mirror = LuminaireSampler::new(&luminaire);
+            let scene = disk_over_floor(luminaire, h as f32, 1.0, 16);
+            let pixels = centre_pixels(&scene);
+            let expected = 0.5 / std::f64::consts::PI
+                * pixels
+                    .iter()
+                    .map(|&(x, y)| {
+                        let p = floor_point(&scene, x, y);
+                        mirror.irradiance_over_filter_plane(p, 48, true)
+                    })
+                    .sum::<f64>()
+                / pixels.len() as f64;
+            let runs: Vec<f64> = (0..4)
+                .map(|seed| {
+                    let out = render_lightfield(
+                        ctx,
+                        &scene,
+                        LightfieldSettings {
+                            spp: 64,
+                            frames: 256,
+                            seed,
+                            pixels: PixelSampling::Centres,
+                            ..Default::default()
+                        },
+                    );
+                    centre_radiance(&scene, &out.image) / expected
+                })
+                .collect();
+            let (mean, stderr) = common::mean_and_stderr(&runs);
+            eprintln!("{above} m beyond the image plane: lightfield / integral over U {mean:.4} ± {stderr:.4}");
+            assert!(stderr < 0.003, "{above}: standard error {stderr}");
+            assert!((mean - 1.0).abs() < 0.01, "{above}: {mean:.4}");
+        }
     });
 }

@@ -239,6 +239,10 @@ impl Method {
                 );
                 p.insert("shared_samples".into(), json!(s.shared_samples));
                 p.insert("averaged_visibility".into(), json!(s.averaged_visibility));
+                p.insert("shadows".into(), json!(s.shadows));
+                if s.sampling_only {
+                    p.insert("sampling_only".into(), json!(true));
+                }
                 p.insert(
                     "pixel_centres".into(),
                     json!(s.pixels == PixelSampling::Centres),
@@ -425,6 +429,8 @@ impl Method {
                     shared_samples: reader.flag("shared_samples", d.shared_samples)?,
                     averaged_visibility: reader
                         .flag("averaged_visibility", d.averaged_visibility)?,
+                    shadows: reader.flag("shadows", d.shadows)?,
+                    sampling_only: false,
                     pixels: reader.pixels()?,
                 })
             }
@@ -574,6 +580,7 @@ impl<'a> Params<'a> {
                 "search",
                 "shared_samples",
                 "averaged_visibility",
+                "shadows",
                 "pixel_centres",
             ],
             "env" => &[

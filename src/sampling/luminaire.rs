@@ -211,6 +211,33 @@ impl LuminaireSampler {
         }
         sum * sx * sy / (n * n) as f64
     }
+    /// I(p) integrated over U instead of S (Lu Section 4.3.4, which holds at every p beyond
+    /// S, on S included): p.z times the integral over U of L(u -> p) / |u - p|^3, by an n x n
+    /// midpoint rule over each basis support box, L(u -> p) = sum_m C_m(s) Psi_m(u -> s) with
+    /// s where the line u-p meets S. With `cosine`, the irradiance of a surface at p facing
+    /// the luminaire (normal -z): each direction weighed by cos = p.z / |u - p|.
+    pub fn irradiance_over_filter_plane(&self, p: DVec3, n: usize, cosine: bool) -> f64 {
+        let g = &self.geometry;
+        let (rx, ry) = (g.basis.reach() * g.pitch[0], g.basis.reach() * g.pitch[1]);
+        let mut sum = 0.0;
+        for m in 0..self.images.len() {
+            let (x, y) = self.node(m);
+            for a in 0..n {
+                for b in 0..n {
+                    let u = (
+                        x + (2.0 * (a as f64 + 0.5) / n as f64 - 1.0) * rx,
+                        y + (2.0 * (b as f64 + 0.5) / n as f64 - 1.0) * ry,
+                    );
+                    let tau = g.delta / p.z;
+                    let s = (u.0 + (p.x - u.0) * tau, u.1 + (p.y - u.1) * tau);
+                    let r = ((u.0 - p.x).powi(2) + (u.1 - p.y).powi(2) + p.z * p.z).sqrt();
+                    let weight = if cosine { p.z / r } else { 1.0 };
+                    sum += self.image_value(m, s) * self.psi(m, u, s) * p.z / (r * r * r) * weight;
+                }
+            }
+        }
+        sum * 4.0 * rx * ry / (n * n) as f64
+    }
 }
 
 #[cfg(test)]
@@ -364,6 +391,24 @@ mod tests {
                 assert!(
                     (mean / exact - 1.0).abs() < 0.01,
                     "{basis:?} h {h}: {mean} against {exact}"
+                );
+            }
+        }
+    }
+
+    /// Section 4.3.4's integral over U against the brute force over S, away from S (where both
+    /// hold), for both bases and on and off axis.
+    #[test]
+    fn the_integral_over_the_filter_plane_matches_the_image_plane() {
+        for basis in [Basis::Bilinear, Basis::QuadraticBSpline] {
+            let lum = luminaire(basis);
+            for p in [DVec3::new(0.0, 0.0, 1.5), DVec3::new(0.3, -0.2, 0.8)] {
+                let over_s = lum.irradiance_brute_force(p, 1024);
+                let over_u = lum.irradiance_over_filter_plane(p, 256, false);
+                eprintln!("{basis:?} at {p}: over U / over S {:.4}", over_u / over_s);
+                assert!(
+                    (over_u / over_s - 1.0).abs() < 0.01,
+                    "{basis:?} at {p}: {over_u} against {over_s}"
                 );
             }
         }

@@ -425,7 +425,13 @@ impl GpuScene {
     /// Every scene binding (bvh.glsl and scene.glsl), by block name.
     pub fn bindings(&self) -> Vec<Binding<'_>> {
         let mut b: Vec<Binding<'_>> = self.bvh.bindings().into_iter().collect();
-        b.extend([
+        b.extend(self.scene_bindings());
+        b
+    }
+
+    /// scene.glsl's bindings alone, for kernels that trace no rays.
+    pub fn scene_bindings(&self) -> Vec<Binding<'_>> {
+        vec![
             bind("ShadingTriangles", &self.shading_triangles),
             bind("Materials", &self.materials),
             bind("Lights", &self.lights),
@@ -434,8 +440,7 @@ impl GpuScene {
             bind("EnvTexels", &self.env_texels),
             bind("EnvCdf", &self.env_cdf),
             bind("SceneParams", &self.constants),
-        ]);
-        b
+        ]
     }
 
     /// Workgroups of an 8 x 8 image kernel over the frame.

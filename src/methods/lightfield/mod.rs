@@ -1,8 +1,10 @@
 //! Light-field luminaires (Lu 14 Chapter 4, issue 9), method `lightfield`: per frame the
 //! G-buffer and the direct light of the scene's other lights (the reference's direct-light
-//! pass), then per placed luminaire glsl/shade_lightfield.comp (its direct light with a shadow
-//! ray per sample, by the chosen strategy). The luminaires' sampling tables are built on the
-//! GPU once per render (tables.rs). src/sampling/luminaire.rs is the f64 mirror.
+//! pass), then per placed luminaire Lu's two steps (Section 4.5.1):
+//! glsl/estimate_luminaire_areas.comp (A(p), pass "A estimation") and
+//! glsl/shade_lightfield.comp (K_m, the samples and their shading with a shadow ray each, by
+//! the chosen strategy; pass "shade"). The luminaires' sampling tables are built on the GPU
+//! at the render's start (tables.rs). src/sampling/luminaire.rs is the f64 mirror.
 
 pub mod tables;
 
@@ -13,6 +15,7 @@ use glam::Vec4;
 use thiserror::Error;
 
 use crate::gpu::{bind, Buffer, Context, GpuError, Kernel};
+use crate::image::Image;
 use crate::methods::accumulation::Accumulation;
 use crate::methods::direct::GBufferAndDirectLight;
 use crate::methods::gbuffer::{GBuffer, PixelSampling};
@@ -81,6 +84,11 @@ pub struct LightfieldSettings {
     /// One shadow ray per image toward its median point instead of one per sample (Section
     /// 4.5.2's approximation: biased at shadow edges).
     pub averaged_visibility: bool,
+    /// Shadow rays (false: no visibility at all, as in timings without shadows).
+    pub shadows: bool,
+    /// Draw the samples and shade nothing (the image stays black): `irad bench lightfield`'s
+    /// measure of sampling alone.
+    pub sampling_only: bool,
     pub seed: u32,
     pub pixels: PixelSampling,
 }
@@ -95,6 +103,8 @@ impl Default for LightfieldSettings {
             secant: true,
             shared_samples: false,
             averaged_visibility: false,
+            shadows: true,
+            sampling_only: false,
             seed: 0,
             pixels: PixelSampling::Jittered,
         }
@@ -129,7 +139,8 @@ struct ShadeParams {
     seed: u32,
     search: u32,
     shared_samples: u32,
-    averaged: u32,
+    visibility: u32,
+    sampling_only: u32,
 }
 
 /// One placed luminaire on the GPU: its tables and its frame.
@@ -186,6 +197,7 @@ impl GpuLuminaire {
 
 pub struct Lightfield {
     direct: GBufferAndDirectLight,
+    estimate: Kernel,
     shade: Kernel,
 }
 
@@ -193,6 +205,7 @@ impl Lightfield {
     pub fn new(ctx: &Context) -> Result<Self, GpuError> {
         Ok(Lightfield {
             direct: GBufferAndDirectLight::new(ctx)?,
+            estimate: Kernel::new(ctx, "estimate_luminaire_areas")?,
             shade: Kernel::new(ctx, "shade_lightfield")?,
         })
     }
@@ -224,6 +237,12 @@ impl Lightfield {
             .map(|l| GpuLuminaire::new(ctx, l, settings))
             .collect::<Result<Vec<_>, _>>()?;
         let counts = Buffer::<f32>::zeroed(ctx, "LuminaireSampleCounts", gpu_scene.pixel_count())?;
+        let areas = Buffer::<f32>::zeroed(ctx, "LuminaireAreas", gpu_scene.pixel_count())?;
+        let visibility = match (settings.shadows, settings.averaged_visibility) {
+            (false, _) => 0,
+            (true, false) => 1,
+            (true, true) => 2,
+        };
         let seed = pcg::hash(&[settings.seed, 0x6c66]);
         let frames = settings.frames.max(1);
         let passes = progressive::run(
@@ -250,21 +269,33 @@ impl Lightfield {
                     true,
                 )?;
                 for l in &luminaires {
+                    let tables = [
+                        bind("LuminaireTexels", &l.tables.texels),
+                        bind("ColumnCdf", &l.tables.column_cdf),
+                        bind("LuminaireSat", &l.tables.sat),
+                        bind("LuminaireParams", &l.frame),
+                        bind("LuminaireAreas", &areas),
+                    ];
+                    cmd.pass("A estimation", |cmd| {
+                        let mut bindings = gpu_scene.scene_bindings();
+                        bindings.push(bind("GBuffer", &gbuffer.texels));
+                        bindings.extend(tables.iter().map(|b| bind(b.name, b.buffer)));
+                        self.estimate
+                            .dispatch(cmd, &bindings, &(), gpu_scene.image_workgroups())
+                    })?;
                     cmd.pass("shade", |cmd| {
                         let mut bindings = gpu_scene.bindings();
                         bindings.push(bind("GBuffer", &gbuffer.texels));
                         bindings.extend(accumulation.bindings());
-                        bindings.push(bind("LuminaireTexels", &l.tables.texels));
-                        bindings.push(bind("ColumnCdf", &l.tables.column_cdf));
-                        bindings.push(bind("LuminaireSat", &l.tables.sat));
-                        bindings.push(bind("LuminaireParams", &l.frame));
+                        bindings.extend(tables.iter().map(|b| bind(b.name, b.buffer)));
                         bindings.push(bind("LuminaireSampleCounts", &counts));
                         let params = ShadeParams {
                             frame,
                             seed,
                             search: settings.secant as u32,
                             shared_samples: settings.shared_samples as u32,
-                            averaged: settings.averaged_visibility as u32,
+                            visibility,
+                            sampling_only: settings.sampling_only as u32,
                         };
                         self.shade
                             .dispatch(cmd, &bindings, &params, gpu_scene.image_workgroups())
@@ -277,6 +308,11 @@ impl Lightfield {
         let counts = counts.read()?;
         let lit = counts.iter().filter(|&&c| c > 0.0).count();
         let drawn: f64 = counts.iter().map(|&c| c as f64).sum();
+        let most = counts.iter().fold(0.0f32, |a, &c| a.max(c));
+        let mut map = Image::new(gpu_scene.width, gpu_scene.height);
+        for (texel, &c) in map.pixels.iter_mut().zip(&counts) {
+            *texel = [c / most.max(1.0); 3];
+        }
         Ok(RenderOutput {
             image: accumulation.resolve(frames),
             passes,
@@ -288,8 +324,13 @@ impl Lightfield {
                     drawn / (lit.max(1) as f64 * frames as f64),
                 ),
                 ("pixels_with_luminaire_samples".into(), lit as f64),
+                (
+                    "most_luminaire_samples_per_pixel".into(),
+                    most as f64 / frames as f64,
+                ),
             ],
-            maps: vec![],
+            // Where the samples went: each pixel's samples over the most any pixel took.
+            maps: vec![("samples".into(), map)],
         })
     }
 }
