@@ -110,6 +110,14 @@ struct GenerateArgs {
     /// degrees down.
     #[arg(long, default_value_t = 30.0)]
     spread: f64,
+    /// Write a sequence of this many atlases (images_000.exr, ...; atlas = "images_*.exr"),
+    /// the beam lowered by --sweep over them (a levelling headlight: the tables are rebuilt
+    /// every frame of a render). headlight and reflector only.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=256))]
+    frames: u32,
+    /// With --frames: how many degrees the beam is lowered from the first atlas to the last.
+    #[arg(long, default_value_t = 0.0)]
+    sweep: f64,
     /// The image plane's distance from the filter plane, metres.
     #[arg(long, default_value_t = 0.05)]
     delta: f64,
@@ -1449,18 +1457,66 @@ fn generate_luminaire(args: &GenerateArgs) -> Result<()> {
             facet: args.facet,
             beam: args.beam,
             spread: args.spread,
+            tilt: 0.0,
         },
     };
-    let luminaire = Luminaire::from_emitter(
-        geometry,
-        |u, s| emitter.radiance(u, s, delta),
-        &format!("{emitter:?}"),
+    anyhow::ensure!(
+        args.sweep.is_finite() && args.sweep.abs() <= 45.0,
+        "--sweep {}: must be finite and within +-45 degrees",
+        args.sweep
     );
+    let tilts: Vec<f64> = (0..args.frames)
+        .map(|f| args.sweep * f as f64 / (args.frames.max(2) - 1) as f64)
+        .collect();
+    let emitters = tilts
+        .iter()
+        .map(|&t| emitter.tilted(t))
+        .collect::<Option<Vec<Emitter>>>()
+        .filter(|_| args.frames > 1)
+        .map_or_else(
+            || {
+                anyhow::ensure!(
+                    args.frames == 1,
+                    "--frames {}: the disk does not change; a sequence needs --emitter headlight or reflector",
+                    args.frames
+                );
+                Ok(vec![emitter])
+            },
+            Ok,
+        )?;
+    let bar = progress(emitters.len() as u64, "luminaire generate");
+    let mut frames: Vec<Luminaire> = emitters
+        .iter()
+        .map(|e| {
+            let l = Luminaire::from_emitter(
+                geometry,
+                |u, s| e.radiance(u, s, delta),
+                &format!("{e:?}"),
+            );
+            bar.inc(1);
+            l
+        })
+        .collect();
+    bar.finish_and_clear();
+    let mut luminaire = frames.remove(0);
+    if !frames.is_empty() {
+        luminaire.sequence = std::iter::once(luminaire.images.clone())
+            .chain(frames.into_iter().map(|l| l.images))
+            .collect();
+    }
     let path = luminaire.write(&args.out)?;
     println!(
         "wrote {} and {} ({}x{} images of {}x{} texels)",
         path.display(),
-        args.out.join("images.exr").display(),
+        if args.frames > 1 {
+            format!(
+                "{} atlases {}",
+                args.frames,
+                args.out.join("images_*.exr").display()
+            )
+        } else {
+            args.out.join("images.exr").display().to_string()
+        },
         grid[0],
         grid[1],
         resolution.0,

@@ -80,6 +80,15 @@ pub fn render(
             "the environment is a sequence of {maps} maps (frame f shows map f mod {maps}) and this render has {frames} frames, not a multiple of {maps}: the maps are not weighed equally, so the image is not the sequence's average"
         ));
     }
+    for (k, l) in job.scene.luminaires.iter().enumerate() {
+        let atlases = l.luminaire.sequence.len() as u64;
+        if atlases > 1 && frames % atlases != 0 {
+            warnings.push(format!(
+                "luminaire {k} ({}) is a sequence of {atlases} atlases (frame f shows atlas f mod {atlases}) and this render has {frames} frames, not a multiple of {atlases}: the atlases are not weighed equally",
+                l.luminaire.source.display()
+            ));
+        }
+    }
     let output = Renderers::default().run(ctx, &job.method, job.scene, &gpu_scene, progress)?;
     if output.nonfinite_estimates > 0 {
         warnings.push(format!(

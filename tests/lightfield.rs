@@ -637,3 +637,106 @@ fn near_the_image_plane_the_filter_plane_estimator_takes_over() {
         }
     });
 }
+
+/// A luminaire whose atlases change (issue 9 item 3: the tables rebuilt per frame): a sequence
+/// of three (the faceted headlight lowered 0, 10 and 20 degrees). At frames 1, 2 and 4 the
+/// GPU's tables are those of atlas f mod 3 (against the f64 mirror, 1e-5 of the total); and a
+/// render of the two-atlas sequence [A, black] over 2 frames is half a 1-frame render of A
+/// (the same seed: frame 0 draws the same numbers) to f32 rounding, so frame 1 shows atlas 1.
+#[test]
+fn a_sequence_of_atlases_rebuilds_the_tables_every_frame() {
+    use irad::gpu::Commands;
+    use irad::methods::gbuffer::PixelSampling;
+    use irad::methods::lightfield::LightfieldSettings;
+    with_gpu(|ctx| {
+        let geometry = Geometry {
+            grid: [5, 3],
+            pitch: [0.03, 0.03],
+            basis: Basis::QuadraticBSpline,
+            delta: 0.2,
+            image_size: [0.6, 0.6],
+            resolution: [24, 16],
+        };
+        let reflector = Emitter::Reflector {
+            radius: 0.06,
+            radiance: 2000.0,
+            facet: 0.012,
+            beam: 2.0,
+            spread: 30.0,
+            tilt: 0.0,
+        };
+        let atlases: Vec<Luminaire> = [0.0, 10.0, 20.0]
+            .iter()
+            .map(|&t| {
+                let e = reflector.tilted(t).unwrap();
+                Luminaire::from_emitter(geometry, |u, s| e.radiance(u, s, 0.2), "seq")
+            })
+            .collect();
+        let mut lum = atlases[0].clone();
+        lum.sequence = atlases.iter().map(|l| l.images.clone()).collect();
+        let tables = LuminaireTables::new(ctx, &lum).unwrap();
+        assert!(tables.is_sequence());
+        for frame in [1u32, 2, 4] {
+            let mut cmd = Commands::new(ctx).unwrap();
+            tables.record_frame(&mut cmd, frame).unwrap();
+            cmd.submit_and_wait().unwrap();
+            let mirror = LuminaireSampler::new(&atlases[frame as usize % 3]);
+            let sat = tables.sat.read().unwrap();
+            let (rs, rt) = (24usize, 16usize);
+            for (m, image) in mirror.images.iter().enumerate() {
+                let tolerance = 1e-5 * image.marginal_knot(rs).max(1e-30);
+                for t in 0..rt {
+                    for s in 0..rs {
+                        let (gpu, cpu) = (
+                            sat[(m * rt + t) * rs + s] as f64,
+                            image.sat_knot(s + 1, t + 1),
+                        );
+                        assert!(
+                            (gpu - cpu).abs() <= tolerance,
+                            "frame {frame}, image {m}, SAT at ({s}, {t}): {gpu} against {cpu}"
+                        );
+                    }
+                }
+            }
+        }
+        // [A, black]: 2 frames = half of 1 frame of A.
+        let mut scene = headlight_wall(24, 18);
+        let mut pair = atlases[0].clone();
+        let black: Vec<Vec<glam::Vec3>> = pair
+            .images
+            .iter()
+            .map(|im| vec![glam::Vec3::ZERO; im.len()])
+            .collect();
+        pair.sequence = vec![pair.images.clone(), black];
+        scene.luminaires[0].luminaire = pair;
+        let render = |scene: &irad::scene::Scene, frames: u32| {
+            render_lightfield(
+                ctx,
+                scene,
+                LightfieldSettings {
+                    spp: 32,
+                    frames,
+                    seed: 5,
+                    pixels: PixelSampling::Centres,
+                    ..Default::default()
+                },
+            )
+            .image
+        };
+        let two = render(&scene, 2);
+        scene.luminaires[0].luminaire.sequence.clear();
+        let one = render(&scene, 1);
+        let total: f64 = one.pixels.iter().map(|p| p[1] as f64).sum();
+        assert!(total > 0.0, "the headlight lights nothing");
+        for (k, (a, b)) in two.pixels.iter().zip(&one.pixels).enumerate() {
+            for c in 0..3 {
+                assert!(
+                    (2.0 * a[c] - b[c]).abs() <= 1e-5 * b[c].abs() + 1e-12,
+                    "pixel {k} channel {c}: 2 frames of [A, black] {} against 1 frame of A {}",
+                    a[c],
+                    b[c]
+                );
+            }
+        }
+    });
+}

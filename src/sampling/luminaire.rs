@@ -283,6 +283,7 @@ mod tests {
                 resolution: [r, r],
             },
             images,
+            sequence: vec![],
             source: "test".into(),
         })
     }

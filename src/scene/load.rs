@@ -158,8 +158,8 @@ fn build(file: &str, toml_text: &str, files: &Files) -> Result<Scene, SceneError
             });
         };
         let luminaire = luminaire::Luminaire::load(&path)?;
-        // The atlas's texels are part of the content.
-        for texel in luminaire.images.iter().flatten() {
+        // The atlases' texels are part of the content.
+        for texel in luminaire.frames().into_iter().flatten().flatten() {
             for c in texel.to_array() {
                 hash.write(&c.to_le_bytes());
             }
@@ -262,8 +262,9 @@ fn build(file: &str, toml_text: &str, files: &Files) -> Result<Scene, SceneError
             .any(|e| e.texels.iter().any(|t| t.max_element() > 0.0))
         || luminaires.iter().any(|l| {
             l.luminaire
-                .images
-                .iter()
+                .frames()
+                .into_iter()
+                .flatten()
                 .flatten()
                 .any(|t| t.max_element() > 0.0)
         });

@@ -20,12 +20,16 @@
 //! image_size = [0.2, 0.2]       # metres covered by every image on the image plane
 //! atlas = "images.exr"          # W R_s x H R_t texels: image (i, j) is tile (i, j)
 //! ```
+//! `atlas` may be a glob in the file name (`"beam_*.exr"`): a sequence of atlases of one size,
+//! in name order, frame f of a render showing atlas f mod n (a luminaire whose images change,
+//! as a levelling headlight's do).
 
 use std::path::{Path, PathBuf};
 
 use glam::Vec3;
 use serde::Deserialize;
 
+use super::environment::{expand_glob, is_glob, split_glob};
 use super::SceneError;
 use crate::image::{exr, Image};
 
@@ -118,8 +122,12 @@ impl Geometry {
 #[derive(Clone, Debug, PartialEq)]
 pub struct Luminaire {
     pub geometry: Geometry,
-    /// Per image m (m = j W + i), R_s x R_t RGB texels, row-major.
+    /// Per image m (m = j W + i), R_s x R_t RGB texels, row-major (of the first atlas, for a
+    /// sequence).
     pub images: Vec<Vec<Vec3>>,
+    /// A sequence's images, every atlas in order (frame f of a render shows f mod len);
+    /// empty for a still luminaire.
+    pub sequence: Vec<Vec<Vec<Vec3>>>,
     pub source: PathBuf,
 }
 
@@ -178,6 +186,7 @@ impl Luminaire {
         Luminaire {
             geometry,
             images,
+            sequence: vec![],
             source: source.into(),
         }
     }
@@ -241,76 +250,160 @@ impl Luminaire {
                 ))
             }
         };
-        let atlas_path = path.parent().unwrap_or(Path::new("")).join(&f.atlas);
-        let atlas = exr::read(&atlas_path).map_err(|e| SceneError::File {
-            file: atlas_path.display().to_string(),
-            message: format!("atlas (referenced by {display}): {e:#}"),
-        })?;
+        let folder = path.parent().unwrap_or(Path::new(""));
+        let atlas_paths = if is_glob(&f.atlas) {
+            let (dir, pattern) = split_glob(&f.atlas);
+            if is_glob(&dir.to_string_lossy()) || pattern.contains(['[', '{']) {
+                return Err(SceneError::Unsupported {
+                    file: display.clone(),
+                    field: "atlas".into(),
+                    value: format!("{:?}", f.atlas),
+                    what: "globs other than * and ? in the file name".into(),
+                });
+            }
+            let found =
+                expand_glob(&folder.join(&dir), &pattern).map_err(|source| SceneError::Read {
+                    path: folder.join(&dir).display().to_string(),
+                    referenced_by: format!("{display}: atlas = {:?} (its folder)", f.atlas),
+                    source,
+                })?;
+            if found.is_empty() {
+                return Err(invalid(
+                    "atlas",
+                    format!("{:?}", f.atlas),
+                    &format!("no file in {} matches", folder.join(&dir).display()),
+                ));
+            }
+            found
+        } else {
+            vec![folder.join(&f.atlas)]
+        };
         let (w, h) = (w as usize, h as usize);
-        let (aw, ah) = (atlas.width as usize, atlas.height as usize);
-        if aw % w != 0 || ah % h != 0 || aw == 0 || ah == 0 {
-            return Err(invalid(
-                "atlas",
-                format!("{:?} ({aw}x{ah})", f.atlas),
-                &format!("its size must be a multiple of the grid, {w}x{h}"),
-            ));
-        }
-        let resolution = [aw / w, ah / h];
-        if let Some(k) = atlas
-            .pixels
-            .iter()
-            .position(|p| !p.iter().all(|c| c.is_finite() && *c >= 0.0))
-        {
-            return Err(SceneError::Invalid {
+        let mut sequence: Vec<Vec<Vec<Vec3>>> = Vec::with_capacity(atlas_paths.len());
+        let mut first_size = None;
+        for atlas_path in &atlas_paths {
+            let atlas = exr::read(atlas_path).map_err(|e| SceneError::File {
                 file: atlas_path.display().to_string(),
-                field: format!("texel (x {}, y {})", k % aw, k / aw),
-                value: format!("{:?}", atlas.pixels[k]),
-                problem: "must be finite and >= 0 in every channel".into(),
-            });
+                message: format!("atlas (referenced by {display}): {e:#}"),
+            })?;
+            let (aw, ah) = (atlas.width as usize, atlas.height as usize);
+            if aw % w != 0 || ah % h != 0 || aw == 0 || ah == 0 {
+                return Err(invalid(
+                    "atlas",
+                    format!("{:?} ({}: {aw}x{ah})", f.atlas, atlas_path.display()),
+                    &format!("its size must be a multiple of the grid, {w}x{h}"),
+                ));
+            }
+            match first_size {
+                None => first_size = Some((aw, ah)),
+                Some((fw, fh)) if (fw, fh) != (aw, ah) => {
+                    return Err(invalid(
+                        "atlas",
+                        format!("{:?} ({}: {aw}x{ah})", f.atlas, atlas_path.display()),
+                        &format!(
+                            "every atlas of a sequence must have the size of the first, {} ({fw}x{fh})",
+                            atlas_paths[0].display()
+                        ),
+                    ));
+                }
+                Some(_) => {}
+            }
+            if let Some(k) = atlas
+                .pixels
+                .iter()
+                .position(|p| !p.iter().all(|c| c.is_finite() && *c >= 0.0))
+            {
+                return Err(SceneError::Invalid {
+                    file: atlas_path.display().to_string(),
+                    field: format!("texel (x {}, y {})", k % aw, k / aw),
+                    value: format!("{:?}", atlas.pixels[k]),
+                    problem: "must be finite and >= 0 in every channel".into(),
+                });
+            }
+            let [rs, rt] = [aw / w, ah / h];
+            sequence.push(
+                (0..w * h)
+                    .map(|m| {
+                        let (i, j) = (m % w, m / w);
+                        (0..rs * rt)
+                            .map(|k| {
+                                Vec3::from(atlas.pixels[(j * rt + k / rs) * aw + i * rs + k % rs])
+                            })
+                            .collect()
+                    })
+                    .collect(),
+            );
         }
+        let (aw, ah) = first_size.unwrap_or((w, h));
         let geometry = Geometry {
             grid: [w, h],
             pitch: f.pitch,
             basis,
             delta: f.delta,
             image_size: f.image_size,
-            resolution,
+            resolution: [aw / w, ah / h],
         };
-        let [rs, rt] = resolution;
-        let images = (0..w * h)
-            .map(|m| {
-                let (i, j) = (m % w, m / w);
-                (0..rs * rt)
-                    .map(|k| Vec3::from(atlas.pixels[(j * rt + k / rs) * aw + i * rs + k % rs]))
-                    .collect()
-            })
-            .collect();
+        let images = sequence[0].clone();
+        if sequence.len() < 2 {
+            sequence.clear();
+        }
         Ok(Luminaire {
             geometry,
             images,
+            sequence,
             source: path.to_path_buf(),
         })
     }
 
-    /// Writes `<dir>/luminaire.toml` and `<dir>/images.exr`; returns the TOML's path.
+    /// The atlases a render shows in turn: the sequence, or the one still atlas.
+    pub fn frames(&self) -> Vec<&Vec<Vec<Vec3>>> {
+        if self.sequence.is_empty() {
+            vec![&self.images]
+        } else {
+            self.sequence.iter().collect()
+        }
+    }
+
+    /// Writes `<dir>/luminaire.toml` and `<dir>/images.exr` (a sequence: `images_000.exr`,
+    /// `images_001.exr`, ... and `atlas = "images_*.exr"`); returns the TOML's path.
     pub fn write(&self, dir: &Path) -> anyhow::Result<PathBuf> {
         std::fs::create_dir_all(dir)?;
         let g = &self.geometry;
         let [w, h] = g.grid;
         let [rs, rt] = g.resolution;
-        let mut atlas = Image::new((w * rs) as u32, (h * rt) as u32);
-        for (m, image) in self.images.iter().enumerate() {
-            let (i, j) = (m % w, m / w);
-            for (k, texel) in image.iter().enumerate() {
-                atlas.pixels[(j * rt + k / rs) * w * rs + i * rs + k % rs] = texel.to_array();
+        let frames = self.frames();
+        for (f, images) in frames.iter().enumerate() {
+            let mut atlas = Image::new((w * rs) as u32, (h * rt) as u32);
+            for (m, image) in images.iter().enumerate() {
+                let (i, j) = (m % w, m / w);
+                for (k, texel) in image.iter().enumerate() {
+                    atlas.pixels[(j * rt + k / rs) * w * rs + i * rs + k % rs] = texel.to_array();
+                }
             }
+            let name = if self.sequence.is_empty() {
+                "images.exr".to_string()
+            } else {
+                format!("images_{f:03}.exr")
+            };
+            exr::write(&dir.join(name), &atlas)?;
         }
-        exr::write(&dir.join("images.exr"), &atlas)?;
+        let (atlas, what) = if self.sequence.is_empty() {
+            ("images.exr", "the images are images.exr".to_string())
+        } else {
+            (
+                "images_*.exr",
+                format!(
+                    "a sequence of {} atlases, images_*.exr, frame f showing f mod {}",
+                    frames.len(),
+                    frames.len()
+                ),
+            )
+        };
         let toml_path = dir.join("luminaire.toml");
         let text = format!(
-            "# A light-field luminaire (README \"Light-field luminaires\"); the images are images.exr.\n\
+            "# A light-field luminaire (README \"Light-field luminaires\"); {what}.\n\
              grid = [{w}, {h}]\npitch = [{:?}, {:?}]\nbasis = \"{}\"\ndelta = {:?}\n\
-             image_size = [{:?}, {:?}]\natlas = \"images.exr\"\n",
+             image_size = [{:?}, {:?}]\natlas = \"{atlas}\"\n",
             g.pitch[0],
             g.pitch[1],
             g.basis.name(),
@@ -409,19 +502,55 @@ pub enum Emitter {
     /// beam (standard deviation `beam` degrees) in its own direction, chosen by a hash of the
     /// facet, uniformly within +-`spread` degrees horizontally and 0 to `spread` degrees
     /// down, with a brightness from 0.5 to 1. Nothing leaves above the horizontal (the
-    /// cut-off line). The beam pattern is the sum of the facets' beams, as with real
-    /// reflectors, so each basis function's image is a spray of spots over the image plane,
-    /// and a point sees few of them: the case Lu's restriction is made for.
+    /// cut-off line). The whole pattern is lowered by `tilt` degrees. The beam pattern is the
+    /// sum of the facets' beams, as with real reflectors, so each basis function's image is a
+    /// spray of spots over the image plane, and a point sees few of them: the case Lu's
+    /// restriction is made for.
     Reflector {
         radius: f64,
         radiance: f64,
         facet: f64,
         beam: f64,
         spread: f64,
+        tilt: f64,
     },
 }
 
 impl Emitter {
+    /// The emitter lowered by `degrees` more (a levelling headlight's motion); None for the
+    /// disk, which has no direction to tilt.
+    pub fn tilted(self, degrees: f64) -> Option<Emitter> {
+        match self {
+            Emitter::Disk { .. } => None,
+            Emitter::Headlight {
+                radius,
+                radiance,
+                sharpness,
+                tilt,
+            } => Some(Emitter::Headlight {
+                radius,
+                radiance,
+                sharpness,
+                tilt: tilt + degrees,
+            }),
+            Emitter::Reflector {
+                radius,
+                radiance,
+                facet,
+                beam,
+                spread,
+                tilt,
+            } => Some(Emitter::Reflector {
+                radius,
+                radiance,
+                facet,
+                beam,
+                spread,
+                tilt: tilt + degrees,
+            }),
+        }
+    }
+
     /// L(u -> s) for a luminaire whose image plane is `delta` above the filter plane.
     pub fn radiance(&self, u: (f64, f64), s: (f64, f64), delta: f64) -> Vec3 {
         match *self {
@@ -459,6 +588,7 @@ impl Emitter {
                 facet,
                 beam,
                 spread,
+                tilt,
             } => {
                 if u.0 * u.0 + u.1 * u.1 > radius * radius {
                     return Vec3::ZERO;
@@ -466,7 +596,10 @@ impl Emitter {
                 let (fx, fy) = ((u.0 / facet).floor(), (u.1 / facet).floor());
                 let (ax, ay, brightness) = facet_aim(fx as i64, fy as i64, spread);
                 let (dx, dy) = (s.0 - u.0, s.1 - u.1);
-                let (tx, ty) = (dx.atan2(delta).to_degrees(), dy.atan2(delta).to_degrees());
+                let (tx, ty) = (
+                    dx.atan2(delta).to_degrees(),
+                    dy.atan2(delta).to_degrees() + tilt,
+                );
                 if ty > 0.0 {
                     return Vec3::ZERO;
                 }
@@ -566,6 +699,71 @@ mod tests {
                 "{e}"
             );
         }
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    /// A sequence (`atlas` a glob) writes, reads back in name order and keeps its first atlas
+    /// as `images`; an empty match and atlases of different sizes are refused, naming the
+    /// file, field and value.
+    #[test]
+    fn atlas_sequences_read_back_and_bad_ones_are_refused() {
+        let dir = std::env::temp_dir().join(format!("irad-luminaire-seq-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        let emitter = Emitter::Reflector {
+            radius: 0.04,
+            radiance: 10.0,
+            facet: 0.01,
+            beam: 3.0,
+            spread: 20.0,
+            tilt: 0.0,
+        };
+        let frames: Vec<Luminaire> = [0.0, 4.0, 8.0]
+            .iter()
+            .map(|&t| {
+                let e = emitter.tilted(t).unwrap();
+                Luminaire::from_emitter(geometry(), |u, s| e.radiance(u, s, 0.1), "test")
+            })
+            .collect();
+        assert_ne!(frames[0].images, frames[2].images);
+        let mut lum = frames[0].clone();
+        lum.sequence = frames.iter().map(|l| l.images.clone()).collect();
+        let path = lum.write(&dir).unwrap();
+        let back = Luminaire::load(&path).unwrap();
+        assert_eq!(back.sequence, lum.sequence);
+        assert_eq!(back.images, frames[0].images);
+        assert_eq!(back.frames().len(), 3);
+        let toml = std::fs::read_to_string(&path).unwrap();
+        assert!(toml.contains("atlas = \"images_*.exr\""), "{toml}");
+        std::fs::write(&path, toml.replace("images_*.exr", "beam_*.exr")).unwrap();
+        let e = Luminaire::load(&path).unwrap_err().to_string();
+        assert!(
+            e.contains("atlas") && e.contains("beam_*.exr") && e.contains("no file"),
+            "{e}"
+        );
+        std::fs::write(&path, &toml).unwrap();
+        let small = Luminaire::from_emitter(
+            Geometry {
+                resolution: [4, 3],
+                ..geometry()
+            },
+            |u, s| emitter.radiance(u, s, 0.1),
+            "test",
+        );
+        small.write(&dir.join("small")).unwrap();
+        std::fs::rename(dir.join("small/images.exr"), dir.join("images_003.exr")).unwrap();
+        let e = Luminaire::load(&path).unwrap_err().to_string();
+        assert!(
+            e.contains("images_003.exr")
+                && e.contains("size of the first")
+                && e.contains("images_000.exr"),
+            "{e}"
+        );
+        assert!(Emitter::Disk {
+            radius: 0.1,
+            radiance: 1.0
+        }
+        .tilted(3.0)
+        .is_none());
         let _ = std::fs::remove_dir_all(&dir);
     }
 }

@@ -4,7 +4,8 @@
 //! glsl/estimate_luminaire_areas.comp (A(p), pass "A estimation") and
 //! glsl/shade_lightfield.comp (K_m, the samples and their shading with a shadow ray each, by
 //! the chosen strategy; pass "shade"). The luminaires' sampling tables are built on the GPU
-//! at the render's start (tables.rs). src/sampling/luminaire.rs is the f64 mirror.
+//! at the render's start, and every frame for a luminaire whose atlases change (tables.rs).
+//! src/sampling/luminaire.rs is the f64 mirror.
 
 pub mod tables;
 
@@ -251,10 +252,8 @@ impl Lightfield {
             frames,
             &accumulation,
             |cmd, frame| {
-                if frame == 0 {
-                    for l in &luminaires {
-                        cmd.pass("luminaire tables", |cmd| l.tables.record(cmd))?;
-                    }
+                for l in &luminaires {
+                    l.tables.record_frame(cmd, frame)?;
                 }
                 // The G-buffer, the emission seen and the other lights' direct light.
                 self.direct.record(

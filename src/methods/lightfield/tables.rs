@@ -4,13 +4,15 @@
 //! over every column (the conditional CDFs in t, Eq. 4.10, and the column totals), the prefix
 //! sum over each image's column totals (the marginal CDF in s, and the image totals),
 //! glsl/transpose_luminaire_columns.comp, and the prefix sum along every row of the transposed
-//! column CDFs (the summed-area table). src/sampling/restricted.rs is the f64 mirror.
+//! column CDFs (the summed-area table). src/sampling/restricted.rs is the f64 mirror. A
+//! luminaire with a sequence of atlases keeps them all on the GPU; frame f copies atlas
+//! f mod n into the live texels and rebuilds every table from them (`record_frame`).
 
 use bytemuck::{Pod, Zeroable};
 use glam::Vec4;
 
 use crate::gpu::prefix_sum::PrefixSum;
-use crate::gpu::{bind, Buffer, Commands, Context, GpuResult, Kernel};
+use crate::gpu::{bind, Buffer, Commands, Context, GpuBuffer, GpuResult, Kernel};
 use crate::scene::luminaire::Luminaire;
 
 #[repr(C)]
@@ -30,6 +32,8 @@ pub struct LuminaireTables {
     params: TableParams,
     /// The images' RGB texels (image m, row t, column s); .w unused.
     pub texels: Buffer<Vec4>,
+    /// A sequence's every atlas, one after another (None for a still luminaire).
+    sequence: Option<(Buffer<Vec4>, u32)>,
     columns: Buffer<f32>,
     /// Per image and column, the inclusive scan over t: (m, s, t).
     pub column_cdf: Buffer<f32>,
@@ -49,11 +53,26 @@ impl LuminaireTables {
         let [rs, rt] = luminaire.geometry.resolution;
         let m = luminaire.images.len();
         let n = m * rs * rt;
-        let texels: Vec<Vec4> = luminaire
-            .images
-            .iter()
-            .flat_map(|im| im.iter().map(|c| c.extend(0.0)))
-            .collect();
+        let texels_of = |images: &[Vec<glam::Vec3>]| -> Vec<Vec4> {
+            images
+                .iter()
+                .flat_map(|im| im.iter().map(|c| c.extend(0.0)))
+                .collect()
+        };
+        let texels = texels_of(&luminaire.images);
+        let sequence = if luminaire.sequence.is_empty() {
+            None
+        } else {
+            let all: Vec<Vec4> = luminaire
+                .sequence
+                .iter()
+                .flat_map(|images| texels_of(images))
+                .collect();
+            Some((
+                Buffer::from_slice(ctx, "luminaire atlases", &all)?,
+                luminaire.sequence.len() as u32,
+            ))
+        };
         Ok(LuminaireTables {
             weigh: Kernel::new(ctx, "weigh_luminaire_columns")?,
             transpose: Kernel::new(ctx, "transpose_luminaire_columns")?,
@@ -66,6 +85,7 @@ impl LuminaireTables {
                 images: m as u32,
             },
             texels: Buffer::from_slice(ctx, "LuminaireTexels", &texels)?,
+            sequence,
             columns: Buffer::zeroed(ctx, "ColumnValues", n)?,
             column_cdf: Buffer::zeroed(ctx, "ColumnCdf", n)?,
             column_totals: Buffer::zeroed(ctx, "luminaire column totals", m * rs)?,
@@ -77,7 +97,31 @@ impl LuminaireTables {
         })
     }
 
-    /// Pass "luminaire tables": every table from `texels`.
+    /// Whether the images change from frame to frame.
+    pub fn is_sequence(&self) -> bool {
+        self.sequence.is_some()
+    }
+
+    /// What frame `frame` needs: for a sequence, pass "luminaire frame" (atlas frame mod n
+    /// copied into `texels`) and pass "luminaire tables"; for a still luminaire, the tables
+    /// at frame 0 only.
+    pub fn record_frame<'a>(&'a self, cmd: &mut Commands<'a>, frame: u32) -> GpuResult<()> {
+        match &self.sequence {
+            Some((atlases, count)) => {
+                let bytes = self.texels.byte_size();
+                let k = (frame % count) as u64;
+                cmd.pass("luminaire frame", |cmd| {
+                    cmd.copy_region(atlases, k * bytes, &self.texels, bytes);
+                    Ok(())
+                })?;
+            }
+            None if frame > 0 => return Ok(()),
+            None => {}
+        }
+        cmd.pass("luminaire tables", |cmd| self.record(cmd))
+    }
+
+    /// Every table from `texels`.
     pub fn record<'a>(&'a self, cmd: &mut Commands<'a>) -> GpuResult<()> {
         let p = self.params;
         let threads = [p.width, p.height, p.images];
