@@ -502,6 +502,33 @@ enum Bench {
         #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..))]
         frames: u32,
     },
+    /// lightfield's per-frame breakdown (Lu 14 Fig. 4.12: G-buffer, A estimation, sampling,
+    /// shading, shadow rays) for each strategy and sample budget K, with the frame rate and
+    /// the samples actually drawn per lit pixel. Time against error: `irad bench suite
+    /// scenes/suites/lightfield-lavapipe.toml` (or lightfield.toml on a GPU).
+    Lightfield {
+        /// Scene file with luminaires (default: scenes/car-headlights of the source tree, the
+        /// thesis's two-headlight car).
+        scene: Option<PathBuf>,
+        /// K, samples per pixel, luminaire and frame, comma separated (the thesis: 200).
+        #[arg(long, value_delimiter = ',', default_values_t = [50u32, 100, 200])]
+        spp: Vec<u32>,
+        /// The strategies, comma separated.
+        #[arg(long, value_delimiter = ',', default_values_t = ["restricted".to_string(), "uniform".into(), "precomputed".into()])]
+        strategies: Vec<String>,
+        /// K_max, the most samples per pixel, frame and image.
+        #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..=65536))]
+        k_max: u32,
+        /// Image size, WIDTHxHEIGHT (default: the scene's; the thesis: 1024x768).
+        #[arg(long, value_parser = parse_size)]
+        resolution: Option<(u32, u32)>,
+        /// Timed frames per render (after a one-frame warm-up).
+        #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..))]
+        frames: u32,
+        /// Timed renders of each kind (the median is reported).
+        #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..))]
+        repeats: u32,
+    },
     /// Instant radiosity's per-pass GPU times for a range of VPL budgets, and its gathering
     /// throughput in (pixel, VPL) pairs/s next to the scene's incoherent any-hit ray rate.
     Ir {
@@ -751,6 +778,68 @@ fn run(cli: Cli) -> Result<()> {
                 scene.camera.width,
                 scene.camera.height,
                 &report,
+            );
+            Ok(())
+        }
+        Command::Bench(Bench::Lightfield {
+            scene,
+            spp,
+            strategies,
+            k_max,
+            resolution,
+            frames,
+            repeats,
+        }) => {
+            let path = scene.unwrap_or_else(|| {
+                PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes/car-headlights/scene.toml")
+            });
+            let mut scene = scene::load(&path)?;
+            if let Some((w, h)) = resolution {
+                scene.camera.width = w;
+                scene.camera.height = h;
+            }
+            anyhow::ensure!(
+                !spp.is_empty() && spp.iter().all(|&k| (1..=65536).contains(&k)),
+                "--spp: each K must be in 1..=65536"
+            );
+            let strategies = strategies
+                .iter()
+                .map(|name| {
+                    LightfieldStrategy::ALL
+                        .into_iter()
+                        .find(|s| s.name() == name)
+                        .ok_or_else(|| {
+                            let names: Vec<&str> =
+                                LightfieldStrategy::ALL.iter().map(|s| s.name()).collect();
+                            anyhow::anyhow!(
+                                "--strategies: no lightfield strategy {name:?} (one of {})",
+                                names.join(", ")
+                            )
+                        })
+                })
+                .collect::<Result<Vec<_>>>()?;
+            let ctx = Context::new(&options)?;
+            let bar = progress((strategies.len() * spp.len()) as u64, "bench lightfield");
+            let results = irad::bench::lightfield::run(
+                &ctx,
+                &scene,
+                &strategies,
+                &spp,
+                k_max,
+                frames,
+                repeats as usize,
+                |s, k| {
+                    bar.set_message(format!("{} K {k}", s.name()));
+                    bar.inc(1);
+                },
+            )?;
+            bar.finish_and_clear();
+            irad::bench::lightfield::print(
+                &device_line(ctx.info()),
+                &scene,
+                k_max,
+                frames,
+                &results,
             );
             Ok(())
         }

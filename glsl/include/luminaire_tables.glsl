@@ -71,43 +71,70 @@ float window_marginal(LuminaireImage im, vec4 w, float s) {
     return sat_at(im, s, w.w) - sat_at(im, s, w.z) - sat_at(im, w.x, w.w) + sat_at(im, w.x, w.z);
 }
 
+// The summed-area table on knot column i, at t: the integral over [0, i] x [0, t].
+float sat_on_column(LuminaireImage im, uint i, float t) {
+    if (i == 0u) return 0.0;
+    t = clamp(t, 0.0, float(im.height));
+    uint j = min(uint(t), im.height - 1u);
+    return mix(sat_knot(im, i, j), sat_knot(im, i, j + 1u), t - float(j));
+}
+
 // Knot k of a search over [lo, hi] starting at integer `first`: clamp(first + k, lo, hi).
 float search_knot(uint first, uint k, float lo, float hi) {
     return clamp(float(first + k), lo, hi);
 }
 
-// The window's marginal (in_s true) or column i's restricted CDF (in_s false) at knot k.
-float knot_value(LuminaireImage im, vec4 w, bool in_s, uint i, uint first, uint k, float below) {
-    if (in_s) return window_marginal(im, w, search_knot(first, k, w.x, w.y));
+// The window's marginal (in_s true) or column i's restricted CDF (in_s false) at knot k;
+// `origin` is what the marginal subtracts (the integral over [0, s0] x [t0, t1]). Inside the
+// window a knot of the marginal is an integer column: two summed-area reads per row of t.
+float knot_value(LuminaireImage im, vec4 w, bool in_s, uint i, uint first, uint k, float below,
+                 float origin) {
+    if (in_s) {
+        uint knot = first + k;
+        if (float(knot) > w.x && float(knot) < w.y) {
+            return sat_on_column(im, knot, w.w) - sat_on_column(im, knot, w.z) - origin;
+        }
+        return window_marginal(im, w, search_knot(first, k, w.x, w.y));
+    }
     return column_at(im, i, search_knot(first, k, w.z, w.w)) - below;
 }
 
 // The knot interval [k, k + 1) of [0, count] holding target (value(k) <= target <
-// value(k + 1)); `steps` counts the iterations.
+// value(k + 1)); `steps` counts the iterations. The bracket's values are carried from one
+// iteration to the next, so each one reads one or two new knots.
 uint invert_knots(LuminaireImage im, vec4 w, bool in_s, uint i, uint first, float below,
-                  uint count, float target, uint search, inout uint steps) {
+                  float origin, uint count, float target, uint search, inout uint steps) {
     uint lo = 0u;
     uint hi = count;
+    float a = 0.0;
+    float b = knot_value(im, w, in_s, i, first, hi, below, origin);
     while (hi - lo > 1u) {
         ++steps;
-        uint mid;
         if (search == SEARCH_SECANT) {
-            float a = knot_value(im, w, in_s, i, first, lo, below);
-            float b = knot_value(im, w, in_s, i, first, hi, below);
             float x = b > a ? float(lo) + (target - a) / (b - a) * float(hi - lo) : float(lo);
             uint k = uint(clamp(floor(x), float(lo), float(hi - 1u)));
-            float vk = knot_value(im, w, in_s, i, first, k, below);
-            float vk1 = knot_value(im, w, in_s, i, first, k + 1u, below);
-            if (vk <= target && target < vk1) return k;
+            float vk = k == lo ? a : knot_value(im, w, in_s, i, first, k, below, origin);
             if (target < vk) {
                 hi = k;
+                b = vk;
                 continue;
             }
-            mid = k + 1u;
+            float vk1 = k + 1u == hi ? b : knot_value(im, w, in_s, i, first, k + 1u, below, origin);
+            if (target < vk1) return k;
+            // The bracket shrinks by at least one knot.
+            lo = k + 1u;
+            a = vk1;
         } else {
-            mid = (lo + hi) / 2u;
+            uint mid = (lo + hi) / 2u;
+            float vm = knot_value(im, w, in_s, i, first, mid, below, origin);
+            if (target < vm) {
+                hi = mid;
+                b = vm;
+            } else {
+                lo = mid;
+                a = vm;
+            }
         }
-        if (target < knot_value(im, w, in_s, i, first, mid, below)) hi = mid; else lo = mid;
     }
     return lo;
 }
@@ -124,16 +151,17 @@ bool draw_restricted(LuminaireImage im, vec4 w, vec2 u, uint search, out vec2 st
     w = vec4(clamp(min(w.x, w.y), 0.0, float(im.width)), clamp(max(w.x, w.y), 0.0, float(im.width)),
              clamp(min(w.z, w.w), 0.0, float(im.height)), clamp(max(w.z, w.w), 0.0, float(im.height)));
     if (!(w.y > w.x && w.w > w.z)) return false;
-    float total = window_marginal(im, w, w.y);
+    float origin = sat_at(im, w.x, w.w) - sat_at(im, w.x, w.z);
+    float total = sat_at(im, w.y, w.w) - sat_at(im, w.y, w.z) - origin;
     if (!(total > 0.0)) return false;
     uint first = uint(floor(w.x));
     uint last = clamp(uint(ceil(w.y)), first + 1u, im.width);
     float target = u.x * total;
-    uint k = invert_knots(im, w, true, 0u, first, 0.0, last - first, target, search, steps);
+    uint k = invert_knots(im, w, true, 0u, first, 0.0, origin, last - first, target, search, steps);
     float a = search_knot(first, k, w.x, w.y);
     float b = search_knot(first, k + 1u, w.x, w.y);
-    float fa = window_marginal(im, w, a);
-    float fb = window_marginal(im, w, b);
+    float fa = knot_value(im, w, true, 0u, first, k, 0.0, origin);
+    float fb = knot_value(im, w, true, 0u, first, k + 1u, 0.0, origin);
     float s = fb > fa ? a + (target - fa) / (fb - fa) * (b - a) : a;
     uint i = min(first + k, im.width - 1u);
     float below = column_at(im, i, w.z);
@@ -142,7 +170,8 @@ bool draw_restricted(LuminaireImage im, vec4 w, vec2 u, uint search, out vec2 st
     uint first_t = uint(floor(w.z));
     uint last_t = clamp(uint(ceil(w.w)), first_t + 1u, im.height);
     float target_t = u.y * mass;
-    uint kt = invert_knots(im, w, false, i, first_t, below, last_t - first_t, target_t, search, steps);
+    uint kt = invert_knots(im, w, false, i, first_t, below, 0.0, last_t - first_t, target_t, search,
+                           steps);
     float at = search_knot(first_t, kt, w.z, w.w);
     float bt = search_knot(first_t, kt + 1u, w.z, w.w);
     float ga = column_at(im, i, at) - below;

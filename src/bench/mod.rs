@@ -3,6 +3,7 @@
 pub mod chart;
 pub mod env;
 pub mod ir;
+pub mod lightfield;
 pub mod rays;
 pub mod scan;
 pub mod suite;
