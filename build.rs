@@ -51,6 +51,8 @@ const REFERENCE_SOURCES: &[&str] = &[
     "src/methods/gbuffer.rs",
     "src/methods/accumulation.rs",
     "src/methods/progressive.rs",
+    "src/methods/direct.rs",
+    "src/methods/lightfield",
     "src/bench/suite/references.rs",
 ];
 

@@ -26,7 +26,9 @@
 // Visibility: a shadow ray per sample, none, or (averaged: Section 4.5.2's approximation) one
 // per image toward the image's median point (its CDFs at 1/2) standing for all its samples.
 // `sampling_only` (irad bench lightfield) draws the samples and shades nothing: the time of
-// sampling alone.
+// sampling alone. The host splits the work into dispatches of a few images and at most
+// SAMPLES_PER_DISPATCH samples per pixel (src/methods/lightfield/mod.rs), so no invocation
+// loops more than lavapipe's limit allows.
 
 #extension GL_GOOGLE_include_directive : require
 
@@ -56,6 +58,12 @@ layout(push_constant) uniform ShadeParams {
     uint shared_samples;  // 1: the same rotation for every pixel
     uint visibility;
     uint sampling_only;
+    // This dispatch's part: images [image_begin, image_end), and of each image the samples
+    // k in [sample_begin, sample_end) (of its K_m); the parts' sums add up to Eq. 4.18.
+    uint image_begin;
+    uint image_end;
+    uint sample_begin;
+    uint sample_end;
 } params;
 
 // One light sample of image m: the point on S (luminaire frame, metres), and the light it
@@ -157,12 +165,14 @@ void main() {
     vec3 sum = vec3(0.0);
     float drawn = 0.0;
     float sink = 0.0;
-    for (uint m = 0u; m < images; ++m) {
+    for (uint m = params.image_begin; m < min(params.image_end, images); ++m) {
         float share = image_share(m, p, near);
         if (!(share > 0.0)) continue;
         uint count = strategy == STRATEGY_BRUTE_FORCE
                          ? max(k_total / images, 1u)
                          : clamp(uint(round(float(k_total) * share / total)), 1u, k_max);
+        uint k_end = min(count, params.sample_end);
+        if (params.sample_begin >= k_end) continue;
         vec4 area = strategy == STRATEGY_RESTRICTED || strategy == STRATEGY_UNIFORM
                         ? clamp_window(basis_window(m, p))
                         : whole_image();
@@ -183,7 +193,7 @@ void main() {
         vec2 rotation = vec2(random(params.seed, key, params.frame * images + m, 0u),
                              random(params.seed, key, params.frame * images + m, 1u));
         vec3 image_sum = vec3(0.0);
-        for (uint k = 0u; k < count; ++k) {
+        for (uint k = params.sample_begin; k < k_end; ++k) {
             vec2 u = vec2(shifted_halton(2u, k, rotation.x), shifted_halton(3u, k, rotation.y));
             drawn += 1.0;
             LightSample ls;

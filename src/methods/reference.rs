@@ -142,10 +142,14 @@ impl Reference {
 pub const KERNELS: &[&str] = &[
     "write_gbuffer",
     "trace_reference_paths",
-    // The reference of a scene with light-field luminaires is lightfield's brute force.
+    // The reference of a scene with light-field luminaires is lightfield's restricted
+    // strategy: its tables (the scans among them) and its two steps.
     "shade_lightfield",
+    "estimate_luminaire_areas",
     "weigh_luminaire_columns",
     "transpose_luminaire_columns",
+    "reduce_blocks",
+    "scan_blocks",
 ];
 
 /// FNV-1a 64 of the embedded SPIR-V of `KERNELS`, in order.

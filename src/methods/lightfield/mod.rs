@@ -142,12 +142,43 @@ struct ShadeParams {
     shared_samples: u32,
     visibility: u32,
     sampling_only: u32,
+    image_begin: u32,
+    image_end: u32,
+    sample_begin: u32,
+    sample_end: u32,
+}
+
+/// Most samples one invocation of shade_lightfield.comp draws in one dispatch. lavapipe's
+/// LLVM back end (gallivm) breaks out of every loop of an invocation once they have run
+/// 65535 iterations together (LP_MAX_TGSI_LOOP_ITERATIONS, shared by every loop), silently:
+/// 2240 samples per pixel in one dispatch came out at half the light. A sample loops about
+/// 10 times plus its shadow ray's BVH traversal, so 256 leave room for traversals of ~200
+/// steps; on a real GPU the split costs a few dispatches and keeps each one short.
+pub const SAMPLES_PER_DISPATCH: u32 = 256;
+
+/// The dispatches of one luminaire's shading: (image range, sample range) parts that cover
+/// every image's at most `most_per_image` samples, each at most SAMPLES_PER_DISPATCH samples
+/// per pixel.
+fn shade_parts(images: u32, most_per_image: u32) -> Vec<([u32; 2], [u32; 2])> {
+    let range = most_per_image.clamp(1, SAMPLES_PER_DISPATCH);
+    let images_per_part = (SAMPLES_PER_DISPATCH / range).max(1);
+    let mut parts = vec![];
+    for first in (0..images).step_by(images_per_part as usize) {
+        let last = (first + images_per_part).min(images);
+        for k in (0..most_per_image.max(1)).step_by(range as usize) {
+            parts.push(([first, last], [k, k + range]));
+        }
+    }
+    parts
 }
 
 /// One placed luminaire on the GPU: its tables and its frame.
 struct GpuLuminaire {
     tables: LuminaireTables,
     frame: Buffer<LuminaireFrame>,
+    images: u32,
+    /// The most samples any image takes at a point: K_max, or K / M for the brute force.
+    most_per_image: u32,
 }
 
 impl GpuLuminaire {
@@ -189,9 +220,15 @@ impl GpuLuminaire {
                 settings.k_max.max(1),
             ],
         };
+        let images = g.images() as u32;
         Ok(GpuLuminaire {
             tables: LuminaireTables::new(ctx, &placed.luminaire)?,
             frame: Buffer::from_slice(ctx, "LuminaireParams", &[frame])?,
+            images,
+            most_per_image: match settings.strategy {
+                Strategy::BruteForce => (settings.spp / images).max(1),
+                _ => settings.k_max.max(1),
+            },
         })
     }
 }
@@ -288,16 +325,29 @@ impl Lightfield {
                         bindings.extend(accumulation.bindings());
                         bindings.extend(tables.iter().map(|b| bind(b.name, b.buffer)));
                         bindings.push(bind("LuminaireSampleCounts", &counts));
-                        let params = ShadeParams {
-                            frame,
-                            seed,
-                            search: settings.secant as u32,
-                            shared_samples: settings.shared_samples as u32,
-                            visibility,
-                            sampling_only: settings.sampling_only as u32,
-                        };
-                        self.shade
-                            .dispatch(cmd, &bindings, &params, gpu_scene.image_workgroups())
+                        for ([image_begin, image_end], [sample_begin, sample_end]) in
+                            shade_parts(l.images, l.most_per_image)
+                        {
+                            let params = ShadeParams {
+                                frame,
+                                seed,
+                                search: settings.secant as u32,
+                                shared_samples: settings.shared_samples as u32,
+                                visibility,
+                                sampling_only: settings.sampling_only as u32,
+                                image_begin,
+                                image_end,
+                                sample_begin,
+                                sample_end,
+                            };
+                            self.shade.dispatch(
+                                cmd,
+                                &bindings,
+                                &params,
+                                gpu_scene.image_workgroups(),
+                            )?;
+                        }
+                        Ok(())
                     })?;
                 }
                 Ok(())
