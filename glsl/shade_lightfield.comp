@@ -26,9 +26,9 @@
 // Visibility: a shadow ray per sample, none, or (averaged: Section 4.5.2's approximation) one
 // per image toward the image's median point (its CDFs at 1/2) standing for all its samples.
 // `sampling_only` (irad bench lightfield) draws the samples and shades nothing: the time of
-// sampling alone. The host splits the work into dispatches of a few images and at most
-// SAMPLES_PER_DISPATCH samples per pixel (src/methods/lightfield/mod.rs), so no invocation
-// loops more than lavapipe's limit allows.
+// sampling alone. The host splits each pixel's samples, numbered image after image, into
+// dispatches of at most SAMPLES_PER_DISPATCH (src/methods/lightfield/mod.rs), so no
+// invocation loops more than lavapipe's limit allows.
 
 #extension GL_GOOGLE_include_directive : require
 
@@ -58,10 +58,9 @@ layout(push_constant) uniform ShadeParams {
     uint shared_samples;  // 1: the same rotation for every pixel
     uint visibility;
     uint sampling_only;
-    // This dispatch's part: images [image_begin, image_end), and of each image the samples
-    // k in [sample_begin, sample_end) (of its K_m); the parts' sums add up to Eq. 4.18.
-    uint image_begin;
-    uint image_end;
+    // This dispatch's part of the pixel's samples, numbered image after image (image m's
+    // K_m samples follow those of the images before it): [sample_begin, sample_end). The
+    // parts' sums add up to Eq. 4.18.
     uint sample_begin;
     uint sample_end;
 } params;
@@ -123,7 +122,7 @@ bool sample_filter_plane(uint m, vec3 p, vec2 u, inout float sink, out LightSamp
     float delta = lf.plane.z;
     vec2 s = uf + (p.xy - uf) * (delta / p.z);
     if (params.sampling_only != 0u) {
-        sink += s.x + s.y;
+        sink += abs(s.x) + abs(s.y);
         return false;
     }
     vec2 st = plane_to_texels(s);
@@ -165,14 +164,17 @@ void main() {
     vec3 sum = vec3(0.0);
     float drawn = 0.0;
     float sink = 0.0;
-    for (uint m = params.image_begin; m < min(params.image_end, images); ++m) {
+    uint first = 0u;  // the number of image m's first sample among the pixel's
+    for (uint m = 0u; m < images && first < params.sample_end; ++m) {
         float share = image_share(m, p, near);
         if (!(share > 0.0)) continue;
         uint count = strategy == STRATEGY_BRUTE_FORCE
                          ? max(k_total / images, 1u)
                          : clamp(uint(round(float(k_total) * share / total)), 1u, k_max);
-        uint k_end = min(count, params.sample_end);
-        if (params.sample_begin >= k_end) continue;
+        uint k_begin = max(params.sample_begin, first) - first;
+        uint k_end = min(params.sample_end - first, count);
+        first += count;
+        if (k_begin >= k_end) continue;
         vec4 area = strategy == STRATEGY_RESTRICTED || strategy == STRATEGY_UNIFORM
                         ? clamp_window(basis_window(m, p))
                         : whole_image();
@@ -193,7 +195,7 @@ void main() {
         vec2 rotation = vec2(random(params.seed, key, params.frame * images + m, 0u),
                              random(params.seed, key, params.frame * images + m, 1u));
         vec3 image_sum = vec3(0.0);
-        for (uint k = params.sample_begin; k < k_end; ++k) {
+        for (uint k = k_begin; k < k_end; ++k) {
             vec2 u = vec2(shifted_halton(2u, k, rotation.x), shifted_halton(3u, k, rotation.y));
             drawn += 1.0;
             LightSample ls;

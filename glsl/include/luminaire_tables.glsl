@@ -4,7 +4,8 @@
 // in [j, j + 1) (texel units). A window [s0, s1] x [t0, t1] is sampled with the window's own
 // marginal in s, F(s) = the integral of C over [s0, s] x [t0, t1] read from the summed-area
 // table (bilinear between its knots: exact for a piecewise-constant image), then t from
-// column s's CDF restricted to [t0, t1]; the realised pdf is C / A, A = F(s1) (Eq. 4.14).
+// column s's CDF restricted to [t0, t1]; the realised pdf is C / A, A = F(s1) (Eq. 4.14), and
+// is computed from the values the draw inverted.
 // Knot intervals are found by binary search or Lu's modified secant search. Bindings 30-32.
 #ifndef LUMINAIRE_TABLES_GLSL
 #define LUMINAIRE_TABLES_GLSL
@@ -66,11 +67,6 @@ float column_at(LuminaireImage im, uint i, float t) {
     return below + (t - float(j)) * (above - below);
 }
 
-// The window's marginal F at s.
-float window_marginal(LuminaireImage im, vec4 w, float s) {
-    return sat_at(im, s, w.w) - sat_at(im, s, w.z) - sat_at(im, w.x, w.w) + sat_at(im, w.x, w.z);
-}
-
 // The summed-area table on knot column i, at t: the integral over [0, i] x [0, t].
 float sat_on_column(LuminaireImage im, uint i, float t) {
     if (i == 0u) return 0.0;
@@ -94,7 +90,11 @@ float knot_value(LuminaireImage im, vec4 w, bool in_s, uint i, uint first, uint 
         if (float(knot) > w.x && float(knot) < w.y) {
             return sat_on_column(im, knot, w.w) - sat_on_column(im, knot, w.z) - origin;
         }
-        return window_marginal(im, w, search_knot(first, k, w.x, w.y));
+        // The window's edges, with the very operations of draw_restricted's total and origin:
+        // knot 0 is exactly 0 and the last knot exactly the total, so a target below the
+        // total always falls in an interval of the window.
+        float s = search_knot(first, k, w.x, w.y);
+        return sat_at(im, s, w.w) - sat_at(im, s, w.z) - origin;
     }
     return column_at(im, i, search_knot(first, k, w.z, w.w)) - below;
 }
@@ -124,6 +124,7 @@ uint invert_knots(LuminaireImage im, vec4 w, bool in_s, uint i, uint first, floa
             // The bracket shrinks by at least one knot.
             lo = k + 1u;
             a = vk1;
+            if (lo >= hi) break;
         } else {
             uint mid = (lo + hi) / 2u;
             float vm = knot_value(im, w, in_s, i, first, mid, below, origin);
@@ -136,12 +137,12 @@ uint invert_knots(LuminaireImage im, vec4 w, bool in_s, uint i, uint first, floa
             }
         }
     }
-    return lo;
+    return min(lo, count - 1u);
 }
 
 // Draws a point of window w = (s0, s1, t0, t1) (clamped to the image) from u; false when the
-// window holds nothing. `texel` is its texel, `pdf` the realised C / A (texel units), `steps`
-// the search iterations of both inversions.
+// window holds nothing. `texel` is its texel, `pdf` the density realised (C / A in exact
+// arithmetic; texel units), `steps` the search iterations of both inversions.
 bool draw_restricted(LuminaireImage im, vec4 w, vec2 u, uint search, out vec2 st,
                      out uvec2 texel, out float pdf, out uint steps) {
     st = vec2(0.0);
@@ -180,8 +181,13 @@ bool draw_restricted(LuminaireImage im, vec4 w, vec2 u, uint search, out vec2 st
     uint j = min(first_t + kt, im.height - 1u);
     st = vec2(clamp(s, w.x, w.y), clamp(t, w.z, w.w));
     texel = uvec2(i, j);
-    pdf = luminaire_luminance(im, i, j) / total;
-    return pdf > 0.0;
+    // The density the draw realises, from the very values it inverted: the marginal's slope
+    // over [a, b] and the column's over [at, bt]. In exact arithmetic that is C / A (Eq. 4.14:
+    // the slopes are the column's mass over [t0, t1] and C); in f32 the summed-area
+    // differences carry rounding, and dividing by what was drawn keeps the estimate unbiased.
+    if (!(fb > fa && gb > ga)) return false;
+    pdf = (fb - fa) / (b - a) / total * ((gb - ga) / (bt - at)) / mass;
+    return pdf > 0.0 && luminaire_luminance(im, i, j) > 0.0;
 }
 
 #endif

@@ -85,12 +85,13 @@ pub fn run(
         .luminaires
         .iter()
         .any(|l| !l.luminaire.sequence.is_empty());
+    // Builds of every luminaire's tables: one "luminaire tables" pass per luminaire each.
     let builds = |out: &RenderOutput| {
         out.passes
             .passes
             .iter()
             .find(|p| p.0 == "luminaire tables")
-            .map_or(1, |p| p.2.max(1))
+            .map_or(1, |p| (p.2 / scene.luminaires.len().max(1) as u32).max(1))
     };
     let mut results = vec![];
     for &strategy in strategies {

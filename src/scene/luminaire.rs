@@ -372,6 +372,11 @@ impl Luminaire {
         let [w, h] = g.grid;
         let [rs, rt] = g.resolution;
         let frames = self.frames();
+        // A sequence written over an older one must not leave its extra atlases behind (the
+        // glob would read them back).
+        for stale in expand_glob(dir, "images_*.exr")? {
+            std::fs::remove_file(stale)?;
+        }
         for (f, images) in frames.iter().enumerate() {
             let mut atlas = Image::new((w * rs) as u32, (h * rt) as u32);
             for (m, image) in images.iter().enumerate() {
@@ -732,6 +737,12 @@ mod tests {
         assert_eq!(back.sequence, lum.sequence);
         assert_eq!(back.images, frames[0].images);
         assert_eq!(back.frames().len(), 3);
+        // A shorter sequence written over it reads back alone.
+        let mut two = lum.clone();
+        two.sequence.truncate(2);
+        two.write(&dir).unwrap();
+        assert_eq!(Luminaire::load(&path).unwrap().sequence, two.sequence);
+        lum.write(&dir).unwrap();
         let toml = std::fs::read_to_string(&path).unwrap();
         assert!(toml.contains("atlas = \"images_*.exr\""), "{toml}");
         std::fs::write(&path, toml.replace("images_*.exr", "beam_*.exr")).unwrap();

@@ -79,8 +79,8 @@ pub struct LightfieldSettings {
     pub strategy: Strategy,
     /// Lu's modified secant search (true) or binary search.
     pub secant: bool,
-    /// Halton prefixes shared by every pixel (Section 4.5.3) instead of per-pixel random
-    /// numbers.
+    /// Halton prefixes shared by every pixel (Section 4.5.3) instead of a rotation of them per
+    /// pixel.
     pub shared_samples: bool,
     /// One shadow ray per image toward its median point instead of one per sample (Section
     /// 4.5.2's approximation: biased at shadow edges).
@@ -142,8 +142,6 @@ struct ShadeParams {
     shared_samples: u32,
     visibility: u32,
     sampling_only: u32,
-    image_begin: u32,
-    image_end: u32,
     sample_begin: u32,
     sample_end: u32,
 }
@@ -156,35 +154,32 @@ struct ShadeParams {
 /// steps; on a real GPU the split costs a few dispatches and keeps each one short.
 pub const SAMPLES_PER_DISPATCH: u32 = 256;
 
-/// The dispatches of one luminaire's shading: (image range, sample range) parts that cover
-/// every image's at most `most_per_image` samples, each at most SAMPLES_PER_DISPATCH samples
-/// per pixel.
-fn shade_parts(images: u32, most_per_image: u32) -> Vec<([u32; 2], [u32; 2])> {
-    let range = most_per_image.clamp(1, SAMPLES_PER_DISPATCH);
-    let images_per_part = (SAMPLES_PER_DISPATCH / range).max(1);
-    let mut parts = vec![];
-    for first in (0..images).step_by(images_per_part as usize) {
-        let last = (first + images_per_part).min(images);
-        for k in (0..most_per_image.max(1)).step_by(range as usize) {
-            parts.push(([first, last], [k, k + range]));
-        }
-    }
-    parts
+/// The dispatches of one luminaire's shading: ranges of each pixel's samples (numbered image
+/// after image) covering at most `most` samples, each at most SAMPLES_PER_DISPATCH long.
+fn shade_parts(most: u32) -> Vec<[u32; 2]> {
+    (0..most.max(1))
+        .step_by(SAMPLES_PER_DISPATCH as usize)
+        .map(|k| [k, k + SAMPLES_PER_DISPATCH])
+        .collect()
 }
 
 /// One placed luminaire on the GPU: its tables and its frame.
 struct GpuLuminaire {
     tables: LuminaireTables,
     frame: Buffer<LuminaireFrame>,
-    images: u32,
-    /// The most samples any image takes at a point: K_max, or K / M for the brute force.
-    most_per_image: u32,
+    /// The luminaire's own seed, so that two luminaires draw independent numbers.
+    seed: u32,
+    /// The most samples a point takes from the luminaire: each image's K_m is at most
+    /// max(1, K A_m / A + 1/2) and K_max, so their sum is at most K + M and M K_max; the brute
+    /// force takes max(1, K / M) from each.
+    most_samples: u32,
 }
 
 impl GpuLuminaire {
     fn new(
         ctx: &Context,
         placed: &PlacedLuminaire,
+        index: u32,
         settings: &LightfieldSettings,
     ) -> Result<Self, GpuError> {
         let g = &placed.luminaire.geometry;
@@ -221,13 +216,17 @@ impl GpuLuminaire {
             ],
         };
         let images = g.images() as u32;
+        let (k, k_max) = (settings.spp.max(1), settings.k_max.max(1));
         Ok(GpuLuminaire {
             tables: LuminaireTables::new(ctx, &placed.luminaire)?,
             frame: Buffer::from_slice(ctx, "LuminaireParams", &[frame])?,
-            images,
-            most_per_image: match settings.strategy {
-                Strategy::BruteForce => (settings.spp / images).max(1),
-                _ => settings.k_max.max(1),
+            seed: pcg::hash(&[settings.seed, 0x6c66, index]),
+            most_samples: match settings.strategy {
+                Strategy::BruteForce => images.saturating_mul((k / images).max(1)),
+                // (With slack for A(p) and the shares rounding apart in f32.)
+                _ => k
+                    .saturating_add(images + k / 64 + 1)
+                    .min(images.saturating_mul(k_max)),
             },
         })
     }
@@ -272,7 +271,8 @@ impl Lightfield {
         let luminaires = scene
             .luminaires
             .iter()
-            .map(|l| GpuLuminaire::new(ctx, l, settings))
+            .enumerate()
+            .map(|(k, l)| GpuLuminaire::new(ctx, l, k as u32, settings))
             .collect::<Result<Vec<_>, _>>()?;
         let counts = Buffer::<f32>::zeroed(ctx, "LuminaireSampleCounts", gpu_scene.pixel_count())?;
         let areas = Buffer::<f32>::zeroed(ctx, "LuminaireAreas", gpu_scene.pixel_count())?;
@@ -281,7 +281,6 @@ impl Lightfield {
             (true, false) => 1,
             (true, true) => 2,
         };
-        let seed = pcg::hash(&[settings.seed, 0x6c66]);
         let frames = settings.frames.max(1);
         let passes = progressive::run(
             ctx,
@@ -325,18 +324,14 @@ impl Lightfield {
                         bindings.extend(accumulation.bindings());
                         bindings.extend(tables.iter().map(|b| bind(b.name, b.buffer)));
                         bindings.push(bind("LuminaireSampleCounts", &counts));
-                        for ([image_begin, image_end], [sample_begin, sample_end]) in
-                            shade_parts(l.images, l.most_per_image)
-                        {
+                        for [sample_begin, sample_end] in shade_parts(l.most_samples) {
                             let params = ShadeParams {
                                 frame,
-                                seed,
+                                seed: l.seed,
                                 search: settings.secant as u32,
                                 shared_samples: settings.shared_samples as u32,
                                 visibility,
                                 sampling_only: settings.sampling_only as u32,
-                                image_begin,
-                                image_end,
                                 sample_begin,
                                 sample_end,
                             };
@@ -381,5 +376,25 @@ impl Lightfield {
             // Where the samples went: each pixel's samples over the most any pixel took.
             maps: vec![("samples".into(), map)],
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The parts cover every sample number below `most` exactly once.
+    #[test]
+    fn shade_parts_cover_every_sample_once() {
+        for most in [1, 7, 255, 256, 257, 600, 6435] {
+            let mut seen = vec![0u32; most as usize];
+            for [k0, k1] in shade_parts(most) {
+                assert!(k1 - k0 <= SAMPLES_PER_DISPATCH);
+                for k in k0..k1.min(most) {
+                    seen[k as usize] += 1;
+                }
+            }
+            assert!(seen.iter().all(|&c| c == 1), "most {most}");
+        }
     }
 }
