@@ -240,5 +240,78 @@ fn luminaire_generate_writes_a_loadable_luminaire() {
     assert!(lum.images.iter().flatten().any(|t| t.x > 0.0));
     let o = irad(&["luminaire", "generate", "--delta", "0", "-o", out], &[]);
     assert_clean_error(&o, &["--delta 0", "> 0"]);
+    // A sequence: three atlases, the beam lowered 6 degrees over them.
+    let seq = dir.join("seq");
+    let o = irad(
+        &[
+            "luminaire",
+            "generate",
+            "--emitter",
+            "reflector",
+            "--grid",
+            "3x3",
+            "--resolution",
+            "8x8",
+            "--frames",
+            "3",
+            "--sweep",
+            "6",
+            "-o",
+            seq.to_str().unwrap(),
+        ],
+        &[],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let lum = irad::scene::luminaire::Luminaire::load(&seq.join("luminaire.toml")).unwrap();
+    assert_eq!(lum.sequence.len(), 3);
+    assert_ne!(lum.sequence[0], lum.sequence[2]);
+    let o = irad(
+        &[
+            "luminaire",
+            "generate",
+            "--emitter",
+            "disk",
+            "--frames",
+            "2",
+            "-o",
+            out,
+        ],
+        &[],
+    );
+    assert_clean_error(&o, &["--frames 2", "headlight or reflector"]);
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// `irad bench lightfield` prints Fig. 4.12's breakdown, and names a bad strategy.
+#[test]
+fn bench_lightfield_prints_the_breakdown() {
+    let scene = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/scenes/failure/headlight-wall/scene.toml"
+    );
+    let o = irad(
+        &[
+            "bench",
+            "lightfield",
+            scene,
+            "--resolution",
+            "16x12",
+            "--spp",
+            "8",
+            "--frames",
+            "1",
+            "--repeats",
+            "1",
+            "--strategies",
+            "restricted",
+        ],
+        &[],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = String::from_utf8_lossy(&o.stdout);
+    for needle in ["A est.", "sampling", "shadows", "restricted", "per build"] {
+        assert!(text.contains(needle), "`{needle}` not in:\n{text}");
+    }
+    let o = irad(&["bench", "lightfield", scene, "--strategies", "nope"], &[]);
+    assert_clean_error(&o, &["--strategies", "nope", "restricted"]);
 }

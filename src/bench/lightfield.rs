@@ -6,7 +6,8 @@
 //!   the frame only for a luminaire whose atlases change (a still one builds them once per
 //!   render: Lu's precomputation, reported beside the frame);
 //! - A estimation: pass "A estimation" (Lu's step 1);
-//! - sampling: pass "shade" of a sampling-only render (the samples drawn, nothing shaded);
+//! - sampling: pass "shade" of a sampling-only render: per image K_m (A_m computed again, as
+//!   in Lu's step 2) and the samples drawn, nothing shaded;
 //! - shading: "shade" without shadow rays, less sampling (C_m, Psi_m, the BRDF, accumulation);
 //! - shadows: "shade" with a shadow ray per sample, less "shade" without.
 //!
@@ -218,6 +219,6 @@ pub fn print(device: &str, scene: &Scene, k_max: u32, frames: u32, results: &[Li
         );
     }
     println!(
-        "samples: drawn per lit pixel and frame; sampling: drawing them (sampling-only render); shading: C_m, Psi_m, BRDF and accumulation, without visibility; shadows: one ray per sample (differences of medians: a small one can come out negative)"
+        "samples: drawn per lit pixel and frame; sampling: K_m and the draws (sampling-only render); shading: C_m, Psi_m, BRDF and accumulation, without visibility; shadows: one ray per sample (differences of medians: a small one can come out negative)"
     );
 }
