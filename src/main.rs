@@ -707,22 +707,8 @@ fn run(cli: Cli) -> Result<()> {
             if spp.is_empty() {
                 return Ok(());
             }
-            let strategies = strategies
-                .iter()
-                .map(|name| {
-                    EnvStrategy::ALL
-                        .into_iter()
-                        .find(|s| s.name() == name)
-                        .ok_or_else(|| {
-                            let names: Vec<&str> =
-                                EnvStrategy::ALL.iter().map(|s| s.name()).collect();
-                            anyhow::anyhow!(
-                                "--strategies: no env strategy {name:?} (one of {})",
-                                names.join(", ")
-                            )
-                        })
-                })
-                .collect::<Result<Vec<_>>>()?;
+            let strategies =
+                strategies_by_name(&strategies, &EnvStrategy::ALL, |s| s.name(), "env")?;
             if let Some((w, h)) = resolution {
                 scene.camera.width = w;
                 scene.camera.height = h;
@@ -802,22 +788,12 @@ fn run(cli: Cli) -> Result<()> {
                 !spp.is_empty() && spp.iter().all(|&k| (1..=65536).contains(&k)),
                 "--spp: each K must be in 1..=65536"
             );
-            let strategies = strategies
-                .iter()
-                .map(|name| {
-                    LightfieldStrategy::ALL
-                        .into_iter()
-                        .find(|s| s.name() == name)
-                        .ok_or_else(|| {
-                            let names: Vec<&str> =
-                                LightfieldStrategy::ALL.iter().map(|s| s.name()).collect();
-                            anyhow::anyhow!(
-                                "--strategies: no lightfield strategy {name:?} (one of {})",
-                                names.join(", ")
-                            )
-                        })
-                })
-                .collect::<Result<Vec<_>>>()?;
+            let strategies = strategies_by_name(
+                &strategies,
+                &LightfieldStrategy::ALL,
+                |s| s.name(),
+                "lightfield",
+            )?;
             let ctx = Context::new(&options)?;
             let bar = progress((strategies.len() * spp.len()) as u64, "bench lightfield");
             let results = irad::bench::lightfield::run(
@@ -1483,6 +1459,30 @@ fn shaders(check: bool) -> Result<()> {
     );
     println!("rebuild irad (cargo build) to embed them");
     Ok(())
+}
+
+/// `--strategies` of a bench: each name one of `all`'s, or an error listing them.
+fn strategies_by_name<S: Copy>(
+    names: &[String],
+    all: &[S],
+    name: impl Fn(S) -> &'static str,
+    method: &str,
+) -> Result<Vec<S>> {
+    names
+        .iter()
+        .map(|wanted| {
+            all.iter()
+                .copied()
+                .find(|&s| name(s) == wanted)
+                .ok_or_else(|| {
+                    let names: Vec<&str> = all.iter().map(|&s| name(s)).collect();
+                    anyhow::anyhow!(
+                        "--strategies: no {method} strategy {wanted:?} (one of {})",
+                        names.join(", ")
+                    )
+                })
+        })
+        .collect()
 }
 
 fn generate_luminaire(args: &GenerateArgs) -> Result<()> {

@@ -498,6 +498,28 @@ fn centre_radiance(scene: &irad::scene::Scene, image: &irad::image::Image) -> f6
         / pixels.len() as f64
 }
 
+/// The centre pixels' luminance over `expected`: the restricted strategy at K = 256, 64 frames,
+/// pixel centres, over 4 seeds; (mean, standard error).
+fn centre_ratio(ctx: &irad::gpu::Context, scene: &irad::scene::Scene, expected: f64) -> (f64, f64) {
+    let runs: Vec<f64> = (0..4)
+        .map(|seed| {
+            let out = render_lightfield(
+                ctx,
+                scene,
+                irad::methods::lightfield::LightfieldSettings {
+                    spp: 256,
+                    frames: 64,
+                    seed,
+                    pixels: irad::methods::gbuffer::PixelSampling::Centres,
+                    ..Default::default()
+                },
+            );
+            centre_radiance(scene, &out.image) / expected
+        })
+        .collect();
+    common::mean_and_stderr(&runs)
+}
+
 /// Where pixel (x, y)'s centre sees the floor, in the frame of the scene's luminaire.
 fn floor_point(scene: &irad::scene::Scene, x: u32, y: u32) -> glam::DVec3 {
     let d = scene.camera.direction(x as f32 + 0.5, y as f32 + 0.5);
@@ -518,30 +540,12 @@ fn floor_point(scene: &irad::scene::Scene, x: u32, y: u32) -> glam::DVec3 {
 /// seeds, the 4 x 4 pixels about the axis: 13 mm of floor) is within 1% of it.
 #[test]
 fn a_disk_luminaire_lights_the_floor_as_the_closed_form_says() {
-    use irad::methods::gbuffer::PixelSampling;
-    use irad::methods::lightfield::LightfieldSettings;
     with_gpu(|ctx| {
         let h = 0.5f64;
         let scene = disk_over_floor(disk_luminaire(0.5), h as f32, 1.0, 16);
         let r = DISK_RADIUS;
         let exact = 0.5 * r * r / (h * h + r * r);
-        let runs: Vec<f64> = (0..4)
-            .map(|seed| {
-                let out = render_lightfield(
-                    ctx,
-                    &scene,
-                    LightfieldSettings {
-                        spp: 256,
-                        frames: 64,
-                        seed,
-                        pixels: PixelSampling::Centres,
-                        ..Default::default()
-                    },
-                );
-                centre_radiance(&scene, &out.image) / exact
-            })
-            .collect();
-        let (mean, stderr) = common::mean_and_stderr(&runs);
+        let (mean, stderr) = centre_ratio(ctx, &scene, exact);
         eprintln!("disk on the floor's axis: lightfield / closed form {mean:.4} ± {stderr:.4}");
         assert!(stderr < 0.003, "standard error {stderr}");
         assert!((mean - 1.0).abs() < 0.01, "{mean:.4} of the closed form");
@@ -606,8 +610,6 @@ fn no_samples_where_no_window_holds_light() {
 /// the expectation is taken at each pixel.)
 #[test]
 fn near_the_image_plane_the_filter_plane_estimator_takes_over() {
-    use irad::methods::gbuffer::PixelSampling;
-    use irad::methods::lightfield::LightfieldSettings;
     with_gpu(|ctx| {
         for above in [0.06f64, 0.045, 0.0002] {
             let h = 0.2 + above;
@@ -624,23 +626,7 @@ fn near_the_image_plane_the_filter_plane_estimator_takes_over() {
                     })
                     .sum::<f64>()
                 / pixels.len() as f64;
-            let runs: Vec<f64> = (0..4)
-                .map(|seed| {
-                    let out = render_lightfield(
-                        ctx,
-                        &scene,
-                        LightfieldSettings {
-                            spp: 256,
-                            frames: 64,
-                            seed,
-                            pixels: PixelSampling::Centres,
-                            ..Default::default()
-                        },
-                    );
-                    centre_radiance(&scene, &out.image) / expected
-                })
-                .collect();
-            let (mean, stderr) = common::mean_and_stderr(&runs);
+            let (mean, stderr) = centre_ratio(ctx, &scene, expected);
             eprintln!("{above} m beyond the image plane: lightfield / integral over U {mean:.4} ± {stderr:.4}");
             assert!(stderr < 0.003, "{above}: standard error {stderr}");
             assert!((mean - 1.0).abs() < 0.01, "{above}: {mean:.4}");
@@ -795,8 +781,6 @@ fn thousands_of_samples_per_image_are_not_cut_short() {
 /// reference for luminaire scenes is the restricted strategy itself.
 #[test]
 fn restricted_matches_the_f64_integral_on_the_faceted_headlight() {
-    use irad::methods::gbuffer::PixelSampling;
-    use irad::methods::lightfield::LightfieldSettings;
     with_gpu(|ctx| {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("scenes/failure/headlight-wall/headlight/luminaire.toml");
@@ -818,23 +802,7 @@ fn restricted_matches_the_f64_integral_on_the_faceted_headlight() {
                 .sum::<f64>()
             / pixels.len() as f64;
         assert!(expected > 0.0, "no light at the spot");
-        let runs: Vec<f64> = (0..4)
-            .map(|seed| {
-                let out = render_lightfield(
-                    ctx,
-                    &scene,
-                    LightfieldSettings {
-                        spp: 256,
-                        frames: 64,
-                        seed,
-                        pixels: PixelSampling::Centres,
-                        ..Default::default()
-                    },
-                );
-                centre_radiance(&scene, &out.image) / expected
-            })
-            .collect();
-        let (mean, stderr) = common::mean_and_stderr(&runs);
+        let (mean, stderr) = centre_ratio(ctx, &scene, expected);
         eprintln!("faceted headlight: lightfield / integral over U {mean:.4} ± {stderr:.4}");
         assert!(stderr < 0.005, "standard error {stderr}");
         assert!((mean - 1.0).abs() < 0.01, "{mean:.4}");
