@@ -15,6 +15,7 @@ use irad::methods::bundles::{BundlesSettings, Strategy as BundlesStrategy, Suppr
 use irad::methods::envmap::{EnvSettings, Strategy as EnvStrategy};
 use irad::methods::gbuffer::PixelSampling;
 use irad::methods::ir::schedule::Absorption;
+use irad::methods::compensation::{ClampSettings, VplClamp};
 use irad::methods::ir::{DirectLight, IrSettings};
 use irad::methods::lightfield::{LightfieldSettings, Strategy as LightfieldStrategy};
 use irad::methods::reference::ReferenceSettings;
@@ -195,10 +196,16 @@ struct RenderArgs {
     /// lost), or Russian roulette at every vertex (for animation).
     #[arg(long, value_enum, default_value_t = AbsorptionArg::Fractional)]
     absorption: AbsorptionArg,
-    /// ir: clamp the geometry term cos cos / d^2 at this value (Keller's weak singularity):
-    /// a bias, recorded in the JSON. 0 leaves it unclamped.
-    #[arg(long, default_value_t = 0.0)]
-    clamp: f32,
+    /// ir, bir: clamp the VPL gather's geometry term cos cos / d^2 at b (Keller's weak
+    /// singularity: no spikes next to VPLs). "auto" [default]: b = N / A for N surface VPLs
+    /// per frame over the scene's area A (one VPL expected within 1 / sqrt(b) of a point);
+    /// a number sets b; 0 leaves the term unclamped. The clamp used is in the JSON's stats.
+    #[arg(long, default_value = "auto", value_parser = parse_clamp)]
+    clamp: VplClamp,
+    /// ir, bir: with a clamp, add back exactly what it removed by short camera-side paths
+    /// (Kollig and Keller 2004; unbiased) [default: on], or leave the clamp's bias (off).
+    #[arg(long, value_enum, default_value_t = OnOff::On)]
+    compensate: OnOff,
     /// ir: interleaved sampling over k x k pixel blocks (1 disables it).
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=16))]
     interleave: u32,
@@ -449,6 +456,17 @@ enum OnOff {
 enum AbsorptionArg {
     Fractional,
     Roulette,
+}
+
+/// `--clamp`: "auto" or a finite number >= 0.
+fn parse_clamp(s: &str) -> Result<VplClamp, String> {
+    if s == "auto" {
+        return Ok(VplClamp::Auto);
+    }
+    match s.parse::<f32>() {
+        Ok(b) if b.is_finite() && b >= 0.0 => Ok(VplClamp::Fixed(b)),
+        _ => Err(format!("expected \"auto\" or a finite number >= 0, got {s:?}")),
+    }
 }
 
 #[derive(Clone, Copy, clap::ValueEnum)]
@@ -914,7 +932,10 @@ fn render(options: &ContextOptions, args: RenderArgs) -> Result<()> {
                 AbsorptionArg::Fractional => Absorption::Fractional,
                 AbsorptionArg::Roulette => Absorption::Roulette,
             },
-            g_clamp: args.clamp,
+            clamp: ClampSettings {
+                clamp: args.clamp,
+                compensate: args.compensate == OnOff::On,
+            },
             interleave: args.interleave,
             direct: match args.direct {
                 DirectArg::Nee => DirectLight::NextEvent,
@@ -945,6 +966,10 @@ fn render(options: &ContextOptions, args: RenderArgs) -> Result<()> {
             batch: args.batch,
             light_cdf: !args.light_cdf_off,
             adaptive: !args.fixed_weights,
+            clamp: ClampSettings {
+                clamp: args.clamp,
+                compensate: args.compensate == OnOff::On,
+            },
             pixels,
         }),
         MethodArg::Bundles

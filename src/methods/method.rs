@@ -17,6 +17,7 @@ use crate::methods::bundles::light_vertices::LightSelection;
 use crate::methods::bundles::{
     Bundles, BundlesError, BundlesSettings, Strategy as BundlesStrategy, Suppression,
 };
+use crate::methods::compensation::{ClampSettings, VplClamp};
 use crate::methods::envmap::{Env, EnvError, EnvSettings, Strategy as EnvStrategy};
 use crate::methods::gbuffer::PixelSampling;
 use crate::methods::ir::schedule::Absorption;
@@ -145,8 +146,9 @@ impl Method {
                         Absorption::Roulette => "roulette",
                     }),
                 );
-                // 0: off (the clamp is a named, measured bias).
-                p.insert("clamp".into(), json!(s.g_clamp));
+                // "auto" or b (0: unclamped); compensate false: the plain clamp's named bias.
+                p.insert("clamp".into(), s.clamp.clamp_param());
+                p.insert("compensate".into(), json!(s.clamp.compensate));
                 p.insert("interleave".into(), json!(s.interleave));
                 p.insert(
                     "pixel_centres".into(),
@@ -300,7 +302,7 @@ impl Method {
                         Some(_) => Absorption::Fractional,
                         None => d.absorption,
                     },
-                    g_clamp: reader.non_negative("clamp", d.g_clamp)?,
+                    clamp: reader.clamp(d.clamp)?,
                     interleave: reader.uint("interleave", d.interleave, 1, 16)?,
                     direct: match reader.choice("direct", &["nee", "vpl"])? {
                         Some("vpl") => DirectLight::Vpl,
@@ -332,6 +334,7 @@ impl Method {
                     batch: reader.uint("batch", d.batch, 0, 1 << 20)?,
                     light_cdf: reader.flag("light_cdf", d.light_cdf)?,
                     adaptive: reader.flag("adaptive", d.adaptive)?,
+                    clamp: reader.clamp(d.clamp)?,
                     pixels: reader.pixels()?,
                 })
             }
@@ -525,6 +528,22 @@ impl<'a> Params<'a> {
         }
     }
 
+    /// `clamp` ("auto" or a number >= 0, 0 unclamped) and `compensate` (true or false).
+    fn clamp(&mut self, default: ClampSettings) -> Result<ClampSettings, ParamError> {
+        let clamp = match self.params.get("clamp") {
+            None => default.clamp,
+            Some(v) if v.as_str() == Some("auto") => VplClamp::Auto,
+            Some(v) if v.is_str() => {
+                return Err(self.error("clamp", v, "expected \"auto\" or a number >= 0"))
+            }
+            Some(_) => VplClamp::Fixed(self.non_negative("clamp", 0.0)?),
+        };
+        Ok(ClampSettings {
+            clamp,
+            compensate: self.flag("compensate", default.compensate)?,
+        })
+    }
+
     fn flag(&mut self, key: &str, default: bool) -> Result<bool, ParamError> {
         let Some(v) = self.params.get(key) else {
             return Ok(default);
@@ -569,6 +588,8 @@ impl<'a> Params<'a> {
                 "batch",
                 "light_cdf",
                 "adaptive",
+                "clamp",
+                "compensate",
                 "pixel_centres",
             ],
             "lightfield" => &[
@@ -617,6 +638,7 @@ impl<'a> Params<'a> {
                 "seed",
                 "absorption",
                 "clamp",
+                "compensate",
                 "interleave",
                 "direct",
                 "pixel_centres",

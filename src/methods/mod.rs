@@ -5,6 +5,7 @@ pub mod accumulation;
 pub mod bir;
 pub mod bsdf_draws;
 pub mod bundles;
+pub mod compensation;
 pub mod direct;
 pub mod direct_alpha;
 pub mod envmap;

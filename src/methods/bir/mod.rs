@@ -21,11 +21,13 @@ use thiserror::Error;
 
 use crate::gpu::{Buffer, Context, GpuError};
 use crate::methods::accumulation::Accumulation;
+use crate::methods::compensation::{ClampCompensation, ClampSettings, CompensationBuffers, VplSource};
 use crate::methods::direct::GBufferAndDirectLight;
 use crate::methods::gbuffer::{GBuffer, PixelSampling};
 use crate::methods::ir::gather::AccumulateVpls;
 use crate::methods::ir::schedule::{mean_albedo, Absorption, Schedule};
 use crate::methods::ir::walk::{TraceVpls, Vpl, VplBuffers};
+use crate::methods::ir::clamp_stats;
 use crate::methods::progressive;
 use crate::methods::RenderOutput;
 use crate::sampling::pcg;
@@ -92,6 +94,9 @@ pub struct BirSettings {
     /// a side whose batches usually bring less (a starving one) weighs less, instead of the
     /// paper's fixed 1/2.
     pub adaptive: bool,
+    /// The gather's geometry-term clamp and its bias compensation (default: b from the scene
+    /// and the kept VPL count, compensated; src/methods/compensation.rs).
+    pub clamp: ClampSettings,
     pub pixels: PixelSampling,
 }
 
@@ -112,6 +117,7 @@ impl Default for BirSettings {
             batch: 0,
             light_cdf: true,
             adaptive: true,
+            clamp: ClampSettings::default(),
             pixels: PixelSampling::Jittered,
         }
     }
@@ -178,6 +184,7 @@ pub struct Bir {
     resample: ResampleVpls,
     side_weights: UpdateSideWeights,
     gather: AccumulateVpls,
+    compensation: ClampCompensation,
 }
 
 /// The smallest weight an adaptive side weight takes: neither side is ever dropped.
@@ -198,6 +205,7 @@ impl Bir {
             resample: ResampleVpls::new(ctx)?,
             side_weights: UpdateSideWeights::new(ctx)?,
             gather: AccumulateVpls::new(ctx)?,
+            compensation: ClampCompensation::new(ctx)?,
         })
     }
 
@@ -261,6 +269,18 @@ impl Bir {
             } else {
                 None
             };
+        // b from the VPLs a frame shades: the kept ones, or every candidate of every batch.
+        let shaded_per_frame = if resampling {
+            draws * batches
+        } else {
+            candidates * batches
+        };
+        let g_clamp = settings.clamp.resolve(scene, shaded_per_frame);
+        let compensation = if settings.clamp.compensate && g_clamp > 0.0 {
+            Some(CompensationBuffers::new(ctx, gpu_scene)?)
+        } else {
+            None
+        };
         let frames = settings.frames.max(1);
         let passes = progressive::run(
             ctx,
@@ -404,19 +424,45 @@ impl Bir {
                             Ok(())
                         })?;
                     } else {
+                        let sources = unresampled_sources(
+                            &vpls,
+                            &reverse,
+                            &split,
+                            1.0 / batches as f32,
+                        );
                         cmd.pass("vpl accumulation", |cmd| {
-                            self.gather_unresampled(
-                                cmd,
-                                gpu_scene,
-                                &gbuffer,
-                                &accumulation,
-                                &vpls,
-                                &reverse,
-                                &unused,
-                                &split,
-                                1.0 / batches as f32,
-                            )
+                            for source in &sources {
+                                self.gather.record(
+                                    cmd,
+                                    gpu_scene,
+                                    &gbuffer,
+                                    source.vpls,
+                                    &accumulation,
+                                    &unused,
+                                    source.slots.clone(),
+                                    g_clamp,
+                                    1,
+                                    source.weight,
+                                )?;
+                            }
+                            Ok(())
                         })?;
+                        if let Some(buffers) = &compensation {
+                            let seed = pcg::hash(&[settings.seed, frame, b, 0x636f6d70]);
+                            cmd.pass("clamp compensation", |cmd| {
+                                self.compensation.record(
+                                    cmd,
+                                    gpu_scene,
+                                    &gbuffer,
+                                    &accumulation,
+                                    buffers,
+                                    &sources,
+                                    g_clamp,
+                                    frame,
+                                    seed,
+                                )
+                            })?;
+                        }
                     }
                 }
                 if resampling {
@@ -431,17 +477,37 @@ impl Bir {
                             &accumulation,
                             &unused,
                             0..draws * batches,
-                            0.0,
+                            g_clamp,
                             1,
                             1.0 / batches as f32,
                         )
                     })?;
+                    if let Some(buffers) = &compensation {
+                        let seed = pcg::hash(&[settings.seed, frame, 0x636f6d70]);
+                        cmd.pass("clamp compensation", |cmd| {
+                            self.compensation.record(
+                                cmd,
+                                gpu_scene,
+                                &gbuffer,
+                                &accumulation,
+                                buffers,
+                                &[VplSource {
+                                    vpls: &kept,
+                                    slots: 0..draws * batches,
+                                    weight: 1.0 / batches as f32,
+                                }],
+                                g_clamp,
+                                frame,
+                                seed,
+                            )
+                        })?;
+                    }
                 }
                 Ok(())
             },
             progress,
         )?;
-        let mut stats = Vec::new();
+        let mut stats = clamp_stats(g_clamp, compensation.as_ref(), gpu_scene)?;
         if resampling {
             let kept_counts = resample_buffers.stats.read()?;
             let all = (kept_counts[0] + kept_counts[1]).max(1) as f64;
@@ -472,52 +538,32 @@ impl Bir {
             maps: vec![],
         })
     }
+}
 
-    /// Without resampling: every candidate shaded, each side at its weight.
-    #[allow(clippy::too_many_arguments)]
-    fn gather_unresampled<'a>(
-        &'a self,
-        cmd: &mut crate::gpu::Commands<'a>,
-        gpu_scene: &'a GpuScene,
-        gbuffer: &'a GBuffer,
-        accumulation: &'a Accumulation,
-        vpls: &'a VplBuffers,
-        reverse: &'a Buffer<Vpl>,
-        unused: &'a Buffer<glam::Vec4>,
-        split: &Split,
-        scale: f32,
-    ) -> Result<(), GpuError> {
-        if split.standard_weight > 0.0 {
-            self.gather.record(
-                cmd,
-                gpu_scene,
-                gbuffer,
-                &vpls.vpls,
-                accumulation,
-                unused,
-                vpls.layout.surface_slots(),
-                0.0,
-                1,
-                split.standard_weight * scale,
-            )?;
-        }
-        if split.reverse > 0 {
-            // The reverse side's weight is in its VPLs' power.
-            self.gather.record(
-                cmd,
-                gpu_scene,
-                gbuffer,
-                reverse,
-                accumulation,
-                unused,
-                0..split.reverse,
-                0.0,
-                1,
-                scale,
-            )?;
-        }
-        Ok(())
+/// Without resampling: every candidate of a batch shaded, each side at its weight (the reverse
+/// side's is in its VPLs' power).
+fn unresampled_sources<'a>(
+    vpls: &'a VplBuffers,
+    reverse: &'a Buffer<Vpl>,
+    split: &Split,
+    scale: f32,
+) -> Vec<VplSource<'a>> {
+    let mut sources = Vec::new();
+    if split.standard_weight > 0.0 {
+        sources.push(VplSource {
+            vpls: &vpls.vpls,
+            slots: vpls.layout.surface_slots(),
+            weight: split.standard_weight * scale,
+        });
     }
+    if split.reverse > 0 {
+        sources.push(VplSource {
+            vpls: reverse,
+            slots: 0..split.reverse,
+            weight: scale,
+        });
+    }
+    sources
 }
 
 /// Rays the sampling pass casts per batch, at most (every slot and sample assumed alive): the

@@ -36,7 +36,7 @@ impl AccumulateVpls {
 
     /// Shades the VPL slots `slots` of `vpls`, each contribution times `weight`; `g_clamp` 0
     /// leaves the geometry term unclamped. With `interleave` 1 it adds into `accumulation`;
-    /// above, it writes `vpl_radiance` for the filter.
+    /// above, it adds into `vpl_radiance` for the filter (the caller clears it per frame).
     #[allow(clippy::too_many_arguments)]
     pub fn record<'a>(
         &'a self,
@@ -56,9 +56,6 @@ impl AccumulateVpls {
         bindings.extend(accumulation.bindings());
         bindings.push(bind("Vpls", vpls));
         bindings.push(bind("VplRadiance", vpl_radiance));
-        if interleave > 1 {
-            cmd.fill_zero(vpl_radiance);
-        }
         // One dispatch per SLOTS_PER_DISPATCH slots. On lavapipe (Mesa 22.3) this kernel's
         // sums came out deterministically short once one dispatch looped over 32 or more
         // chunks (4096 paths lost 6% of the image at 32 chunks, 63% unsplit; 24 chunks and

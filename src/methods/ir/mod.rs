@@ -14,6 +14,7 @@ use thiserror::Error;
 
 use crate::gpu::{Buffer, Context, GpuError};
 use crate::methods::accumulation::Accumulation;
+use crate::methods::compensation::{ClampCompensation, ClampSettings, CompensationBuffers, VplSource};
 use crate::methods::direct::GBufferAndDirectLight;
 use crate::methods::gbuffer::{GBuffer, PixelSampling};
 use crate::methods::progressive;
@@ -43,8 +44,9 @@ pub struct IrSettings {
     pub frames: u32,
     pub seed: u32,
     pub absorption: Absorption,
-    /// The geometry-term clamp; 0 leaves it unclamped (unbiased).
-    pub g_clamp: f32,
+    /// The geometry-term clamp b and its bias compensation (default: b from the scene,
+    /// compensated, so unbiased; src/methods/compensation.rs).
+    pub clamp: ClampSettings,
     pub interleave: u32,
     pub direct: DirectLight,
     pub pixels: PixelSampling,
@@ -57,7 +59,7 @@ impl Default for IrSettings {
             frames: 16,
             seed: 0,
             absorption: Absorption::Fractional,
-            g_clamp: 0.0,
+            clamp: ClampSettings::default(),
             interleave: 1,
             direct: DirectLight::NextEvent,
             pixels: PixelSampling::Jittered,
@@ -78,6 +80,7 @@ pub struct InstantRadiosity {
     walk: TraceVpls,
     gather: AccumulateVpls,
     filter: FilterInterleaved,
+    compensation: ClampCompensation,
 }
 
 impl InstantRadiosity {
@@ -87,6 +90,7 @@ impl InstantRadiosity {
             walk: TraceVpls::new(ctx)?,
             gather: AccumulateVpls::new(ctx)?,
             filter: FilterInterleaved::new(ctx)?,
+            compensation: ClampCompensation::new(ctx)?,
         })
     }
 
@@ -120,9 +124,19 @@ impl InstantRadiosity {
                 1
             },
         )?;
-        let slots = match settings.direct {
-            DirectLight::NextEvent => vpls.layout.surface_slots(),
-            DirectLight::Vpl => 0..vpls.layout.slot_count,
+        // The clamp and its compensation act on the surface VPLs; under `--direct vpl` the
+        // light vertices are gathered unclamped (a path from x cannot hit a point light, so
+        // their clamp could not be compensated).
+        let surface = vpls.layout.surface_slots();
+        let light_vertices = match settings.direct {
+            DirectLight::NextEvent => 0..0,
+            DirectLight::Vpl => 0..surface.start,
+        };
+        let g_clamp = settings.clamp.resolve(scene, surface.end - surface.start);
+        let compensation = if settings.clamp.compensate && g_clamp > 0.0 {
+            Some(CompensationBuffers::new(ctx, gpu_scene)?)
+        } else {
+            None
         };
         let direct_depth = match settings.direct {
             DirectLight::NextEvent => 1,
@@ -151,19 +165,48 @@ impl InstantRadiosity {
                     self.walk.record(cmd, gpu_scene, &vpls, walk_seed, None)
                 })?;
                 cmd.pass("vpl accumulation", |cmd| {
-                    self.gather.record(
-                        cmd,
-                        gpu_scene,
-                        &gbuffer,
-                        &vpls.vpls,
-                        &accumulation,
-                        &vpl_radiance,
-                        slots.clone(),
-                        settings.g_clamp,
-                        interleave,
-                        1.0,
-                    )
+                    if interleave > 1 {
+                        cmd.fill_zero(&vpl_radiance);
+                    }
+                    for (slots, clamp) in [(light_vertices.clone(), 0.0), (surface.clone(), g_clamp)] {
+                        if slots.is_empty() {
+                            continue;
+                        }
+                        self.gather.record(
+                            cmd,
+                            gpu_scene,
+                            &gbuffer,
+                            &vpls.vpls,
+                            &accumulation,
+                            &vpl_radiance,
+                            slots,
+                            clamp,
+                            interleave,
+                            1.0,
+                        )?;
+                    }
+                    Ok(())
                 })?;
+                if let Some(buffers) = &compensation {
+                    let seed = pcg::hash(&[settings.seed, frame, 0x636f6d70]);
+                    cmd.pass("clamp compensation", |cmd| {
+                        self.compensation.record(
+                            cmd,
+                            gpu_scene,
+                            &gbuffer,
+                            &accumulation,
+                            buffers,
+                            &[VplSource {
+                                vpls: &vpls.vpls,
+                                slots: surface.clone(),
+                                weight: 1.0,
+                            }],
+                            g_clamp,
+                            frame,
+                            seed,
+                        )
+                    })?;
+                }
                 if interleave > 1 {
                     cmd.pass("interleave filter", |cmd| {
                         self.filter.record(
@@ -185,8 +228,29 @@ impl InstantRadiosity {
             passes,
             wall_ms: start.elapsed().as_secs_f64() * 1e3,
             nonfinite_estimates: accumulation.nonfinite_estimates()?,
-            stats: Vec::new(),
+            stats: clamp_stats(g_clamp, compensation.as_ref(), gpu_scene)?,
             maps: vec![],
         })
     }
+}
+
+/// The clamp a render used and, compensated, the last frame's compensation vertices per pixel
+/// at each level (how much of the image the clamp touched).
+pub fn clamp_stats(
+    g_clamp: f32,
+    compensation: Option<&CompensationBuffers>,
+    scene: &GpuScene,
+) -> Result<Vec<(String, f64)>, GpuError> {
+    let mut stats = vec![("vpl_clamp".to_string(), g_clamp as f64)];
+    if let Some(buffers) = compensation {
+        let counts = buffers.counts.read()?;
+        let pixels = scene.pixel_count().max(1) as f64;
+        for (level, &count) in counts.iter().enumerate().skip(1) {
+            stats.push((
+                format!("compensation_vertices_per_pixel_level_{level}"),
+                count as f64 / pixels,
+            ));
+        }
+    }
+    Ok(stats)
 }
