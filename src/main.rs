@@ -12,10 +12,10 @@ use irad::gpu::{self, Context, ContextOptions, DeviceInfo, DeviceSelector, Valid
 use irad::methods::bundles::directions::DirectionDensity;
 use irad::methods::bundles::light_vertices::LightSelection;
 use irad::methods::bundles::{BundlesSettings, Strategy as BundlesStrategy, Suppression};
+use irad::methods::compensation::{ClampSettings, VplClamp};
 use irad::methods::envmap::{EnvSettings, Strategy as EnvStrategy};
 use irad::methods::gbuffer::PixelSampling;
 use irad::methods::ir::schedule::Absorption;
-use irad::methods::compensation::{ClampSettings, VplClamp};
 use irad::methods::ir::{DirectLight, IrSettings};
 use irad::methods::lightfield::{LightfieldSettings, Strategy as LightfieldStrategy};
 use irad::methods::reference::ReferenceSettings;
@@ -465,7 +465,9 @@ fn parse_clamp(s: &str) -> Result<VplClamp, String> {
     }
     match s.parse::<f32>() {
         Ok(b) if b.is_finite() && b >= 0.0 => Ok(VplClamp::Fixed(b)),
-        _ => Err(format!("expected \"auto\" or a finite number >= 0, got {s:?}")),
+        _ => Err(format!(
+            "expected \"auto\" or a finite number >= 0, got {s:?}"
+        )),
     }
 }
 

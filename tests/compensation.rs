@@ -107,7 +107,9 @@ fn compensated_clamp_keeps_the_mean_and_removes_spikes_in_the_corner_light() {
         eprintln!("ir, plain clamp: mean / reference = {plain_mean:.4}");
         assert!(plain_mean < 0.9, "the plain clamp should darken this scene");
 
-        let images: Vec<Image> = (0..8).map(|s| ir_run(100 + s, ClampSettings::default())).collect();
+        let images: Vec<Image> = (0..8)
+            .map(|s| ir_run(100 + s, ClampSettings::default()))
+            .collect();
         check_mean("ir, compensated", &images, r, 0.007);
 
         // Spikes: the brightest pixel of 8 seeds against the reference's brightest.

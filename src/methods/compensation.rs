@@ -203,7 +203,8 @@ impl ClampCompensation {
                 seed,
                 g_clamp,
             };
-            self.trace.dispatch_threads(cmd, &bindings, &params, threads)?;
+            self.trace
+                .dispatch_threads(cmd, &bindings, &params, threads)?;
 
             // The last level's gather is unclamped: nothing is left to compensate.
             let clamp = if level == DEPTH { 0.0 } else { g_clamp };

@@ -766,7 +766,7 @@ mod tests {
     fn parameters_read_back_to_the_same_method() {
         let ir = Method::from_params(
             "ir",
-            &table("vpls = 64\nframes = 3\nabsorption = \"roulette\"\nclamp = 2.5\ninterleave = 4\ndirect = \"vpl\"\npixel_centres = true"),
+            &table("vpls = 64\nframes = 3\nabsorption = \"roulette\"\nclamp = 2.5\ncompensate = false\ninterleave = 4\ndirect = \"vpl\"\npixel_centres = true"),
         )
         .unwrap();
         let back: toml::Table = ir
@@ -901,6 +901,10 @@ mod tests {
         );
         let e = Method::from_params("ir", &table("clamp = -1.0")).unwrap_err();
         assert!(e.to_string().contains("clamp = -1.0"), "{e}");
+        let e = Method::from_params("bir", &table("clamp = \"sometimes\"")).unwrap_err();
+        assert!(e.to_string().contains("clamp = \"sometimes\""), "{e}");
+        let e = Method::from_params("ir", &table("compensate = 1")).unwrap_err();
+        assert!(e.to_string().contains("compensate = 1"), "{e}");
         let e = Method::from_params("bidir", &table("")).unwrap_err();
         assert!(e.to_string().contains("unknown method `bidir`"), "{e}");
     }

@@ -21,13 +21,15 @@ use thiserror::Error;
 
 use crate::gpu::{Buffer, Context, GpuError};
 use crate::methods::accumulation::Accumulation;
-use crate::methods::compensation::{ClampCompensation, ClampSettings, CompensationBuffers, VplSource};
+use crate::methods::compensation::{
+    ClampCompensation, ClampSettings, CompensationBuffers, VplSource,
+};
 use crate::methods::direct::GBufferAndDirectLight;
 use crate::methods::gbuffer::{GBuffer, PixelSampling};
+use crate::methods::ir::clamp_stats;
 use crate::methods::ir::gather::AccumulateVpls;
 use crate::methods::ir::schedule::{mean_albedo, Absorption, Schedule};
 use crate::methods::ir::walk::{TraceVpls, Vpl, VplBuffers};
-use crate::methods::ir::clamp_stats;
 use crate::methods::progressive;
 use crate::methods::RenderOutput;
 use crate::sampling::pcg;
@@ -424,12 +426,8 @@ impl Bir {
                             Ok(())
                         })?;
                     } else {
-                        let sources = unresampled_sources(
-                            &vpls,
-                            &reverse,
-                            &split,
-                            1.0 / batches as f32,
-                        );
+                        let sources =
+                            unresampled_sources(&vpls, &reverse, &split, 1.0 / batches as f32);
                         cmd.pass("vpl accumulation", |cmd| {
                             for source in &sources {
                                 self.gather.record(

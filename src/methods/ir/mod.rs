@@ -14,7 +14,9 @@ use thiserror::Error;
 
 use crate::gpu::{Buffer, Context, GpuError};
 use crate::methods::accumulation::Accumulation;
-use crate::methods::compensation::{ClampCompensation, ClampSettings, CompensationBuffers, VplSource};
+use crate::methods::compensation::{
+    ClampCompensation, ClampSettings, CompensationBuffers, VplSource,
+};
 use crate::methods::direct::GBufferAndDirectLight;
 use crate::methods::gbuffer::{GBuffer, PixelSampling};
 use crate::methods::progressive;
@@ -168,7 +170,9 @@ impl InstantRadiosity {
                     if interleave > 1 {
                         cmd.fill_zero(&vpl_radiance);
                     }
-                    for (slots, clamp) in [(light_vertices.clone(), 0.0), (surface.clone(), g_clamp)] {
+                    for (slots, clamp) in
+                        [(light_vertices.clone(), 0.0), (surface.clone(), g_clamp)]
+                    {
                         if slots.is_empty() {
                             continue;
                         }
