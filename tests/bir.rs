@@ -9,7 +9,7 @@ use irad::methods::reference::{Reference, ReferenceSettings};
 use irad::scene::gpu::GpuScene;
 use irad::scene::Scene;
 
-use common::{luminance_mean, mean_and_stderr, with_gpu};
+use common::{luminance_mean, mean_and_stderr, scene_file, with_gpu};
 
 fn small_cornell(size: u32) -> Scene {
     let mut scene = irad::scene::default_scene();
@@ -179,11 +179,7 @@ fn the_uniform_floor_keeps_the_mean_where_power_estimates_miss_vpls() {
 #[test]
 fn both_sides_beat_reverse_only_in_the_halogen_office() {
     with_gpu(|ctx| {
-        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("scenes/failure/halogen-office/scene.toml");
-        let mut scene = irad::scene::load(&path).unwrap();
-        scene.camera.width = 32;
-        scene.camera.height = 24;
+        let scene = scene_file("failure/halogen-office", 32, 24);
         let gpu = GpuScene::upload(ctx, &scene).unwrap();
         let bir = Bir::new(ctx).unwrap();
         let variance = |strategy: Strategy| {

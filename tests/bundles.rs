@@ -14,18 +14,7 @@ use irad::methods::reference::{Reference, ReferenceSettings};
 use irad::scene::gpu::GpuScene;
 use irad::scene::{Light, Scene};
 
-use common::{luminance_mean, mean_and_stderr, with_gpu};
-
-fn scene(name: &str, width: u32, height: u32) -> Scene {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("scenes")
-        .join(name)
-        .join("scene.toml");
-    let mut scene = irad::scene::load(&path).unwrap();
-    scene.camera.width = width;
-    scene.camera.height = height;
-    scene
-}
+use common::{luminance_mean, mean_and_stderr, scene_file, with_gpu};
 
 /// The path tracer with at most `max_depth` scattering events (2: direct light plus one
 /// bounce; 3 adds the second), at pixel centres as every render here: the point light 5 cm
@@ -92,7 +81,7 @@ fn every_strategy_matches_the_path_length_limited_reference_mean() {
             ("spot-light", 32, 24, true, 3, &[Strategy::Mis]),
         ];
         for (name, w, h, two_bounce, depth, strategies) in cases {
-            let scene = scene(name, w, h);
+            let scene = scene_file(name, w, h);
             let gpu = GpuScene::upload(ctx, &scene).unwrap();
             {
                 let r = luminance_mean(&reference(ctx, &gpu, 4096, depth, 7));
@@ -139,7 +128,7 @@ fn every_strategy_matches_the_path_length_limited_reference_mean() {
 #[test]
 fn mis_beats_vpls_and_bundles_alone_in_the_corner() {
     with_gpu(|ctx| {
-        let scene = scene("failure/corner-light", 32, 32);
+        let scene = scene_file("failure/corner-light", 32, 32);
         let gpu = GpuScene::upload(ctx, &scene).unwrap();
         let a = reference(ctx, &gpu, 4096, 2, 11);
         let b = reference(ctx, &gpu, 4096, 2, 12);
@@ -180,7 +169,7 @@ fn mis_beats_vpls_and_bundles_alone_in_the_corner() {
 #[test]
 fn roughness_clamping_suppresses_glossy_spikes_and_keeps_more_energy_than_clamping() {
     with_gpu(|ctx| {
-        let scene = scene("failure/glossy-cornell", 32, 32);
+        let scene = scene_file("failure/glossy-cornell", 32, 32);
         let gpu = GpuScene::upload(ctx, &scene).unwrap();
         let a = reference(ctx, &gpu, 4096, 2, 21);
         let b = reference(ctx, &gpu, 4096, 2, 22);
@@ -237,7 +226,7 @@ fn roughness_clamping_suppresses_glossy_spikes_and_keeps_more_energy_than_clampi
 #[test]
 fn environment_bundles_match_the_reference_direct_light() {
     with_gpu(|ctx| {
-        let scene = scene("glossy-env", 32, 24);
+        let scene = scene_file("glossy-env", 32, 24);
         let gpu = GpuScene::upload(ctx, &scene).unwrap();
         let a = reference(ctx, &gpu, 4096, 1, 31);
         let b = reference(ctx, &gpu, 4096, 1, 32);
@@ -291,7 +280,7 @@ fn environment_bundles_match_the_reference_direct_light() {
 #[test]
 fn roulette_over_lights_keeps_the_mean() {
     with_gpu(|ctx| {
-        let mut scene = scene("spot-light", 32, 24);
+        let mut scene = scene_file("spot-light", 32, 24);
         scene.lights.push(Light::Point {
             position: Vec3::new(-1.2, 1.2, 0.0),
             intensity: Vec3::new(1.0, 2.0, 3.0),

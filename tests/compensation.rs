@@ -5,8 +5,6 @@
 
 mod common;
 
-use std::path::Path;
-
 use irad::gpu::Context;
 use irad::image::Image;
 use irad::methods::bir::{Bir, BirSettings};
@@ -18,15 +16,7 @@ use irad::methods::RenderOutput;
 use irad::scene::gpu::GpuScene;
 use irad::scene::Scene;
 
-use common::{luminance_mean, mean_and_stderr, with_gpu};
-
-fn corner_light(size: u32) -> Scene {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/failure/corner-light/scene.toml");
-    let mut scene = irad::scene::load(&path).unwrap();
-    scene.camera.width = size;
-    scene.camera.height = size;
-    scene
-}
+use common::{luminance_mean, mean_and_stderr, scene_file, with_gpu};
 
 fn reference(ctx: &Context, scene: &Scene, spp: u32) -> Image {
     let gpu = GpuScene::upload(ctx, scene).unwrap();
@@ -81,7 +71,7 @@ fn check_mean(label: &str, images: &[Image], r: f64, noisiest: f64) {
 #[test]
 fn compensated_clamp_keeps_the_mean_and_removes_spikes_in_the_corner_light() {
     with_gpu(|ctx| {
-        let scene = corner_light(32);
+        let scene = scene_file("failure/corner-light", 32, 32);
         let gpu = GpuScene::upload(ctx, &scene).unwrap();
         let reference_image = reference(ctx, &scene, 8192);
         let r = luminance_mean(&reference_image);

@@ -18,20 +18,9 @@ use irad::methods::reference::{Reference, ReferenceSettings};
 use irad::sampling::cubemap;
 use irad::sampling::environment::{sampling_weights, texel_index, texel_solid_angle};
 use irad::scene::gpu::GpuScene;
-use irad::scene::{Environment, Scene};
+use irad::scene::Environment;
 
-use common::{luminance_mean, mean_and_stderr, with_gpu};
-
-fn scene(name: &str, width: u32, height: u32) -> Scene {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("scenes")
-        .join(name)
-        .join("scene.toml");
-    let mut scene = irad::scene::load(&path).unwrap();
-    scene.camera.width = width;
-    scene.camera.height = height;
-    scene
-}
+use common::{luminance_mean, mean_and_stderr, scene_file, with_gpu};
 
 /// The path tracer's direct light (one scattering event) at pixel centres.
 fn direct_reference(ctx: &Context, gpu: &GpuScene, spp: u32, seed: u32) -> Image {
@@ -59,7 +48,7 @@ fn direct_reference(ctx: &Context, gpu: &GpuScene, spp: u32, seed: u32) -> Image
 #[test]
 fn every_strategy_matches_the_reference_direct_light() {
     with_gpu(|ctx| {
-        let mut scene = scene("glossy-env", 32, 24);
+        let mut scene = scene_file("glossy-env", 32, 24);
         // Phong exponents of at most 20: cosine sampling meets sharper lobes only by chance,
         // too heavy-tailed to pin its mean at a test's budget.
         for m in scene.materials.iter_mut() {
@@ -181,7 +170,7 @@ fn build_table(ctx: &Context, gpu: &GpuScene, r: u32, per_face: u32) -> (Vec<f32
 #[test]
 fn cube_samples_follow_their_pdf() {
     with_gpu(|ctx| {
-        let mut scene = scene("glossy-env", 8, 8);
+        let mut scene = scene_file("glossy-env", 8, 8);
         scene.environment = Some(test_sky());
         let env = scene.environment.as_ref().unwrap();
         let gpu = GpuScene::upload(ctx, &scene).unwrap();
@@ -248,7 +237,7 @@ fn cube_samples_follow_their_pdf() {
 #[test]
 fn a_single_bright_texel_keeps_positive_pdf() {
     with_gpu(|ctx| {
-        let mut scene = scene("glossy-env", 8, 8);
+        let mut scene = scene_file("glossy-env", 8, 8);
         let (w, h) = (64u32, 32u32);
         for (ie, je) in [(0u32, 9u32), (17, 0), (40, 20), (63, 31)] {
             let mut map = test_sky();
@@ -292,7 +281,7 @@ fn a_single_bright_texel_keeps_positive_pdf() {
 #[test]
 fn black_and_single_texel_maps() {
     with_gpu(|ctx| {
-        let mut scene = scene("glossy-env", 16, 12);
+        let mut scene = scene_file("glossy-env", 16, 12);
         let mut black = test_sky();
         black.texels.iter_mut().for_each(|t| *t = Vec3::ZERO);
         let mut single = black.clone();
@@ -332,7 +321,7 @@ fn black_and_single_texel_maps() {
 #[test]
 fn dynamic_shares_waste_fewer_samples_with_the_sun_behind() {
     with_gpu(|ctx| {
-        let scene = scene("failure/sun-behind", 48, 36);
+        let scene = scene_file("failure/sun-behind", 48, 36);
         let gpu = GpuScene::upload(ctx, &scene).unwrap();
         let a = direct_reference(ctx, &gpu, 4096, 61);
         let b = direct_reference(ctx, &gpu, 4096, 62);
@@ -389,7 +378,7 @@ fn dynamic_shares_waste_fewer_samples_with_the_sun_behind() {
 #[test]
 fn beta_weights_keep_neighbouring_pixels_continuous() {
     with_gpu(|ctx| {
-        let mut scene = scene("glossy-env", 160, 120);
+        let mut scene = scene_file("glossy-env", 160, 120);
         scene.environment = Some(broad_sky());
         let gpu = GpuScene::upload(ctx, &scene).unwrap();
         let env = Env::new(ctx).unwrap();
@@ -449,7 +438,7 @@ fn beta_weights_keep_neighbouring_pixels_continuous() {
 #[test]
 fn latlong_table_samples_follow_their_pdf() {
     with_gpu(|ctx| {
-        let mut scene = scene("glossy-env", 8, 8);
+        let mut scene = scene_file("glossy-env", 8, 8);
         let mut sky = test_sky();
         // A black band: zero-weight texels must never be drawn.
         for t in sky.texels[(20 * 64) as usize..(22 * 64) as usize].iter_mut() {
@@ -592,7 +581,7 @@ fn leaf_solid_angle(j: u32, rows: u32) -> f64 {
 #[test]
 fn hierarchical_samples_follow_their_density() {
     with_gpu(|ctx| {
-        let mut scene = scene("glossy-env", 8, 8);
+        let mut scene = scene_file("glossy-env", 8, 8);
         for (w, h) in [(48u32, 24u32), (64, 32), (100, 20), (7, 1)] {
             let mut sky = if h > 1 {
                 sky_of_size(w, h)
@@ -753,7 +742,7 @@ fn alpha_names_the_better_strategy_in_the_extreme_cases() {
             ("diffuse under a sun", sun, false),
             ("mirror under a smooth sky", smooth, true),
         ] {
-            let mut scene = scene("glossy-env", 24, 18);
+            let mut scene = scene_file("glossy-env", 24, 18);
             for m in scene.materials.iter_mut() {
                 if mirror {
                     (m.kd, m.ks, m.ns) = (Vec3::ZERO, Vec3::splat(0.9), 2000.0);
@@ -818,7 +807,7 @@ fn alpha_names_the_better_strategy_in_the_extreme_cases() {
 #[test]
 fn alpha_lowers_the_variance_under_a_high_frequency_map() {
     with_gpu(|ctx| {
-        let mut scene = scene("glossy-env", 32, 24);
+        let mut scene = scene_file("glossy-env", 32, 24);
         scene.environment = Some(starry_sky());
         let gpu = GpuScene::upload(ctx, &scene).unwrap();
         let env = Env::new(ctx).unwrap();
@@ -873,7 +862,7 @@ fn alpha_lowers_the_variance_under_a_high_frequency_map() {
 #[test]
 fn dynamic_maps_change_every_frame() {
     with_gpu(|ctx| {
-        let mut scene = scene("glossy-env", 32, 24);
+        let mut scene = scene_file("glossy-env", 32, 24);
         for m in scene.materials.iter_mut() {
             m.ns = m.ns.min(100.0);
         }
@@ -946,7 +935,7 @@ fn dynamic_maps_change_every_frame() {
 #[test]
 fn uniform_faces_needs_more_samples_at_equal_error() {
     with_gpu(|ctx| {
-        let scene = scene("failure/sun-behind", 48, 36);
+        let scene = scene_file("failure/sun-behind", 48, 36);
         let gpu = GpuScene::upload(ctx, &scene).unwrap();
         let a = direct_reference(ctx, &gpu, 4096, 71);
         let b = direct_reference(ctx, &gpu, 4096, 72);
@@ -1111,7 +1100,7 @@ fn chi_square(counts: &[u32], probabilities: &[f64], n: u32, what: &str) -> (f64
 #[test]
 fn brdf_and_cosine_samples_follow_their_pdf() {
     with_gpu(|ctx| {
-        let scene = scene("glossy-env", 8, 8);
+        let scene = scene_file("glossy-env", 8, 8);
         let gpu = GpuScene::upload(ctx, &scene).unwrap();
         let n = 200_000u32;
         let draws = irad::methods::bsdf_draws::BsdfDraws::new(ctx, n).unwrap();

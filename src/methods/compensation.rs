@@ -6,11 +6,12 @@
 //! - glsl/trace_compensation_paths.comp: level l's vertices, BSDF-sampled from level l - 1
 //!   (the G-buffer for l = 1), kept where G(x, y) > b, with next-event estimation at each;
 //! - glsl/gather_compensation_vpls.comp: the frame's VPLs at level l's vertices, clamped at b
-//!   except at the last level, `depth`, whose gather is unclamped and ends the recursion
+//!   except at the last level, DEPTH, whose gather is unclamped and ends the recursion
 //!   without bias.
 //!
 //! b comes from the scene by default (`auto_clamp`): the geometry term at the radius inside
-//! which a shading point expects one VPL of the frame.
+//! which a shading point expects a few (pi) of the frame's VPLs. A method resolves its
+//! settings into a `FrameClamp` once per render and records its pass after each gather.
 
 use std::ops::Range;
 
@@ -61,6 +62,24 @@ impl ClampSettings {
         }
     }
 
+    /// b for a render whose frames shade `vpls` surface VPLs, with the compensation's buffers
+    /// when it is compensated (and b > 0).
+    pub fn prepare(
+        &self,
+        ctx: &Context,
+        scene: &Scene,
+        gpu_scene: &GpuScene,
+        vpls: u32,
+    ) -> GpuResult<FrameClamp> {
+        let g_clamp = self.resolve(scene, vpls);
+        let buffers = if self.compensate && g_clamp > 0.0 {
+            Some(CompensationBuffers::new(ctx, gpu_scene)?)
+        } else {
+            None
+        };
+        Ok(FrameClamp { g_clamp, buffers })
+    }
+
     /// The record's value of `clamp`: "auto" or the number.
     pub fn clamp_param(&self) -> serde_json::Value {
         match self.clamp {
@@ -85,14 +104,7 @@ pub const AUTO_CLAMP_SCALE: f64 = 1.0;
 
 /// b for `vpls` surface VPLs per frame in `scene`: AUTO_CLAMP_SCALE vpls / (total triangle area).
 pub fn auto_clamp(scene: &Scene, vpls: u32) -> f32 {
-    let area: f64 = scene
-        .triangles
-        .iter()
-        .map(|t| {
-            let [p0, p1, p2] = t.positions;
-            0.5 * (p1 - p0).cross(p2 - p0).length() as f64
-        })
-        .sum();
+    let area: f64 = scene.triangles.iter().map(|t| t.area()).sum();
     if area > 0.0 {
         (AUTO_CLAMP_SCALE * vpls.max(1) as f64 / area) as f32
     } else {
@@ -112,14 +124,14 @@ pub struct CompensationVertex {
 }
 
 /// The two vertex lists levels alternate between and the per-level counts.
-pub struct CompensationBuffers {
+struct CompensationBuffers {
     lists: [Buffer<CompensationVertex>; 2],
     /// counts[l]: level l's vertices this frame (counts[0] unused).
-    pub counts: Buffer<u32>,
+    counts: Buffer<u32>,
 }
 
 impl CompensationBuffers {
-    pub fn new(ctx: &Context, scene: &GpuScene) -> GpuResult<Self> {
+    fn new(ctx: &Context, scene: &GpuScene) -> GpuResult<Self> {
         let n = scene.pixel_count().max(1);
         Ok(CompensationBuffers {
             lists: [
@@ -174,7 +186,7 @@ impl ClampCompensation {
     /// frame's G-buffer: DEPTH levels of paths, each level's VPL light added into
     /// `accumulation`.
     #[allow(clippy::too_many_arguments)]
-    pub fn record<'a>(
+    fn record<'a>(
         &'a self,
         cmd: &mut Commands<'a>,
         scene: &'a GpuScene,
@@ -232,5 +244,62 @@ impl ClampCompensation {
             }
         }
         Ok(())
+    }
+}
+
+/// A render's clamp: the b its gathers use and, compensated, the buffers of the compensation.
+pub struct FrameClamp {
+    pub g_clamp: f32,
+    buffers: Option<CompensationBuffers>,
+}
+
+impl FrameClamp {
+    /// Records pass "clamp compensation" after a gather of `sources` at `g_clamp`, or nothing
+    /// when the clamp is off or not compensated. `seed` keys the paths' random numbers.
+    #[allow(clippy::too_many_arguments)]
+    pub fn record_compensation<'a>(
+        &'a self,
+        kernels: &'a ClampCompensation,
+        cmd: &mut Commands<'a>,
+        scene: &'a GpuScene,
+        gbuffer: &'a GBuffer,
+        accumulation: &'a Accumulation,
+        sources: &[VplSource<'a>],
+        frame: u32,
+        seed: u32,
+    ) -> GpuResult<()> {
+        let Some(buffers) = &self.buffers else {
+            return Ok(());
+        };
+        cmd.pass("clamp compensation", |cmd| {
+            kernels.record(
+                cmd,
+                scene,
+                gbuffer,
+                accumulation,
+                buffers,
+                sources,
+                self.g_clamp,
+                frame,
+                seed,
+            )
+        })
+    }
+
+    /// `vpl_clamp` (the b used) and, compensated, the last frame's compensation vertices per
+    /// pixel at each level (how much of the image the clamp touched).
+    pub fn stats(&self, scene: &GpuScene) -> GpuResult<Vec<(String, f64)>> {
+        let mut stats = vec![("vpl_clamp".to_string(), self.g_clamp as f64)];
+        if let Some(buffers) = &self.buffers {
+            let counts = buffers.counts.read()?;
+            let pixels = scene.pixel_count().max(1) as f64;
+            for (level, &count) in counts.iter().enumerate().skip(1) {
+                stats.push((
+                    format!("compensation_vertices_per_pixel_level_{level}"),
+                    count as f64 / pixels,
+                ));
+            }
+        }
+        Ok(stats)
     }
 }

@@ -57,6 +57,12 @@ pub struct Triangle {
     pub material: u32,
 }
 
+impl Triangle {
+    pub fn area(&self) -> f64 {
+        0.5 * obj::double_area(self.positions)
+    }
+}
+
 #[derive(Clone, Debug, PartialEq)]
 pub enum Light {
     /// Radiant intensity `intensity` (W/sr per channel) in every direction.

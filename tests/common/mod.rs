@@ -40,6 +40,18 @@ pub fn with_gpu(test: impl FnOnce(&Context)) {
     );
 }
 
+/// scenes/NAME/scene.toml at WIDTH x HEIGHT pixels.
+pub fn scene_file(name: &str, width: u32, height: u32) -> irad::scene::Scene {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("scenes")
+        .join(name)
+        .join("scene.toml");
+    let mut scene = irad::scene::load(&path).unwrap_or_else(|e| panic!("{e}"));
+    scene.camera.width = width;
+    scene.camera.height = height;
+    scene
+}
+
 /// The image's mean luminance (Rec. 709 weights).
 pub fn luminance_mean(image: &irad::image::Image) -> f64 {
     let m = image.mean();

@@ -19,14 +19,11 @@ use std::time::Instant;
 
 use thiserror::Error;
 
-use crate::gpu::{Buffer, Context, GpuError};
+use crate::gpu::{Buffer, Commands, Context, GpuError};
 use crate::methods::accumulation::Accumulation;
-use crate::methods::compensation::{
-    ClampCompensation, ClampSettings, CompensationBuffers, VplSource,
-};
+use crate::methods::compensation::{ClampCompensation, ClampSettings, FrameClamp, VplSource};
 use crate::methods::direct::GBufferAndDirectLight;
 use crate::methods::gbuffer::{GBuffer, PixelSampling};
-use crate::methods::ir::clamp_stats;
 use crate::methods::ir::gather::AccumulateVpls;
 use crate::methods::ir::schedule::{mean_albedo, Absorption, Schedule};
 use crate::methods::ir::walk::{TraceVpls, Vpl, VplBuffers};
@@ -277,12 +274,9 @@ impl Bir {
         } else {
             candidates * batches
         };
-        let g_clamp = settings.clamp.resolve(scene, shaded_per_frame);
-        let compensation = if settings.clamp.compensate && g_clamp > 0.0 {
-            Some(CompensationBuffers::new(ctx, gpu_scene)?)
-        } else {
-            None
-        };
+        let clamp = settings
+            .clamp
+            .prepare(ctx, scene, gpu_scene, shaded_per_frame)?;
         let frames = settings.frames.max(1);
         let passes = progressive::run(
             ctx,
@@ -428,84 +422,46 @@ impl Bir {
                     } else {
                         let sources =
                             unresampled_sources(&vpls, &reverse, &split, 1.0 / batches as f32);
-                        cmd.pass("vpl accumulation", |cmd| {
-                            for source in &sources {
-                                self.gather.record(
-                                    cmd,
-                                    gpu_scene,
-                                    &gbuffer,
-                                    source.vpls,
-                                    &accumulation,
-                                    &unused,
-                                    source.slots.clone(),
-                                    g_clamp,
-                                    1,
-                                    source.weight,
-                                )?;
-                            }
-                            Ok(())
-                        })?;
-                        if let Some(buffers) = &compensation {
-                            let seed = pcg::hash(&[settings.seed, frame, b, 0x636f6d70]);
-                            cmd.pass("clamp compensation", |cmd| {
-                                self.compensation.record(
-                                    cmd,
-                                    gpu_scene,
-                                    &gbuffer,
-                                    &accumulation,
-                                    buffers,
-                                    &sources,
-                                    g_clamp,
-                                    frame,
-                                    seed,
-                                )
-                            })?;
-                        }
-                    }
-                }
-                if resampling {
-                    cmd.pass("vpl accumulation", |cmd| {
-                        // Each batch's draws estimate its candidates' sum; the batches are
-                        // `batches` estimates of one frame's.
-                        self.gather.record(
+                        let seed = pcg::hash(&[settings.seed, frame, b, 0x636f6d70]);
+                        self.gather_compensated(
                             cmd,
                             gpu_scene,
                             &gbuffer,
-                            &kept,
                             &accumulation,
                             &unused,
-                            0..draws * batches,
-                            g_clamp,
-                            1,
-                            1.0 / batches as f32,
-                        )
-                    })?;
-                    if let Some(buffers) = &compensation {
-                        let seed = pcg::hash(&[settings.seed, frame, 0x636f6d70]);
-                        cmd.pass("clamp compensation", |cmd| {
-                            self.compensation.record(
-                                cmd,
-                                gpu_scene,
-                                &gbuffer,
-                                &accumulation,
-                                buffers,
-                                &[VplSource {
-                                    vpls: &kept,
-                                    slots: 0..draws * batches,
-                                    weight: 1.0 / batches as f32,
-                                }],
-                                g_clamp,
-                                frame,
-                                seed,
-                            )
-                        })?;
+                            &clamp,
+                            &sources,
+                            frame,
+                            seed,
+                        )?;
                     }
+                }
+                if resampling {
+                    // Each batch's draws estimate its candidates' sum; the batches are
+                    // `batches` estimates of one frame's.
+                    let sources = [VplSource {
+                        vpls: &kept,
+                        slots: 0..draws * batches,
+                        weight: 1.0 / batches as f32,
+                    }];
+                    let seed = pcg::hash(&[settings.seed, frame, 0x636f6d70]);
+                    self.gather_compensated(
+                        cmd,
+                        gpu_scene,
+                        &gbuffer,
+                        &accumulation,
+                        &unused,
+                        &clamp,
+                        &sources,
+                        frame,
+                        seed,
+                    )?;
                 }
                 Ok(())
             },
             progress,
         )?;
-        let mut stats = clamp_stats(g_clamp, compensation.as_ref(), gpu_scene)?;
+        let mut stats = clamp.stats(gpu_scene)?;
         if resampling {
             let kept_counts = resample_buffers.stats.read()?;
             let all = (kept_counts[0] + kept_counts[1]).max(1) as f64;
@@ -535,6 +491,51 @@ impl Bir {
             stats,
             maps: vec![],
         })
+    }
+}
+
+impl Bir {
+    /// Pass "vpl accumulation" over `sources` at the clamp, then its compensation.
+    #[allow(clippy::too_many_arguments)]
+    fn gather_compensated<'a>(
+        &'a self,
+        cmd: &mut Commands<'a>,
+        gpu_scene: &'a GpuScene,
+        gbuffer: &'a GBuffer,
+        accumulation: &'a Accumulation,
+        unused: &'a Buffer<glam::Vec4>,
+        clamp: &'a FrameClamp,
+        sources: &[VplSource<'a>],
+        frame: u32,
+        seed: u32,
+    ) -> Result<(), GpuError> {
+        cmd.pass("vpl accumulation", |cmd| {
+            for source in sources {
+                self.gather.record(
+                    cmd,
+                    gpu_scene,
+                    gbuffer,
+                    source.vpls,
+                    accumulation,
+                    unused,
+                    source.slots.clone(),
+                    clamp.g_clamp,
+                    1,
+                    source.weight,
+                )?;
+            }
+            Ok(())
+        })?;
+        clamp.record_compensation(
+            &self.compensation,
+            cmd,
+            gpu_scene,
+            gbuffer,
+            accumulation,
+            sources,
+            frame,
+            seed,
+        )
     }
 }
 

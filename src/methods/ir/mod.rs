@@ -14,9 +14,7 @@ use thiserror::Error;
 
 use crate::gpu::{Buffer, Context, GpuError};
 use crate::methods::accumulation::Accumulation;
-use crate::methods::compensation::{
-    ClampCompensation, ClampSettings, CompensationBuffers, VplSource,
-};
+use crate::methods::compensation::{ClampCompensation, ClampSettings, VplSource};
 use crate::methods::direct::GBufferAndDirectLight;
 use crate::methods::gbuffer::{GBuffer, PixelSampling};
 use crate::methods::progressive;
@@ -134,12 +132,9 @@ impl InstantRadiosity {
             DirectLight::NextEvent => 0..0,
             DirectLight::Vpl => 0..surface.start,
         };
-        let g_clamp = settings.clamp.resolve(scene, surface.end - surface.start);
-        let compensation = if settings.clamp.compensate && g_clamp > 0.0 {
-            Some(CompensationBuffers::new(ctx, gpu_scene)?)
-        } else {
-            None
-        };
+        let clamp = settings
+            .clamp
+            .prepare(ctx, scene, gpu_scene, surface.end - surface.start)?;
         let direct_depth = match settings.direct {
             DirectLight::NextEvent => 1,
             DirectLight::Vpl => 0,
@@ -170,9 +165,10 @@ impl InstantRadiosity {
                     if interleave > 1 {
                         cmd.fill_zero(&vpl_radiance);
                     }
-                    for (slots, clamp) in
-                        [(light_vertices.clone(), 0.0), (surface.clone(), g_clamp)]
-                    {
+                    for (slots, clamp) in [
+                        (light_vertices.clone(), 0.0),
+                        (surface.clone(), clamp.g_clamp),
+                    ] {
                         if slots.is_empty() {
                             continue;
                         }
@@ -191,26 +187,20 @@ impl InstantRadiosity {
                     }
                     Ok(())
                 })?;
-                if let Some(buffers) = &compensation {
-                    let seed = pcg::hash(&[settings.seed, frame, 0x636f6d70]);
-                    cmd.pass("clamp compensation", |cmd| {
-                        self.compensation.record(
-                            cmd,
-                            gpu_scene,
-                            &gbuffer,
-                            &accumulation,
-                            buffers,
-                            &[VplSource {
-                                vpls: &vpls.vpls,
-                                slots: surface.clone(),
-                                weight: 1.0,
-                            }],
-                            g_clamp,
-                            frame,
-                            seed,
-                        )
-                    })?;
-                }
+                clamp.record_compensation(
+                    &self.compensation,
+                    cmd,
+                    gpu_scene,
+                    &gbuffer,
+                    &accumulation,
+                    &[VplSource {
+                        vpls: &vpls.vpls,
+                        slots: surface.clone(),
+                        weight: 1.0,
+                    }],
+                    frame,
+                    pcg::hash(&[settings.seed, frame, 0x636f6d70]),
+                )?;
                 if interleave > 1 {
                     cmd.pass("interleave filter", |cmd| {
                         self.filter.record(
@@ -232,29 +222,8 @@ impl InstantRadiosity {
             passes,
             wall_ms: start.elapsed().as_secs_f64() * 1e3,
             nonfinite_estimates: accumulation.nonfinite_estimates()?,
-            stats: clamp_stats(g_clamp, compensation.as_ref(), gpu_scene)?,
+            stats: clamp.stats(gpu_scene)?,
             maps: vec![],
         })
     }
-}
-
-/// The clamp a render used and, compensated, the last frame's compensation vertices per pixel
-/// at each level (how much of the image the clamp touched).
-pub fn clamp_stats(
-    g_clamp: f32,
-    compensation: Option<&CompensationBuffers>,
-    scene: &GpuScene,
-) -> Result<Vec<(String, f64)>, GpuError> {
-    let mut stats = vec![("vpl_clamp".to_string(), g_clamp as f64)];
-    if let Some(buffers) = compensation {
-        let counts = buffers.counts.read()?;
-        let pixels = scene.pixel_count().max(1) as f64;
-        for (level, &count) in counts.iter().enumerate().skip(1) {
-            stats.push((
-                format!("compensation_vertices_per_pixel_level_{level}"),
-                count as f64 / pixels,
-            ));
-        }
-    }
-    Ok(stats)
 }

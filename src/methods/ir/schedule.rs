@@ -84,8 +84,7 @@ impl Schedule {
 pub fn mean_albedo(scene: &Scene) -> f64 {
     let (mut weighted, mut area) = (0.0, 0.0);
     for t in &scene.triangles {
-        let [p0, p1, p2] = t.positions;
-        let a = 0.5 * (p1 - p0).cross(p2 - p0).length() as f64;
+        let a = t.area();
         let m = &scene.materials[t.material as usize];
         weighted += a * luminance(m.kd + m.ks);
         area += a;
