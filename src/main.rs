@@ -18,6 +18,7 @@ use irad::methods::gbuffer::PixelSampling;
 use irad::methods::ir::schedule::Absorption;
 use irad::methods::ir::{DirectLight, IrSettings};
 use irad::methods::lightfield::{LightfieldSettings, Strategy as LightfieldStrategy};
+use irad::methods::rebuild::TableRebuild;
 use irad::methods::reference::ReferenceSettings;
 use irad::methods::Method;
 use irad::render::{self, RenderJob};
@@ -198,10 +199,16 @@ struct RenderArgs {
     absorption: AbsorptionArg,
     /// ir, bir: clamp the VPL gather's geometry term cos cos / d^2 at b (Keller's weak
     /// singularity: no spikes next to VPLs). "auto" [default]: b = N / A for N surface VPLs
-    /// per frame over the scene's area A (one VPL expected within 1 / sqrt(b) of a point);
+    /// per frame over the scene's area A (pi VPLs expected within 1 / sqrt(b) of a point);
     /// a number sets b; 0 leaves the term unclamped. The clamp used is in the JSON's stats.
     #[arg(long, default_value = "auto", value_parser = parse_clamp)]
     clamp: VplClamp,
+    /// env, bundles, lightfield: build the sampling tables derived from the map or atlas (cube
+    /// map and CDFs, latitude-longitude table, pyramid, bundle directions, luminaire tables)
+    /// once for a still input and per frame for a sequence, or every frame as Lu 14's dynamic
+    /// pipeline does (for timing it; the same image bits for a still input).
+    #[arg(long, value_enum, default_value_t = RebuildArg::WhenChanged)]
+    rebuild_tables: RebuildArg,
     /// ir, bir: with a clamp, add back exactly what it removed by short camera-side paths
     /// (Kollig and Keller 2004; unbiased) [default: on], or leave the clamp's bias (off).
     #[arg(long, value_enum, default_value_t = OnOff::On)]
@@ -221,7 +228,7 @@ struct RenderArgs {
     #[arg(long, value_enum)]
     strategy: Option<StrategyArg>,
     /// env: texels along a side of each face of the cube map that drives the light samples
-    /// (rebuilt from the scene's map every frame).
+    /// (built from the map once, or per frame for a sequence: --rebuild-tables).
     #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(1..=4096))]
     face_resolution: u32,
     /// env --strategy dynamic|uniform-faces: take every sample from the cube map (Lu Eq. 3.5,
@@ -469,6 +476,12 @@ fn parse_clamp(s: &str) -> Result<VplClamp, String> {
             "expected \"auto\" or a finite number >= 0, got {s:?}"
         )),
     }
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum RebuildArg {
+    WhenChanged,
+    EveryFrame,
 }
 
 #[derive(Clone, Copy, clap::ValueEnum)]
@@ -1038,6 +1051,10 @@ fn render(options: &ContextOptions, args: RenderArgs) -> Result<()> {
                 DirectionsArg::Environment => DirectionDensity::Environment,
             },
             env_offset: args.env_offset,
+            rebuild: match args.rebuild_tables {
+                RebuildArg::WhenChanged => TableRebuild::WhenChanged,
+                RebuildArg::EveryFrame => TableRebuild::EveryFrame,
+            },
             pixels,
         }),
         MethodArg::Env => Method::Env(EnvSettings {
@@ -1061,6 +1078,10 @@ fn render(options: &ContextOptions, args: RenderArgs) -> Result<()> {
             integer_counts: args.integer_counts,
             alpha_samples: args.alpha_samples,
             shadows: !args.no_shadows,
+            rebuild: match args.rebuild_tables {
+                RebuildArg::WhenChanged => TableRebuild::WhenChanged,
+                RebuildArg::EveryFrame => TableRebuild::EveryFrame,
+            },
             pixels,
         }),
         MethodArg::Lightfield => Method::Lightfield(LightfieldSettings {
@@ -1082,6 +1103,10 @@ fn render(options: &ContextOptions, args: RenderArgs) -> Result<()> {
             shadows: !args.no_shadows,
             sampling_only: false,
             seed: args.seed,
+            rebuild: match args.rebuild_tables {
+                RebuildArg::WhenChanged => TableRebuild::WhenChanged,
+                RebuildArg::EveryFrame => TableRebuild::EveryFrame,
+            },
             pixels,
         }),
     };

@@ -14,6 +14,7 @@ use irad::methods::envmap::cube::CubeTable;
 use irad::methods::envmap::pyramid::{self, EnvPyramid, PyramidDraws};
 use irad::methods::envmap::{Env, EnvSettings, Strategy};
 use irad::methods::gbuffer::PixelSampling;
+use irad::methods::rebuild::TableRebuild;
 use irad::methods::reference::{Reference, ReferenceSettings};
 use irad::sampling::cubemap;
 use irad::sampling::environment::{sampling_weights, texel_index, texel_solid_angle};
@@ -90,6 +91,7 @@ fn every_strategy_matches_the_reference_direct_light() {
                         integer_counts: false,
                         alpha_samples,
                         shadows: true,
+                        rebuild: TableRebuild::WhenChanged,
                         pixels: PixelSampling::Centres,
                     };
                     let out = env.render(ctx, &scene, &gpu, &settings, |_, _| {}).unwrap();
@@ -339,6 +341,7 @@ fn dynamic_shares_waste_fewer_samples_with_the_sun_behind() {
                     integer_counts: false,
                     alpha_samples: None,
                     shadows: true,
+                    rebuild: TableRebuild::WhenChanged,
                     pixels: PixelSampling::Centres,
                 };
                 let out = env.render(ctx, &scene, &gpu, &settings, |_, _| {}).unwrap();
@@ -410,6 +413,7 @@ fn beta_weights_keep_neighbouring_pixels_continuous() {
                     integer_counts,
                     alpha_samples: None,
                     shadows: true,
+                    rebuild: TableRebuild::WhenChanged,
                     pixels: PixelSampling::Centres,
                 };
                 let out = env.render(ctx, &scene, &gpu, &settings, |_, _| {}).unwrap();

@@ -6,6 +6,7 @@ mod common;
 
 use irad::gpu::Commands;
 use irad::methods::lightfield::tables::LuminaireTables;
+use irad::methods::rebuild::TableRebuild;
 use irad::sampling::luminaire::LuminaireSampler;
 use irad::scene::luminaire::{Basis, Emitter, Geometry, Luminaire};
 
@@ -674,7 +675,9 @@ fn a_sequence_of_atlases_rebuilds_the_tables_every_frame() {
         assert!(tables.is_sequence());
         for frame in [1u32, 2, 4] {
             let mut cmd = Commands::new(ctx).unwrap();
-            tables.record_frame(&mut cmd, frame).unwrap();
+            tables
+                .record_frame(&mut cmd, frame, TableRebuild::WhenChanged)
+                .unwrap();
             cmd.submit_and_wait().unwrap();
             let mirror = LuminaireSampler::new(&atlases[frame as usize % 3]);
             let sat = tables.sat.read().unwrap();

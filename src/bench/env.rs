@@ -14,6 +14,7 @@ use crate::gpu::{copy::CopyValues, Buffer, Commands, Context};
 use crate::methods::envmap::cube::CubeTable;
 use crate::methods::envmap::{Env, EnvSettings, Strategy};
 use crate::methods::equirect_table::EquirectTable;
+use crate::methods::rebuild::TableRebuild;
 use crate::scene::gpu::GpuScene;
 use crate::scene::{Environment, Scene};
 
@@ -184,6 +185,8 @@ pub fn run_shading(
                     strategy,
                     face_resolution,
                     shadows,
+                    // Lu's dynamic frame: the tables rebuilt every frame, as for a moving map.
+                    rebuild: TableRebuild::EveryFrame,
                     ..Default::default()
                 };
                 env.render(ctx, scene, &gpu, &settings(1), |_, _| {})?;

@@ -25,6 +25,7 @@ use crate::methods::ir::{DirectLight, InstantRadiosity, IrError, IrSettings};
 use crate::methods::lightfield::{
     Lightfield, LightfieldError, LightfieldSettings, Strategy as LightfieldStrategy,
 };
+use crate::methods::rebuild::TableRebuild;
 use crate::methods::reference::{Reference, ReferenceSettings};
 use crate::methods::RenderOutput;
 use crate::scene::gpu::GpuScene;
@@ -209,6 +210,7 @@ impl Method {
                 if let Some(offset) = s.env_offset {
                     p.insert("env_offset".into(), json!(offset));
                 }
+                p.insert("rebuild_tables".into(), json!(s.rebuild.name()));
                 p.insert(
                     "pixel_centres".into(),
                     json!(s.pixels == PixelSampling::Centres),
@@ -225,6 +227,7 @@ impl Method {
                     p.insert("alpha_samples".into(), json!(m));
                 }
                 p.insert("shadows".into(), json!(s.shadows));
+                p.insert("rebuild_tables".into(), json!(s.rebuild.name()));
                 p.insert(
                     "pixel_centres".into(),
                     json!(s.pixels == PixelSampling::Centres),
@@ -245,6 +248,7 @@ impl Method {
                 if s.sampling_only {
                     p.insert("sampling_only".into(), json!(true));
                 }
+                p.insert("rebuild_tables".into(), json!(s.rebuild.name()));
                 p.insert(
                     "pixel_centres".into(),
                     json!(s.pixels == PixelSampling::Centres),
@@ -256,12 +260,13 @@ impl Method {
 
     /// `name` with `params` over its defaults (those of `irad render`). Keys are the flags of
     /// `irad render` with `-` written `_`: reference takes spp, max_depth, roulette_depth,
-    /// pixel_centres, seed; ir takes vpls, frames, absorption, clamp, interleave, direct,
-    /// pixel_centres, seed; bir takes vpls, frames, strategy, pool, light_samples, ratio,
-    /// floor, power_samples, batch, pixel_centres, seed; bundles takes iterations, frames,
-    /// strategy, heuristic, two_bounce, two_bounce_clamp, glossy, roughness_m,
-    /// contribution_clamp, lights, directions, env_offset, pixel_centres, seed; env takes spp,
-    /// frames, strategy, face_resolution, light_only, integer_counts, alpha_samples, shadows,
+    /// pixel_centres, seed; ir takes vpls, frames, absorption, clamp ("auto" or a number),
+    /// compensate, interleave, direct, pixel_centres, seed; bir takes vpls, frames, strategy,
+    /// pool, light_samples, ratio, floor, power_samples, batch, clamp, compensate,
+    /// pixel_centres, seed; bundles takes iterations, frames, strategy, heuristic, two_bounce,
+    /// two_bounce_clamp, glossy, roughness_m, contribution_clamp, lights, directions,
+    /// env_offset, rebuild_tables, pixel_centres, seed; env takes spp, frames, strategy,
+    /// face_resolution, light_only, integer_counts, alpha_samples, shadows, rebuild_tables,
     /// pixel_centres, seed.
     pub fn from_params(name: &str, params: &toml::Table) -> Result<Method, ParamError> {
         let mut reader = Params {
@@ -385,6 +390,7 @@ impl Method {
                         true => Some(reader.non_negative("env_offset", 0.0)?),
                         false => d.env_offset,
                     },
+                    rebuild: reader.rebuild()?,
                     pixels: reader.pixels()?,
                 })
             }
@@ -407,6 +413,7 @@ impl Method {
                         false => d.alpha_samples,
                     },
                     shadows: reader.flag("shadows", d.shadows)?,
+                    rebuild: reader.rebuild()?,
                     pixels: reader.pixels()?,
                 })
             }
@@ -434,6 +441,7 @@ impl Method {
                         .flag("averaged_visibility", d.averaged_visibility)?,
                     shadows: reader.flag("shadows", d.shadows)?,
                     sampling_only: false,
+                    rebuild: reader.rebuild()?,
                     pixels: reader.pixels()?,
                 })
             }
@@ -544,6 +552,16 @@ impl<'a> Params<'a> {
         })
     }
 
+    /// `rebuild_tables`: "when-changed" (the default) or "every-frame".
+    fn rebuild(&mut self) -> Result<TableRebuild, ParamError> {
+        Ok(
+            match self.choice("rebuild_tables", &["when-changed", "every-frame"])? {
+                Some("every-frame") => TableRebuild::EveryFrame,
+                _ => TableRebuild::WhenChanged,
+            },
+        )
+    }
+
     fn flag(&mut self, key: &str, default: bool) -> Result<bool, ParamError> {
         let Some(v) = self.params.get(key) else {
             return Ok(default);
@@ -602,6 +620,7 @@ impl<'a> Params<'a> {
                 "shared_samples",
                 "averaged_visibility",
                 "shadows",
+                "rebuild_tables",
                 "pixel_centres",
             ],
             "env" => &[
@@ -614,6 +633,7 @@ impl<'a> Params<'a> {
                 "integer_counts",
                 "alpha_samples",
                 "shadows",
+                "rebuild_tables",
                 "pixel_centres",
             ],
             "bundles" => &[
@@ -630,6 +650,7 @@ impl<'a> Params<'a> {
                 "lights",
                 "directions",
                 "env_offset",
+                "rebuild_tables",
                 "pixel_centres",
             ],
             _ => &[

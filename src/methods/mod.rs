@@ -16,6 +16,7 @@ pub mod lightfield;
 pub mod method;
 pub mod paths;
 pub mod progressive;
+pub mod rebuild;
 pub mod reference;
 
 pub use method::{Method, ParamError, Renderers, RunError, METHOD_NAMES};

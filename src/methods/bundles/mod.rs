@@ -23,6 +23,7 @@ use crate::methods::accumulation::Accumulation;
 use crate::methods::direct::GBufferAndDirectLight;
 use crate::methods::gbuffer::{GBuffer, PixelSampling};
 use crate::methods::progressive;
+use crate::methods::rebuild::TableRebuild;
 use crate::methods::RenderOutput;
 use crate::sampling::environment::sampling_weights;
 use crate::sampling::pcg;
@@ -103,6 +104,9 @@ pub struct BundlesSettings {
     /// Eq. 2's Lo (luminance); None: 0 when the map is the only light, else the map's mean
     /// luminance, so bundle rays still cover the directions the map leaves dark.
     pub env_offset: Option<f32>,
+    /// The direction table (pass "bundle directions"): once for a still map, per frame for a
+    /// sequence (default), or every frame.
+    pub rebuild: TableRebuild,
     pub pixels: PixelSampling,
 }
 
@@ -120,6 +124,7 @@ impl Default for BundlesSettings {
             lights: LightSelection::All,
             directions: DirectionDensity::Environment,
             env_offset: None,
+            rebuild: TableRebuild::WhenChanged,
             pixels: PixelSampling::Jittered,
         }
     }
@@ -238,7 +243,12 @@ impl Bundles {
                     1,
                     false,
                 )?;
-                if environment && directions.density() == DirectionDensity::Environment {
+                if environment
+                    && directions.density() == DirectionDensity::Environment
+                    && settings
+                        .rebuild
+                        .due(frame, gpu_scene.environment_frames() > 1)
+                {
                     cmd.pass("bundle directions", |cmd| directions.record(cmd, gpu_scene))?;
                 }
                 let first = frame * per_frame;

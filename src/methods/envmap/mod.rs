@@ -17,6 +17,7 @@ use crate::methods::accumulation::Accumulation;
 use crate::methods::direct::GBufferAndDirectLight;
 use crate::methods::gbuffer::{GBuffer, PixelSampling};
 use crate::methods::progressive;
+use crate::methods::rebuild::TableRebuild;
 use crate::methods::RenderOutput;
 use crate::sampling::pcg;
 use crate::scene::gpu::GpuScene;
@@ -118,6 +119,9 @@ pub struct EnvSettings {
     /// A shadow ray per sample (true, the default). false leaves visibility out, as the
     /// thesis's timings do: for timing comparisons only, the image is wrong where occluded.
     pub shadows: bool,
+    /// The cube map, its CDFs, the latitude-longitude table and the pyramid: once for a still
+    /// map, per frame for a sequence (default), or every frame (Lu's pipeline, for timing).
+    pub rebuild: TableRebuild,
     pub pixels: PixelSampling,
 }
 
@@ -133,6 +137,7 @@ impl Default for EnvSettings {
             integer_counts: false,
             alpha_samples: None,
             shadows: true,
+            rebuild: TableRebuild::WhenChanged,
             pixels: PixelSampling::Jittered,
         }
     }
@@ -208,6 +213,7 @@ impl Env {
         let latlong = EquirectTable::new(ctx, gpu_scene, 0.0, strategy == Strategy::Latlong)?;
         let pyramid = EnvPyramid::new(ctx, gpu_scene, strategy == Strategy::Hierarchical)?;
         let frames = settings.frames.max(1);
+        let sequence = gpu_scene.environment_frames() > 1;
         let passes = progressive::run(
             ctx,
             gpu_scene,
@@ -226,9 +232,12 @@ impl Env {
                     0,
                     true,
                 )?;
+                let rebuild = settings.rebuild.due(frame, sequence);
                 if strategy.uses_cube() {
-                    cmd.pass("cube map", |cmd| cube.record_weights(cmd, gpu_scene))?;
-                    cmd.pass("cdf", |cmd| cube.record_cdf(cmd))?;
+                    if rebuild {
+                        cmd.pass("cube map", |cmd| cube.record_weights(cmd, gpu_scene))?;
+                        cmd.pass("cdf", |cmd| cube.record_cdf(cmd))?;
+                    }
                     // Each frame's samples are a Halton sequence from index 0 under the frame's
                     // own scrambling: every pixel uses a prefix (M_f of them), and a prefix of
                     // one sequence is well spread where a strided piece of a longer one is not.
@@ -238,10 +247,10 @@ impl Env {
                         })
                     })?;
                 }
-                if latlong.is_built() {
+                if latlong.is_built() && rebuild {
                     cmd.pass("latlong table", |cmd| latlong.record(cmd, gpu_scene))?;
                 }
-                if pyramid.is_built() {
+                if pyramid.is_built() && rebuild {
                     cmd.pass("pyramid", |cmd| pyramid.record(cmd, gpu_scene))?;
                 }
                 cmd.pass("shade", |cmd| {

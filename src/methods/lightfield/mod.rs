@@ -21,6 +21,7 @@ use crate::methods::accumulation::Accumulation;
 use crate::methods::direct::GBufferAndDirectLight;
 use crate::methods::gbuffer::{GBuffer, PixelSampling};
 use crate::methods::progressive;
+use crate::methods::rebuild::TableRebuild;
 use crate::methods::RenderOutput;
 use crate::sampling::pcg;
 use crate::scene::gpu::GpuScene;
@@ -90,6 +91,9 @@ pub struct LightfieldSettings {
     /// Draw the samples and shade nothing (the image stays black): `irad bench lightfield`'s
     /// measure of sampling alone.
     pub sampling_only: bool,
+    /// The luminaire tables: once for a still atlas, per frame for a sequence (default), or
+    /// every frame.
+    pub rebuild: TableRebuild,
     pub seed: u32,
     pub pixels: PixelSampling,
 }
@@ -106,6 +110,7 @@ impl Default for LightfieldSettings {
             averaged_visibility: false,
             shadows: true,
             sampling_only: false,
+            rebuild: TableRebuild::WhenChanged,
             seed: 0,
             pixels: PixelSampling::Jittered,
         }
@@ -289,7 +294,7 @@ impl Lightfield {
             &accumulation,
             |cmd, frame| {
                 for l in &luminaires {
-                    l.tables.record_frame(cmd, frame)?;
+                    l.tables.record_frame(cmd, frame, settings.rebuild)?;
                 }
                 // The G-buffer, the emission seen and the other lights' direct light.
                 self.direct.record(

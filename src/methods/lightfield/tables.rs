@@ -13,6 +13,7 @@ use glam::Vec4;
 
 use crate::gpu::prefix_sum::PrefixSum;
 use crate::gpu::{bind, Buffer, Commands, Context, GpuBuffer, GpuResult, Kernel};
+use crate::methods::rebuild::TableRebuild;
 use crate::scene::luminaire::Luminaire;
 
 #[repr(C)]
@@ -104,19 +105,23 @@ impl LuminaireTables {
 
     /// What frame `frame` needs: for a sequence, pass "luminaire frame" (atlas frame mod n
     /// copied into `texels`) and pass "luminaire tables"; for a still luminaire, the tables
-    /// at frame 0 only.
-    pub fn record_frame<'a>(&'a self, cmd: &mut Commands<'a>, frame: u32) -> GpuResult<()> {
-        match &self.sequence {
-            Some((atlases, count)) => {
-                let bytes = self.texels.byte_size();
-                let k = (frame % count) as u64;
-                cmd.pass("luminaire frame", |cmd| {
-                    cmd.copy_region(atlases, k * bytes, &self.texels, bytes);
-                    Ok(())
-                })?;
-            }
-            None if frame > 0 => return Ok(()),
-            None => {}
+    /// when `rebuild` says (at frame 0 only by default).
+    pub fn record_frame<'a>(
+        &'a self,
+        cmd: &mut Commands<'a>,
+        frame: u32,
+        rebuild: TableRebuild,
+    ) -> GpuResult<()> {
+        if let Some((atlases, count)) = &self.sequence {
+            let bytes = self.texels.byte_size();
+            let k = (frame % count) as u64;
+            cmd.pass("luminaire frame", |cmd| {
+                cmd.copy_region(atlases, k * bytes, &self.texels, bytes);
+                Ok(())
+            })?;
+        }
+        if !rebuild.due(frame, self.is_sequence()) {
+            return Ok(());
         }
         cmd.pass("luminaire tables", |cmd| self.record(cmd))
     }
