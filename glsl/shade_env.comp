@@ -2,7 +2,9 @@
 // The `env` method's shading (Lu 14 Section 3.3, Alg. 2, and Chapter 5), direct light of the
 // environment map with visibility (a shadow ray per sample), at each G-buffer point p with
 // shading normal n. Cube-map light samples come from the frame's pre-generated per-face
-// samples (EnvSamples, shared by every pixel); the radiance is always the scene's own map
+// samples (EnvSamples): each face's sequence is cut into `windows` windows of per_face samples
+// and each pixel reads its own window (a hash of pixel, frame and set), so the pixels' errors
+// do not all move together; windows 1 is Lu's one set shared by every pixel. The radiance is always the scene's own map
 // (envmap.glsl), the tables only drive the pdf. Strategies:
 //   dynamic (0): mu_f(n) = F_f(n) I_f / sum_g F_g(n) I_g (Eq. 3.4), F_f(n) the sum of
 //     <n, c>+ over the face's normalized corners; N_s / 2 light samples split over the faces
@@ -67,6 +69,7 @@ layout(push_constant) uniform ShadeParams {
     uint integer_counts;  // 1: round(M_f) samples per face instead of beta-weighted M_f
     float alpha_samples;  // alpha: M, the samples that estimate alpha
     uint shadows;         // 0: no shadow rays (every sample visible: the thesis's timings)
+    uint windows;         // windows of per_face samples per face and set (1: shared by all)
 } params;
 
 #define STRATEGY_DYNAMIC 0u
@@ -170,12 +173,15 @@ vec3 estimate_cube(Shading p, float mu[6], float taken[6], float brdf_count, uin
     vec3 sum = vec3(0.0);
     float light_count = 0.0;
     for (uint f = 0u; f < 6u; ++f) light_count += taken[f];
+    uint window = params.windows > 1u
+        ? hash4(params.seed, p.pixel, params.frame, 0x77696e64u + set) % params.windows
+        : 0u;
     for (uint f = 0u; f < 6u; ++f) {
         float count = taken[f];
         uint n_f = min(uint(ceil(count)), params.per_face);
         for (uint i = 0u; i < n_f; ++i) {
             float beta = min(1.0, count - float(i));
-            vec4 ls = env_samples[(set * 6u + f) * params.per_face + i];
+            vec4 ls = env_samples[((set * 6u + f) * params.windows + window) * params.per_face + i];
             if (!(ls.w > 0.0)) continue;
             vec3 wi = ls.xyz;
             counts += vec2(beta, dot(p.n, wi) > 0.0 && dot(p.side, wi) > 0.0 ? beta : 0.0);

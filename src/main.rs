@@ -251,7 +251,9 @@ struct RenderArgs {
     #[arg(long)]
     binary_search: bool,
     /// lightfield: every pixel takes the same Halton prefixes (Lu Section 4.5.3) instead of
-    /// its own rotation of them (biased per pixel pattern, not in the mean).
+    /// its own rotation of them (biased per pixel pattern, not in the mean). env: every pixel
+    /// takes the frame's one set of light samples per face (Lu's) instead of its own window
+    /// of a 64 times longer sequence (the whole image's error then moves as one).
     #[arg(long)]
     shared_samples: bool,
     /// lightfield: one shadow ray per image toward its median point instead of one per sample
@@ -1078,6 +1080,7 @@ fn render(options: &ContextOptions, args: RenderArgs) -> Result<()> {
             integer_counts: args.integer_counts,
             alpha_samples: args.alpha_samples,
             shadows: !args.no_shadows,
+            shared_samples: args.shared_samples,
             rebuild: match args.rebuild_tables {
                 RebuildArg::WhenChanged => TableRebuild::WhenChanged,
                 RebuildArg::EveryFrame => TableRebuild::EveryFrame,

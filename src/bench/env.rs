@@ -85,7 +85,7 @@ pub fn run(
     let mut results = Vec::new();
     for &r in faces {
         progress(r);
-        let cube = CubeTable::new(ctx, r, samples_per_face, 1)?;
+        let cube = CubeTable::new(ctx, r, samples_per_face, 1, 1)?;
         let mut times: [Vec<f64>; 5] = Default::default();
         for i in 0..warmup + repeats {
             let mut cmd = Commands::new(ctx)?;

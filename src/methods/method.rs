@@ -227,6 +227,7 @@ impl Method {
                     p.insert("alpha_samples".into(), json!(m));
                 }
                 p.insert("shadows".into(), json!(s.shadows));
+                p.insert("shared_samples".into(), json!(s.shared_samples));
                 p.insert("rebuild_tables".into(), json!(s.rebuild.name()));
                 p.insert(
                     "pixel_centres".into(),
@@ -266,7 +267,8 @@ impl Method {
     /// pixel_centres, seed; bundles takes iterations, frames, strategy, heuristic, two_bounce,
     /// two_bounce_clamp, glossy, roughness_m, contribution_clamp, lights, directions,
     /// env_offset, rebuild_tables, pixel_centres, seed; env takes spp, frames, strategy,
-    /// face_resolution, light_only, integer_counts, alpha_samples, shadows, rebuild_tables,
+    /// face_resolution, light_only, integer_counts, alpha_samples, shadows, shared_samples,
+    /// rebuild_tables,
     /// pixel_centres, seed.
     pub fn from_params(name: &str, params: &toml::Table) -> Result<Method, ParamError> {
         let mut reader = Params {
@@ -413,6 +415,7 @@ impl Method {
                         false => d.alpha_samples,
                     },
                     shadows: reader.flag("shadows", d.shadows)?,
+                    shared_samples: reader.flag("shared_samples", d.shared_samples)?,
                     rebuild: reader.rebuild()?,
                     pixels: reader.pixels()?,
                 })
@@ -633,6 +636,7 @@ impl<'a> Params<'a> {
                 "integer_counts",
                 "alpha_samples",
                 "shadows",
+                "shared_samples",
                 "rebuild_tables",
                 "pixel_centres",
             ],

@@ -24,6 +24,7 @@ struct SampleParams {
     first: u32,
     seed: u32,
     set: u32,
+    window: u32,
 }
 
 pub struct CubeTable {
@@ -33,8 +34,11 @@ pub struct CubeTable {
     over_rows: PrefixSum,
     /// R: texels along a face's side.
     pub resolution: u32,
-    /// Light samples pre-generated per face, set and frame.
+    /// Light samples per face, set, frame and window (what one pixel may take).
     pub per_face: u32,
+    /// Windows of `per_face` samples per face and set; each pixel reads one (1: every pixel
+    /// shares one set, Lu's).
+    pub windows: u32,
     /// Independent sample sets (alpha draws its two steps from two).
     pub sets: u32,
     pub weights: Buffer<f32>,
@@ -46,10 +50,17 @@ pub struct CubeTable {
 }
 
 impl CubeTable {
-    pub fn new(ctx: &Context, resolution: u32, per_face: u32, sets: u32) -> GpuResult<Self> {
+    pub fn new(
+        ctx: &Context,
+        resolution: u32,
+        per_face: u32,
+        sets: u32,
+        windows: u32,
+    ) -> GpuResult<Self> {
         let r = resolution.max(1) as usize;
         let per_face = per_face.max(1);
         let sets = sets.max(1);
+        let windows = windows.max(1);
         Ok(CubeTable {
             weigh: Kernel::new(ctx, "weigh_env_cube")?,
             generate: Kernel::new(ctx, "generate_env_samples")?,
@@ -57,13 +68,14 @@ impl CubeTable {
             over_rows: PrefixSum::new(ctx, r, 6)?,
             resolution: r as u32,
             per_face,
+            windows,
             sets,
             weights: Buffer::zeroed(ctx, "CubeWeights", 6 * r * r)?,
             row_cdf: Buffer::zeroed(ctx, "CubeRowCdf", 6 * r * r)?,
             row_totals: Buffer::zeroed(ctx, "cube row totals", 6 * r)?,
             face_cdf: Buffer::zeroed(ctx, "CubeFaceCdf", 6 * r)?,
             face_totals: Buffer::zeroed(ctx, "CubeFaceTotals", 6)?,
-            samples: Buffer::zeroed(ctx, "EnvSamples", 6 * (sets * per_face) as usize)?,
+            samples: Buffer::zeroed(ctx, "EnvSamples", 6 * (sets * per_face * windows) as usize)?,
         })
     }
 
@@ -98,8 +110,9 @@ impl CubeTable {
             .record(cmd, &self.row_totals, &self.face_cdf, &self.face_totals)
     }
 
-    /// Pass "light samples": `per_face` samples per face of sample set `set` from Halton
-    /// index `first`.
+    /// Pass "light samples": `per_face` samples per face and window of sample set `set`, each
+    /// window a scrambled Halton sequence from index `first`, window 0 scrambled by `seed`,
+    /// the others each by their own hash of it.
     pub fn record_samples<'a>(
         &'a self,
         cmd: &mut Commands<'a>,
@@ -111,12 +124,17 @@ impl CubeTable {
         bindings.push(bind("EnvSamples", &self.samples));
         let params = SampleParams {
             resolution: self.resolution,
-            per_face: self.per_face,
+            per_face: self.per_face * self.windows,
             first,
             seed,
             set: set.min(self.sets - 1),
+            window: self.per_face,
         };
-        self.generate
-            .dispatch_threads(cmd, &bindings, &params, [self.per_face, 6, 1])
+        self.generate.dispatch_threads(
+            cmd,
+            &bindings,
+            &params,
+            [self.per_face * self.windows, 6, 1],
+        )
     }
 }

@@ -122,6 +122,10 @@ pub struct EnvSettings {
     /// The cube map, its CDFs, the latitude-longitude table and the pyramid: once for a still
     /// map, per frame for a sequence (default), or every frame (Lu's pipeline, for timing).
     pub rebuild: TableRebuild,
+    /// Lu's one set of light samples per face and frame shared by every pixel (true), instead
+    /// of a window per pixel out of SAMPLE_WINDOWS (the default, whose image error does not
+    /// move as one).
+    pub shared_samples: bool,
     pub pixels: PixelSampling,
 }
 
@@ -138,6 +142,7 @@ impl Default for EnvSettings {
             alpha_samples: None,
             shadows: true,
             rebuild: TableRebuild::WhenChanged,
+            shared_samples: false,
             pixels: PixelSampling::Jittered,
         }
     }
@@ -152,6 +157,9 @@ pub enum EnvError {
     #[error(transparent)]
     Gpu(#[from] GpuError),
 }
+
+/// Windows of light samples per face and frame that pixels pick from (unless shared).
+pub const SAMPLE_WINDOWS: u32 = 64;
 
 pub struct Env {
     direct: GBufferAndDirectLight,
@@ -206,7 +214,12 @@ impl Env {
             _ if light_only => (spp, 1),
             _ => (spp.div_ceil(2), 1),
         };
-        let cube = CubeTable::new(ctx, settings.face_resolution, per_face, sets)?;
+        let windows = if settings.shared_samples {
+            1
+        } else {
+            SAMPLE_WINDOWS
+        };
+        let cube = CubeTable::new(ctx, settings.face_resolution, per_face, sets, windows)?;
         let seed = pcg::hash(&[settings.seed, 0x656e76]);
         let counts = Buffer::<[f32; 2]>::zeroed(ctx, "EnvSampleCounts", gpu_scene.pixel_count())?;
         let alpha = Buffer::<[f32; 2]>::zeroed(ctx, "EnvAlpha", gpu_scene.pixel_count())?;

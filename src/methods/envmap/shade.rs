@@ -26,6 +26,7 @@ struct ShadeParams {
     integer_counts: u32,
     alpha_samples: f32,
     shadows: u32,
+    windows: u32,
 }
 
 /// What the shading does this frame.
@@ -84,6 +85,7 @@ impl ShadeEnv {
             integer_counts: settings.integer_counts as u32,
             alpha_samples: settings.alpha_samples as f32,
             shadows: settings.shadows as u32,
+            windows: cube.windows,
         };
         self.0
             .dispatch(cmd, &bindings, &params, scene.image_workgroups())
