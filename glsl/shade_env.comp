@@ -48,7 +48,7 @@ layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 #include "equirect_table.glsl"
 #include "env_pyramid.glsl"
 
-// Per sample set s, face f and sample k: slot (s * 6 + f) * per_face + k.
+// Per sample set s, face f, window w and sample k: slot ((s * 6 + f) * windows + w) * per_face + k.
 layout(set = 0, binding = 24, std430) readonly buffer EnvSamples { vec4 env_samples[]; };
 // Per pixel, summed over frames: x the light samples used (their beta weights), y those that
 // are effective (above the surface: not cancelled by the cosine; Lu Fig. 3.6).

@@ -29,6 +29,8 @@ layout(push_constant) uniform CompensationParams {
     uint frame;
     uint seed;
     float g_clamp;  // b > 0
+    float direct_weight;  // multiplies the next-event term: the share of the frame's estimate
+                          // the compensated gather is (bir without resampling: 1 / batches)
 } params;
 
 layout(set = 0, binding = 14, std430) readonly buffer CompensationIn { CompensationVertex vertices_in[]; };
@@ -112,7 +114,10 @@ void main() {
                     vec3 to_light = y + ls.direction * ls.distance - origin_y;
                     visible = !trace_any(origin_y, to_light, 0.9999);
                 }
-                if (visible) accumulate_radiance(pixel, beta * f * cos_l * ls.radiance / ls.pdf);
+                if (visible) {
+                    accumulate_radiance(
+                        pixel, beta * f * cos_l * ls.radiance * (params.direct_weight / ls.pdf));
+                }
             }
         }
     }

@@ -59,6 +59,9 @@ fn every_strategy_matches_the_reference_mean_in_the_cornell_box() {
                         seed: 100 + seed,
                         strategy,
                         ratio,
+                        // Unresampled in two batches: each batch's compensation weighs its
+                        // share of the direct light at the paths' vertices.
+                        batch: if ratio > 0 { 0 } else { 128 },
                         ..Default::default()
                     };
                     let out = bir.render(ctx, &scene, &gpu, &settings, |_, _| {}).unwrap();

@@ -150,6 +150,7 @@ struct TraceParams {
     frame: u32,
     seed: u32,
     g_clamp: f32,
+    direct_weight: f32,
 }
 
 #[repr(C)]
@@ -195,6 +196,7 @@ impl ClampCompensation {
         buffers: &'a CompensationBuffers,
         sources: &[VplSource<'a>],
         g_clamp: f32,
+        direct_weight: f32,
         frame: u32,
         seed: u32,
     ) -> GpuResult<()> {
@@ -214,6 +216,7 @@ impl ClampCompensation {
                 frame,
                 seed,
                 g_clamp,
+                direct_weight,
             };
             self.trace
                 .dispatch_threads(cmd, &bindings, &params, threads)?;
@@ -255,7 +258,10 @@ pub struct FrameClamp {
 
 impl FrameClamp {
     /// Records pass "clamp compensation" after a gather of `sources` at `g_clamp`, or nothing
-    /// when the clamp is off or not compensated. `seed` keys the paths' random numbers.
+    /// when the clamp is off or not compensated. `direct_weight` is the share of the frame's
+    /// estimate this gather is (the weight of the next-event term at the paths' vertices,
+    /// which the sources' weights do not carry: 1 for one gather per frame). `seed` keys the
+    /// paths' random numbers.
     #[allow(clippy::too_many_arguments)]
     pub fn record_compensation<'a>(
         &'a self,
@@ -265,6 +271,7 @@ impl FrameClamp {
         gbuffer: &'a GBuffer,
         accumulation: &'a Accumulation,
         sources: &[VplSource<'a>],
+        direct_weight: f32,
         frame: u32,
         seed: u32,
     ) -> GpuResult<()> {
@@ -280,6 +287,7 @@ impl FrameClamp {
                 buffers,
                 sources,
                 self.g_clamp,
+                direct_weight,
                 frame,
                 seed,
             )

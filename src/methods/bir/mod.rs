@@ -431,6 +431,9 @@ impl Bir {
                             &unused,
                             &clamp,
                             &sources,
+                            // The sides' weights sum to 1: each batch is 1 / batches of the
+                            // frame's estimate.
+                            1.0 / batches as f32,
                             frame,
                             seed,
                         )?;
@@ -453,6 +456,7 @@ impl Bir {
                         &unused,
                         &clamp,
                         &sources,
+                        1.0,
                         frame,
                         seed,
                     )?;
@@ -495,7 +499,8 @@ impl Bir {
 }
 
 impl Bir {
-    /// Pass "vpl accumulation" over `sources` at the clamp, then its compensation.
+    /// Pass "vpl accumulation" over `sources` at the clamp, then its compensation, whose
+    /// next-event term weighs `direct_weight` (FrameClamp::record_compensation).
     #[allow(clippy::too_many_arguments)]
     fn gather_compensated<'a>(
         &'a self,
@@ -506,6 +511,7 @@ impl Bir {
         unused: &'a Buffer<glam::Vec4>,
         clamp: &'a FrameClamp,
         sources: &[VplSource<'a>],
+        direct_weight: f32,
         frame: u32,
         seed: u32,
     ) -> Result<(), GpuError> {
@@ -533,6 +539,7 @@ impl Bir {
             gbuffer,
             accumulation,
             sources,
+            direct_weight,
             frame,
             seed,
         )

@@ -160,6 +160,8 @@ pub enum EnvError {
 
 /// Windows of light samples per face and frame that pixels pick from (unless shared).
 pub const SAMPLE_WINDOWS: u32 = 64;
+/// Most light samples a frame generates over its windows (16 MiB of samples).
+pub const MAX_WINDOWED_SAMPLES: u32 = 1 << 20;
 
 pub struct Env {
     direct: GBufferAndDirectLight,
@@ -214,10 +216,12 @@ impl Env {
             _ if light_only => (spp, 1),
             _ => (spp.div_ceil(2), 1),
         };
-        let windows = if settings.shared_samples {
+        // Fewer windows where a frame's samples would pass MAX_WINDOWED_SAMPLES (a huge N_s),
+        // none for the strategies that draw nothing from the cube map.
+        let windows = if settings.shared_samples || !strategy.uses_cube() {
             1
         } else {
-            SAMPLE_WINDOWS
+            (MAX_WINDOWED_SAMPLES / (6 * sets * per_face).max(1)).clamp(1, SAMPLE_WINDOWS)
         };
         let cube = CubeTable::new(ctx, settings.face_resolution, per_face, sets, windows)?;
         let seed = pcg::hash(&[settings.seed, 0x656e76]);

@@ -198,6 +198,7 @@ impl InstantRadiosity {
                         slots: surface.clone(),
                         weight: 1.0,
                     }],
+                    1.0,
                     frame,
                     pcg::hash(&[settings.seed, frame, 0x636f6d70]),
                 )?;
