@@ -180,7 +180,7 @@ fn main() {
         sorted.sort_by(f64::total_cmp);
         let stats: Vec<String> = stats.iter().map(|(k, v)| format!("{k} {v:.3}")).collect();
         println!(
-            "{name}: mean {m:.4} ± {e:.4}; relMSE mean {:.4} median {:.4} max {:.4}; {gpu_ms:.0} GPU ms per render; {}",
+            "{name}: mean {m:.4} ± {e:.4}; relMSE mean {:.3e} median {:.3e} max {:.3e}; {gpu_ms:.0} GPU ms per render; {}",
             errors.iter().sum::<f64>() / errors.len() as f64,
             sorted[sorted.len() / 2],
             sorted[sorted.len() - 1],

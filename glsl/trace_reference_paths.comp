@@ -28,6 +28,7 @@ layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 #include "bsdf.glsl"
 #include "lights.glsl"
 #include "gbuffer.glsl"
+#include "camera.glsl"
 #include "radiance.glsl"
 
 layout(push_constant) uniform PathParams {
@@ -37,6 +38,15 @@ layout(push_constant) uniform PathParams {
     uint roulette_depth;  // first bounce at which Russian roulette may end the path
     uint environment;     // 0: the environment is seen by the camera only, not reflected (a
                           // method that estimates its reflection itself: bundles)
+    uint camera_samples;  // 0: one path from the G-buffer's hit, sample index `frame`; K > 0:
+                          // K paths per pixel, each from its own camera ray at subpixel
+                          // position and sample index frame * K + k, weighted 1 / K (the
+                          // many-light methods' --direct-spp: direct light and the pixel
+                          // footprint get K samples per frame)
+    uint first_sample;    // with camera_samples: this dispatch's samples are k = first_sample
+    uint sample_count;    // .. first_sample + sample_count - 1 (split so no invocation runs
+                          // past lavapipe's loop budget: src/methods/paths.rs)
+    uint centred;         // with camera_samples: 1 aims every camera ray at the pixel centre
 } params;
 
 const uint DIMENSIONS_PER_BOUNCE = 8u;
@@ -45,21 +55,9 @@ float max_component(vec3 v) {
     return max(max(v.x, v.y), v.z);
 }
 
-void main() {
-    uvec2 pixel = gl_GlobalInvocationID.xy;
-    if (pixel.x >= scene.size.x || pixel.y >= scene.size.y) return;
-    uint index = pixel.y * scene.size.x + pixel.x;
-    GBufferTexel g = gbuffer[index];
-
-    vec3 dir = g.direction.xyz;
-    bool found = g.position.w >= 0.0;
-    vec3 p = g.position.xyz;
-    float t = g.position.w;
-    uint tri = floatBitsToUint(g.geometric_normal.w);
-    vec3 ns = g.shading_normal.xyz;
-    vec3 ng = g.geometric_normal.xyz;
-    uint mat = floatBitsToUint(g.shading_normal.w);
-
+// The path's estimate from its first hit (found false: the camera ray `dir` missed).
+vec3 path_radiance(uint index, uint sample_index, vec3 dir, bool found, vec3 p, float t,
+                   uint tri, vec3 ns, vec3 ng, uint mat) {
     // Lights next-event estimation draws from: all, or, with the environment left out, the
     // entries before its own (the last), whose share of the table is `mass`.
     uint entries = scene.size.z;
@@ -100,10 +98,10 @@ void main() {
         uint dim = 2u + depth * DIMENSIONS_PER_BOUNCE;
 
         LightSample ls;
-        uint r_select = random_u31(params.seed, index, params.frame, dim);
-        uint r_texel = random_u31(params.seed, index, params.frame, dim + 7u);
-        vec2 u_light = vec2(random(params.seed, index, params.frame, dim + 1u),
-                            random(params.seed, index, params.frame, dim + 2u));
+        uint r_select = random_u31(params.seed, index, sample_index, dim);
+        uint r_texel = random_u31(params.seed, index, sample_index, dim + 7u);
+        vec2 u_light = vec2(random(params.seed, index, sample_index, dim + 1u),
+                            random(params.seed, index, sample_index, dim + 2u));
         if (bound < 0x80000000u) {
             // Rescaled below the bound (select_light_among keeps it among the first entries).
             r_select = bound == 0u ? 0u : min(uint(float(r_select) * mass), bound - 1u);
@@ -129,9 +127,9 @@ void main() {
             }
         }
 
-        vec3 u_bsdf = vec3(random(params.seed, index, params.frame, dim + 3u),
-                           random(params.seed, index, params.frame, dim + 4u),
-                           random(params.seed, index, params.frame, dim + 5u));
+        vec3 u_bsdf = vec3(random(params.seed, index, sample_index, dim + 3u),
+                           random(params.seed, index, sample_index, dim + 4u),
+                           random(params.seed, index, sample_index, dim + 5u));
         vec3 wi;
         if (!bsdf_sample(m, n, wo, u_bsdf, wi)) break;
         float pdf = bsdf_pdf(m, n, wo, wi);
@@ -143,7 +141,7 @@ void main() {
 
         if (depth + 1u >= params.roulette_depth) {
             float q = max(0.0, 1.0 - max_component(beta));
-            if (random(params.seed, index, params.frame, dim + 6u) < q) break;
+            if (random(params.seed, index, sample_index, dim + 6u) < q) break;
             beta /= 1.0 - q;
         }
 
@@ -159,5 +157,44 @@ void main() {
             mat = triangle_material(tri);
         }
     }
-    accumulate_radiance(index, L);
+    return L;
+}
+
+void main() {
+    uvec2 pixel = gl_GlobalInvocationID.xy;
+    if (pixel.x >= scene.size.x || pixel.y >= scene.size.y) return;
+    uint index = pixel.y * scene.size.x + pixel.x;
+
+    if (params.camera_samples == 0u) {
+        GBufferTexel g = gbuffer[index];
+        vec3 L = path_radiance(index, params.frame, g.direction.xyz, g.position.w >= 0.0,
+                               g.position.xyz, g.position.w, floatBitsToUint(g.geometric_normal.w),
+                               g.shading_normal.xyz, g.geometric_normal.xyz,
+                               floatBitsToUint(g.shading_normal.w));
+        accumulate_radiance(index, L);
+        return;
+    }
+    vec3 sum = vec3(0.0);
+    vec3 origin = scene.camera_position.xyz;
+    for (uint k = params.first_sample; k < params.first_sample + params.sample_count; ++k) {
+        uint sample_index = params.frame * params.camera_samples + k;
+        vec2 subpixel = params.centred != 0u ? vec2(0.5)
+                                             : subpixel_position(params.seed, index, sample_index);
+        vec3 dir = camera_direction(pixel, subpixel);
+        RayHit hit;
+        vec3 L;
+        if (trace_closest(origin, dir, infinity(), hit)) {
+            uint tri = hit.triangle;
+            L = path_radiance(index, sample_index, dir, true, origin + hit.t * dir, hit.t, tri,
+                              shading_normal(tri, hit.barycentrics),
+                              shading_triangles[tri].geometric_normal.xyz,
+                              triangle_material(tri));
+        } else {
+            L = path_radiance(index, sample_index, dir, false, origin, -1.0, 0u, vec3(0.0),
+                              vec3(0.0), 0u);
+        }
+        // A non-finite sample is dropped whole (and counted) by accumulate_radiance below.
+        sum += L;
+    }
+    accumulate_radiance(index, sum / float(params.camera_samples));
 }

@@ -1,5 +1,6 @@
 //! The `irad` command line.
 
+use irad::methods::direct::MAX_DIRECT_SPP;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -213,6 +214,12 @@ struct RenderArgs {
     /// (Kollig and Keller 2004; unbiased) [default: on], or leave the clamp's bias (off).
     #[arg(long, value_enum, default_value_t = OnOff::On)]
     compensate: OnOff,
+    /// ir, bir, bundles: direct-light samples per pixel and frame, each from its own camera
+    /// ray at a new subpixel position, so direct light and the pixel footprint get this many
+    /// samples per expensive frame while the VPL gather shades one position [default: see
+    /// README "Budgets"].
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=MAX_DIRECT_SPP as i64))]
+    direct_spp: Option<u32>,
     /// ir: interleaved sampling over k x k pixel blocks (1 disables it).
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=16))]
     interleave: u32,
@@ -958,6 +965,7 @@ fn render(options: &ContextOptions, args: RenderArgs) -> Result<()> {
                 DirectArg::Nee => DirectLight::NextEvent,
                 DirectArg::Vpl => DirectLight::Vpl,
             },
+            direct_spp: args.direct_spp.unwrap_or(IrSettings::default().direct_spp),
             pixels,
         }),
         MethodArg::Bir if !(args.floor.is_finite() && args.floor >= 0.0) => {
@@ -987,6 +995,7 @@ fn render(options: &ContextOptions, args: RenderArgs) -> Result<()> {
                 clamp: args.clamp,
                 compensate: args.compensate == OnOff::On,
             },
+            direct_spp: args.direct_spp.unwrap_or(irad::methods::bir::BirSettings::default().direct_spp),
             pixels,
         }),
         MethodArg::Bundles
@@ -1057,6 +1066,7 @@ fn render(options: &ContextOptions, args: RenderArgs) -> Result<()> {
                 RebuildArg::WhenChanged => TableRebuild::WhenChanged,
                 RebuildArg::EveryFrame => TableRebuild::EveryFrame,
             },
+            direct_spp: args.direct_spp.unwrap_or(BundlesSettings::default().direct_spp),
             pixels,
         }),
         MethodArg::Env => Method::Env(EnvSettings {
@@ -1222,8 +1232,17 @@ fn bench_suite(options: &ContextOptions, args: SuiteArgs) -> Result<()> {
                 .as_ref()
                 .map(|f| format!(", expected to fail: {}", f.methods.join(", ")))
                 .unwrap_or_default();
+            let depth = match &s.reference {
+                Method::Reference(r) if r.max_depth < 64 => format!(" (max_depth {})", r.max_depth),
+                _ => String::new(),
+            };
+            let home = if s.home.is_empty() {
+                String::new()
+            } else {
+                format!(", home of: {}", s.home.join(", "))
+            };
             println!(
-                "  scene {} {}x{}, reference {} spp{failing}",
+                "  scene {} {}x{}, reference {} spp{depth}{failing}{home}",
                 s.scene.name,
                 cam.width,
                 cam.height,

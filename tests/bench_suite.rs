@@ -204,6 +204,71 @@ fn quick_suite_writes_every_output_and_charts_the_csv_figures() {
     let _ = fs::remove_dir_all(&dir);
 }
 
+/// A time budget: the run calibrates its count (frames; the reference's spp) to fill the
+/// GPU time, records it, and renders exactly as a fixed budget of that count does; the report
+/// tables the scene's runs at equal time with the home method marked.
+#[test]
+fn a_time_budget_records_its_count_and_renders_as_that_count_does() {
+    let dir = temp_dir("time");
+    let cache = dir.join("cache");
+    let text = r#"
+name = "time"
+width = 16
+warmup = 0
+repeats = 1
+flicker_frames = 0
+[reference]
+spp = 32
+[[scene]]
+path = "embedded:cornell-box"
+home = ["ir"]
+[[method]]
+method = "reference"
+label = "pt"
+budgets = [{ time_ms = 40 }]
+[[method]]
+method = "ir"
+params = { vpls = 8 }
+budgets = [{ time_ms = 80 }]
+"#;
+    let suite = Suite::parse("time.toml", text, &scenes_dir()).unwrap();
+    common::with_gpu(|ctx| {
+        let timed = run_suite(ctx, &suite, &dir.join("timed"), &cache, Shard::WHOLE);
+        let mut fixed_text = text.to_string();
+        for (run, key) in timed.runs.iter().zip(["spp", "frames"]) {
+            assert_eq!(run.status, Status::Ok, "{}", run.note);
+            let count = run
+                .calibrated_count
+                .expect("a time budget records its count");
+            assert!(count >= 1);
+            assert_eq!(run.parameters[key], serde_json::json!(count), "{}", run.id);
+            assert!(!run.calibration.is_empty() && run.calibration.iter().all(|t| t.ms > 0.0));
+            let budget = format!("{{ time_ms = {} }}", run.time_ms.unwrap());
+            fixed_text = fixed_text.replacen(&budget, &format!("{{ {key} = {count} }}"), 1);
+        }
+        assert!(timed.runs[1].home && !timed.runs[0].home);
+        let fixed = Suite::parse("time.toml", &fixed_text, &scenes_dir()).unwrap();
+        let counted = run_suite(ctx, &fixed, &dir.join("counted"), &cache, Shard::WHOLE);
+        // The same bits: every error figure equal.
+        let metrics = |r: &SuiteResults| r.runs.iter().map(|r| r.metrics).collect::<Vec<_>>();
+        assert_eq!(metrics(&timed), metrics(&counted));
+        assert!(metrics(&timed).iter().all(|m| m.is_some()));
+        let rows = csv_rows(&dir.join("timed").join("results.csv"));
+        assert_eq!(
+            rows[1]["calibrated_count"],
+            timed.runs[1].calibrated_count.unwrap().to_string()
+        );
+        assert_eq!(rows[1]["time_ms"], "80");
+        let report = fs::read_to_string(dir.join("timed").join("report.md")).unwrap();
+        assert!(report.contains("Equal time, 80 GPU ms"), "{report}");
+        assert!(
+            report.contains("| ⌂ | ir |") && report.contains("speed vs pt"),
+            "{report}"
+        );
+    });
+    let _ = fs::remove_dir_all(&dir);
+}
+
 const TINY_SUITE: &str = r#"
 name = "tiny"
 width = 16
@@ -598,6 +663,27 @@ fn bad_suite_files_name_file_field_and_value() {
     );
     assert!(
         e.contains("method[0].budgets[0].spp = 1: also set in params"),
+        "{e}"
+    );
+    let e = with(
+        "{ vpls = 8, frames = 1 }",
+        "{ vpls = 8, frames = 1, time_ms = 500 }",
+    );
+    assert!(
+        e.contains("method[1].budgets[0].frames = 1: a time_ms budget calibrates frames"),
+        "{e}"
+    );
+    let e = with("{ spp = 1 }", "{ time_ms = 0 }");
+    assert!(
+        e.contains("method[0].budgets[0].time_ms = 0: must be GPU milliseconds"),
+        "{e}"
+    );
+    let e = with(
+        "path = \"embedded:cornell-box\"",
+        "path = \"embedded:cornell-box\"\nhome = [\"bidir\"]",
+    );
+    assert!(
+        e.contains("scene[0].home = \"bidir\": not the label"),
         "{e}"
     );
     let e = with("budgets = [{ vpls = 8, frames = 1 }]", "budgets = []");

@@ -8,7 +8,11 @@ use crate::scene::gpu::GpuScene;
 
 use super::accumulation::Accumulation;
 use super::gbuffer::{GBuffer, PixelSampling, WriteGBuffer};
-use super::paths::TracePaths;
+use super::paths::{PathStarts, TracePaths};
+
+/// The most `--direct-spp` accepts: more direct samples than a frame's VPL gather costs
+/// rays is never the budget's best split.
+pub const MAX_DIRECT_SPP: u32 = 1024;
 
 pub struct GBufferAndDirectLight {
     gbuffer: WriteGBuffer,
@@ -24,7 +28,10 @@ impl GBufferAndDirectLight {
     }
 
     /// Records the passes "gbuffer" and "direct light" of `frame`; `reflected_environment`
-    /// false leaves the environment's direct light out (bundles estimates it).
+    /// false leaves the environment's direct light out (bundles estimates it). `direct_spp` 0
+    /// starts the direct-light paths at the G-buffer's hits; K > 0 gives them K camera rays of
+    /// their own per pixel and frame (`--direct-spp`), so direct light and the pixel footprint
+    /// get K samples while the frame's expensive indirect estimate gets one position.
     #[allow(clippy::too_many_arguments)]
     pub fn record<'a>(
         &'a self,
@@ -37,7 +44,12 @@ impl GBufferAndDirectLight {
         pixels: PixelSampling,
         max_depth: u32,
         reflected_environment: bool,
+        direct_spp: u32,
     ) -> GpuResult<()> {
+        let starts = match direct_spp {
+            0 => PathStarts::GBuffer,
+            samples => PathStarts::Camera { samples, pixels },
+        };
         cmd.pass("gbuffer", |cmd| {
             self.gbuffer
                 .record(cmd, scene, gbuffer, frame, seed, pixels)
@@ -53,6 +65,7 @@ impl GBufferAndDirectLight {
                 max_depth,
                 u32::MAX,
                 reflected_environment,
+                starts,
             )
         })
     }

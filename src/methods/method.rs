@@ -18,6 +18,7 @@ use crate::methods::bundles::{
     Bundles, BundlesError, BundlesSettings, Strategy as BundlesStrategy, Suppression,
 };
 use crate::methods::compensation::{ClampSettings, VplClamp};
+use crate::methods::direct::MAX_DIRECT_SPP;
 use crate::methods::envmap::{Env, EnvError, EnvSettings, Strategy as EnvStrategy};
 use crate::methods::gbuffer::PixelSampling;
 use crate::methods::ir::schedule::Absorption;
@@ -107,6 +108,29 @@ impl Method {
         }
     }
 
+    /// The parameter a time budget calibrates (`time_ms` in a suite): the reference's `spp`,
+    /// every other method's `frames`; `samples()` reads it.
+    pub fn count_key(&self) -> &'static str {
+        match self {
+            Method::Reference(_) => "spp",
+            _ => "frames",
+        }
+    }
+
+    /// The same method and settings with `count_key()` set to `count`.
+    pub fn with_count(&self, count: u32) -> Method {
+        let mut m = self.clone();
+        match &mut m {
+            Method::Reference(s) => s.spp = count,
+            Method::Ir(s) => s.frames = count,
+            Method::Bir(s) => s.frames = count,
+            Method::Bundles(s) => s.frames = count,
+            Method::Env(s) => s.frames = count,
+            Method::Lightfield(s) => s.frames = count,
+        }
+        m
+    }
+
     /// Work in units that scale a method's cost at a fixed resolution, for time estimates:
     /// samples per pixel, or frames times light paths.
     pub fn work(&self) -> f64 {
@@ -138,6 +162,7 @@ impl Method {
                 );
             }
             Method::Ir(s) => {
+                p.insert("direct_spp".into(), json!(s.direct_spp));
                 p.insert("vpls".into(), json!(s.paths));
                 p.insert("frames".into(), json!(s.frames));
                 p.insert(
@@ -164,6 +189,7 @@ impl Method {
                 );
             }
             Method::Bir(s) => {
+                p.insert("direct_spp".into(), json!(s.direct_spp));
                 p.insert("vpls".into(), json!(s.vpls));
                 p.insert("frames".into(), json!(s.frames));
                 p.insert("strategy".into(), json!(s.strategy.name()));
@@ -176,6 +202,8 @@ impl Method {
                 p.insert("power_samples".into(), json!(s.power_samples));
                 p.insert("batch".into(), json!(s.batch));
                 p.insert("light_cdf".into(), json!(s.light_cdf));
+                p.insert("clamp".into(), s.clamp.clamp_param());
+                p.insert("compensate".into(), json!(s.clamp.compensate));
                 p.insert("adaptive".into(), json!(s.adaptive));
                 p.insert(
                     "pixel_centres".into(),
@@ -183,6 +211,7 @@ impl Method {
                 );
             }
             Method::Bundles(s) => {
+                p.insert("direct_spp".into(), json!(s.direct_spp));
                 p.insert("iterations".into(), json!(s.iterations));
                 p.insert("frames".into(), json!(s.frames));
                 p.insert("strategy".into(), json!(s.strategy.name()));
@@ -262,11 +291,11 @@ impl Method {
     /// `name` with `params` over its defaults (those of `irad render`). Keys are the flags of
     /// `irad render` with `-` written `_`: reference takes spp, max_depth, roulette_depth,
     /// pixel_centres, seed; ir takes vpls, frames, absorption, clamp ("auto" or a number),
-    /// compensate, interleave, direct, pixel_centres, seed; bir takes vpls, frames, strategy,
+    /// compensate, interleave, direct, direct_spp, pixel_centres, seed; bir takes vpls, frames, strategy,
     /// pool, light_samples, ratio, floor, power_samples, batch, clamp, compensate,
-    /// pixel_centres, seed; bundles takes iterations, frames, strategy, heuristic, two_bounce,
+    /// direct_spp, pixel_centres, seed; bundles takes iterations, frames, strategy, heuristic, two_bounce,
     /// two_bounce_clamp, glossy, roughness_m, contribution_clamp, lights, directions,
-    /// env_offset, rebuild_tables, pixel_centres, seed; env takes spp, frames, strategy,
+    /// env_offset, rebuild_tables, direct_spp, pixel_centres, seed; env takes spp, frames, strategy,
     /// face_resolution, light_only, integer_counts, alpha_samples, shadows, shared_samples,
     /// rebuild_tables,
     /// pixel_centres, seed.
@@ -316,6 +345,7 @@ impl Method {
                         Some(_) => DirectLight::NextEvent,
                         None => d.direct,
                     },
+                    direct_spp: reader.uint("direct_spp", d.direct_spp, 1, MAX_DIRECT_SPP)?,
                     pixels: reader.pixels()?,
                 })
             }
@@ -342,6 +372,7 @@ impl Method {
                     light_cdf: reader.flag("light_cdf", d.light_cdf)?,
                     adaptive: reader.flag("adaptive", d.adaptive)?,
                     clamp: reader.clamp(d.clamp)?,
+                    direct_spp: reader.uint("direct_spp", d.direct_spp, 1, MAX_DIRECT_SPP)?,
                     pixels: reader.pixels()?,
                 })
             }
@@ -393,6 +424,7 @@ impl Method {
                         false => d.env_offset,
                     },
                     rebuild: reader.rebuild()?,
+                    direct_spp: reader.uint("direct_spp", d.direct_spp, 1, MAX_DIRECT_SPP)?,
                     pixels: reader.pixels()?,
                 })
             }
@@ -611,6 +643,7 @@ impl<'a> Params<'a> {
                 "adaptive",
                 "clamp",
                 "compensate",
+                "direct_spp",
                 "pixel_centres",
             ],
             "lightfield" => &[
@@ -655,6 +688,7 @@ impl<'a> Params<'a> {
                 "directions",
                 "env_offset",
                 "rebuild_tables",
+                "direct_spp",
                 "pixel_centres",
             ],
             _ => &[
@@ -666,6 +700,7 @@ impl<'a> Params<'a> {
                 "compensate",
                 "interleave",
                 "direct",
+                "direct_spp",
                 "pixel_centres",
             ],
         };

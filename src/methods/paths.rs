@@ -11,7 +11,7 @@ use crate::gpu::{bind, Commands, Context, GpuResult, Kernel};
 use crate::scene::gpu::GpuScene;
 
 use super::accumulation::Accumulation;
-use super::gbuffer::GBuffer;
+use super::gbuffer::{GBuffer, PixelSampling};
 
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
@@ -21,7 +21,27 @@ struct PathParams {
     max_depth: u32,
     roulette_depth: u32,
     environment: u32,
+    camera_samples: u32,
+    first_sample: u32,
+    sample_count: u32,
+    centred: u32,
 }
+
+/// Where a frame's paths start.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PathStarts {
+    /// One path per pixel from the G-buffer's hit (the reference's frame).
+    GBuffer,
+    /// `samples` paths per pixel, each from its own camera ray (new subpixel positions,
+    /// sample indices frame * samples + k), averaged: a many-light method's `--direct-spp`.
+    Camera { samples: u32, pixels: PixelSampling },
+}
+
+/// Camera samples per pixel in one dispatch: lavapipe stops an invocation's loops silently
+/// after 65535 iterations in all (DESIGN.md); a depth-1 sample traces three rays, each a
+/// traversal loop of up to a few hundred iterations in the largest scenes, so 16 samples
+/// stay well inside the budget and more are split across dispatches.
+const CAMERA_SAMPLES_PER_DISPATCH: u32 = 16;
 
 pub struct TracePaths(Kernel);
 
@@ -42,18 +62,43 @@ impl TracePaths {
         max_depth: u32,
         roulette_depth: u32,
         reflected_environment: bool,
+        starts: PathStarts,
     ) -> GpuResult<()> {
         let mut bindings = scene.bindings();
         bindings.push(bind("GBuffer", &gbuffer.texels));
         bindings.extend(accumulation.bindings());
-        let params = PathParams {
+        let mut params = PathParams {
             frame,
             seed,
             max_depth,
             roulette_depth,
             environment: reflected_environment as u32,
+            camera_samples: 0,
+            first_sample: 0,
+            sample_count: 0,
+            centred: 0,
         };
-        self.0
-            .dispatch(cmd, &bindings, &params, scene.image_workgroups())
+        match starts {
+            PathStarts::GBuffer => {
+                self.0
+                    .dispatch(cmd, &bindings, &params, scene.image_workgroups())
+            }
+            PathStarts::Camera { samples, pixels } => {
+                let samples = samples.max(1);
+                params.camera_samples = samples;
+                params.centred = u32::from(pixels == PixelSampling::Centres);
+                let mut first = 0;
+                while first < samples {
+                    params.first_sample = first;
+                    params.sample_count = CAMERA_SAMPLES_PER_DISPATCH.min(samples - first);
+                    // (Each dispatch adds into the same pixels; dispatches are ordered by
+                    // the barrier Commands records after each.)
+                    self.0
+                        .dispatch(cmd, &bindings, &params, scene.image_workgroups())?;
+                    first += params.sample_count;
+                }
+                Ok(())
+            }
+        }
     }
 }

@@ -13,7 +13,7 @@ use super::accumulation::Accumulation;
 use super::direct_alpha::ShadeDirectAlpha;
 use super::envmap;
 use super::gbuffer::{GBuffer, PixelSampling, WriteGBuffer};
-use super::paths::TracePaths;
+use super::paths::{PathStarts, TracePaths};
 use super::progressive;
 use super::RenderOutput;
 
@@ -111,6 +111,7 @@ impl Reference {
                         settings.max_depth,
                         settings.roulette_depth,
                         true,
+                        PathStarts::GBuffer,
                     )
                 })
             },

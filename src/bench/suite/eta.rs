@@ -2,7 +2,7 @@
 //! time per unit of work (renders x `Method::work` x pixels) of the finished runs of the same method
 //! label, or of all finished runs when its label has not run yet. Runs of one label scale
 //! about linearly in their samples; labels differ by orders of magnitude, so they are not
-//! pooled when they need not be.
+//! pooled when they need not be. A time-budget run is estimated from its budget.
 
 use std::collections::BTreeMap;
 use std::time::Duration;
@@ -28,6 +28,10 @@ pub fn units(suite: &Suite, run: &RunSpec) -> f64 {
 impl Eta {
     /// `run` took `seconds` (its scene's reference included, when it came first).
     pub fn finished(&mut self, suite: &Suite, run: &RunSpec, seconds: f64) {
+        if run.time_ms.is_some() {
+            // Its time is its budget (time_left), not a rate over its default count.
+            return;
+        }
         let u = units(suite, run);
         let label = &suite.entries[run.entry].label;
         let e = self.by_label.entry(label.clone()).or_default();
@@ -46,6 +50,9 @@ impl Eta {
         let seconds: f64 = remaining
             .iter()
             .map(|r| {
+                if let Some(t) = time_left(suite, r) {
+                    return t;
+                }
                 let label = &suite.entries[r.entry].label;
                 let per_unit = self
                     .by_label
@@ -56,6 +63,13 @@ impl Eta {
             .sum();
         Some(Duration::from_secs_f64(seconds.max(0.0)))
     }
+}
+
+/// A time-budget run's seconds: its renders at the budget each, plus about half a budget of
+/// calibration (calibrate.rs).
+fn time_left(suite: &Suite, run: &RunSpec) -> Option<f64> {
+    let renders = (suite.warmup + suite.repeats.max(suite.flicker_frames)) as f64;
+    run.time_ms.map(|ms| (renders + 0.5) * ms / 1e3)
 }
 
 #[cfg(test)]

@@ -14,6 +14,9 @@ use crate::methods::{Method, ParamError, METHOD_NAMES};
 use crate::scene::hash::Fnv1a64;
 use crate::scene::{self, Scene, SceneError};
 
+/// The largest time budget a suite may ask for: a day.
+pub const MAX_TIME_MS: f64 = 86_400_000.0;
+
 /// Seed of cached references unless the suite names one: far from the small seeds runs use,
 /// so a run never shares its random numbers with its reference.
 pub const REFERENCE_SEED: u32 = 0x9e37_79b9;
@@ -82,6 +85,12 @@ struct SceneEntry {
     path: String,
     resolution: Option<[i64; 2]>,
     reference_spp: Option<i64>,
+    /// The reference's max_depth for this scene (1: direct light, for a method that
+    /// estimates only that).
+    reference_max_depth: Option<i64>,
+    /// Labels of the [[method]] entries this scene showcases (marked in the equal-time table).
+    #[serde(default)]
+    home: Vec<String>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -123,6 +132,8 @@ pub struct SuiteScene {
     pub path: String,
     /// The reference method (seed included) for this scene.
     pub reference: Method,
+    /// Labels of the method entries whose home this scene is (the suite's `home`).
+    pub home: Vec<String>,
 }
 
 #[derive(Debug)]
@@ -142,6 +153,10 @@ pub struct RunSpec {
     pub method: Method,
     /// The budget's keys as written, `vpls=64 frames=4`.
     pub budget: String,
+    /// A time budget (`time_ms`): GPU milliseconds the run's count (`Method::count_key`:
+    /// frames, or the reference's spp) is calibrated to fill before it renders (calibrate.rs);
+    /// `method` holds the default count until then.
+    pub time_ms: Option<f64>,
     /// `<scene>/<label>/<budget>`, unique, stable across shards.
     pub id: String,
 }
@@ -327,17 +342,27 @@ impl Suite {
                 }
             }
             let mut reference = reference.clone();
-            if let Some(spp) = entry.reference_spp {
+            if entry.reference_spp.is_some() || entry.reference_max_depth.is_some() {
                 let mut p = reference_params.clone();
-                p.insert("spp".into(), toml::Value::Integer(spp));
+                let mut fields = vec![];
+                for (key, value) in [
+                    ("spp", entry.reference_spp),
+                    ("max_depth", entry.reference_max_depth),
+                ] {
+                    if let Some(v) = value {
+                        p.insert(key.into(), toml::Value::Integer(v));
+                        fields.push(format!("scene[{i}].reference_{key}"));
+                    }
+                }
                 reference = Method::from_params("reference", &p)
-                    .map_err(|e| param_error(format!("scene[{i}].reference_spp"), e))?;
+                    .map_err(|e| param_error(fields.join(", "), e))?;
             }
             hash.write(&scene.content_hash.to_le_bytes());
             scenes.push(SuiteScene {
                 scene,
                 path: entry.path.clone(),
                 reference,
+                home: entry.home.clone(),
             });
         }
 
@@ -361,8 +386,9 @@ impl Suite {
         let scene_names: BTreeSet<&str> = scenes.iter().map(|s| s.scene.name.as_str()).collect();
         let mut entries = Vec::new();
         let mut labels = BTreeSet::new();
-        // Per entry, per budget: the method and its budget label, checked whatever scenes apply.
-        let mut budgets: Vec<Vec<(Method, String)>> = Vec::new();
+        // Per entry, per budget: the method, its budget label and time budget, checked whatever
+        // scenes apply.
+        let mut budgets: Vec<Vec<(Method, String, Option<f64>)>> = Vec::new();
         for (i, m) in f.method.iter().enumerate() {
             let label = m.label.clone().unwrap_or_else(|| m.method.clone());
             if label.is_empty() || file_safe(&label) != label {
@@ -409,10 +435,32 @@ impl Suite {
                     "needs at least one budget ({} for the defaults)",
                 ));
             }
-            let mut methods: Vec<(Method, String)> = Vec::new();
+            let mut methods: Vec<(Method, String, Option<f64>)> = Vec::new();
             for (b, budget) in m.budgets.iter().enumerate() {
                 let mut params = m.params.clone();
-                for (k, v) in budget {
+                if let Some(v) = m.params.get("time_ms") {
+                    return Err(field(
+                        &format!("method[{i}].params.time_ms"),
+                        v.to_string(),
+                        "a time budget belongs in budgets, one per budget",
+                    ));
+                }
+                let time_ms = match budget.get("time_ms") {
+                    None => None,
+                    Some(v) => match v.as_float().or(v.as_integer().map(|i| i as f64)) {
+                        Some(t) if t > 0.0 && t <= MAX_TIME_MS => Some(t),
+                        _ => {
+                            return Err(field(
+                                &format!("method[{i}].budgets[{b}].time_ms"),
+                                v.to_string(),
+                                &format!(
+                                    "must be GPU milliseconds, a number in (0, {MAX_TIME_MS}]"
+                                ),
+                            ))
+                        }
+                    },
+                };
+                for (k, v) in budget.iter().filter(|(k, _)| *k != "time_ms") {
                     if k == "seed" || params.contains_key(k) {
                         return Err(field(
                             &format!("method[{i}].budgets[{b}].{k}"),
@@ -425,6 +473,16 @@ impl Suite {
                 params.insert("seed".into(), toml::Value::Integer(seed as i64));
                 let method = Method::from_params(&m.method, &params)
                     .map_err(|e| param_error(format!("method[{i}].budgets[{b}]"), e))?;
+                if let (Some(_), Some(v)) = (time_ms, params.get(method.count_key())) {
+                    return Err(field(
+                        &format!("method[{i}].budgets[{b}].{}", method.count_key()),
+                        v.to_string(),
+                        &format!(
+                            "a time_ms budget calibrates {} itself: leave it out",
+                            method.count_key()
+                        ),
+                    ));
+                }
                 let text = budget
                     .iter()
                     .map(|(k, v)| format!("{k}={}", plain(v)))
@@ -435,20 +493,33 @@ impl Suite {
                 } else {
                     text
                 };
-                if let Some((_, same)) = methods.iter().find(|(other, _)| *other == method) {
+                if let Some((_, same, _)) = methods
+                    .iter()
+                    .find(|(other, _, t)| *other == method && *t == time_ms)
+                {
                     return Err(field(
                         &format!("method[{i}].budgets[{b}]"),
                         format!("{{ {text} }}"),
                         &format!("the same settings as budget {{ {same} }}"),
                     ));
                 }
-                methods.push((method, text));
+                methods.push((method, text, time_ms));
             }
             budgets.push(methods);
             entries.push(SuiteMethod {
                 method: m.method.clone(),
                 label,
             });
+        }
+
+        for (i, s) in scenes.iter().enumerate() {
+            if let Some(unknown) = s.home.iter().find(|h| !labels.contains(h.as_str())) {
+                return Err(field(
+                    &format!("scene[{i}].home"),
+                    format!("{unknown:?}"),
+                    "not the label of a [[method]] in this suite",
+                ));
+            }
         }
 
         let mut runs = Vec::new();
@@ -461,7 +532,7 @@ impl Suite {
                 if !applies {
                     continue;
                 }
-                for (method, budget) in &budgets[e] {
+                for (method, budget, time_ms) in &budgets[e] {
                     let id = format!("{}/{}/{}", suite_scene.scene.name, entries[e].label, budget);
                     runs.push(RunSpec {
                         index: runs.len(),
@@ -469,6 +540,7 @@ impl Suite {
                         entry: e,
                         method: method.clone(),
                         budget: budget.clone(),
+                        time_ms: *time_ms,
                         id,
                     });
                 }

@@ -39,6 +39,10 @@ pub struct Measured {
     /// Images scored.
     pub scored: u32,
     pub flicker: Option<f64>,
+    /// The mean over the K images of the image mean (pixels and channels together), relative
+    /// to the reference's, minus 1: signed, so noise averages out over the images (the bias
+    /// figure averages each image's absolute offset). NaN where an image has NaN/Inf.
+    pub image_mean_offset: f64,
     pub gpu_ms: Option<f64>,
     pub pass_gpu_ms: BTreeMap<String, Option<f64>>,
     pub wall_ms: f64,
@@ -112,8 +116,12 @@ pub fn measure(
     } else {
         None
     };
+    let channel_mean = |im: &Image| im.mean().iter().sum::<f64>() / 3.0;
+    let images_mean = images.iter().map(channel_mean).sum::<f64>() / images.len() as f64;
+    let image_mean_offset = images_mean / channel_mean(reference) - 1.0;
     Ok(Measured {
         metrics: Metrics::mean(&scores),
+        image_mean_offset,
         scored: k,
         flicker,
         gpu_ms: median_of(&gpu),

@@ -6,6 +6,7 @@
 //! readable results of the runs it finished. `--shard i/n` runs part of a suite; `merge`
 //! combines parts.
 
+pub mod calibrate;
 pub mod eta;
 pub mod file;
 pub mod measure;
@@ -251,7 +252,7 @@ fn run_one(
     spec: &file::RunSpec,
     prepared: &Prepared,
     options: &SuiteOptions,
-    progress: impl FnMut(u32, u32, u32, u32),
+    mut progress: impl FnMut(u32, u32, u32, u32),
 ) -> Result<RunRecord> {
     let suite_scene = &suite.scenes[spec.scene];
     let scene = &suite_scene.scene;
@@ -265,6 +266,9 @@ fn run_one(
         method: spec.method.name().into(),
         label: suite.entries[spec.entry].label.clone(),
         budget: spec.budget.clone(),
+        time_ms: spec.time_ms,
+        calibrated_count: None,
+        calibration: vec![],
         parameters: spec.method.parameters(),
         status: Status::Ok,
         note: String::new(),
@@ -272,6 +276,7 @@ fn run_one(
             .failure
             .as_ref()
             .is_some_and(|f| f.methods.iter().any(|m| m == spec.method.name())),
+        home: suite_scene.home.contains(&suite.entries[spec.entry].label),
         resolution: [scene.camera.width, scene.camera.height],
         seed: spec.method.seed(),
         warmup: suite.warmup,
@@ -285,6 +290,7 @@ fn run_one(
         wall_ms: None,
         metrics: None,
         flicker: None,
+        image_mean_offset: None,
         nonfinite_estimates: 0,
         reference_spp: reference_spp(&suite_scene.reference),
         reference_seed: suite_scene.reference.seed(),
@@ -307,10 +313,44 @@ fn run_one(
             return Ok(record);
         }
     };
+    let fail = |mut record: RunRecord, e: MeasureError| {
+        match e {
+            MeasureError::Declined(why) => {
+                record.status = Status::Declined;
+                record.note = why;
+            }
+            MeasureError::Failed(e) => {
+                record.status = Status::Error;
+                record.note = e;
+            }
+        }
+        Ok(record)
+    };
+    let mut method = spec.method.clone();
+    if let Some(time_ms) = spec.time_ms {
+        let calibration = calibrate::calibrate(
+            ctx,
+            renderers,
+            &method,
+            scene,
+            gpu_scene,
+            time_ms,
+            |render, done, total| progress(render, 0, done, total),
+        );
+        match calibration {
+            Ok(c) => {
+                method = method.with_count(c.count);
+                record.calibrated_count = Some(c.count);
+                record.calibration = c.trials;
+                record.parameters = method.parameters();
+            }
+            Err(e) => return fail(record, e),
+        }
+    }
     let measured = measure(
         ctx,
         renderers,
-        &spec.method,
+        &method,
         scene,
         gpu_scene,
         reference,
@@ -321,16 +361,7 @@ fn run_one(
     );
     let m = match measured {
         Ok(m) => m,
-        Err(MeasureError::Declined(why)) => {
-            record.status = Status::Declined;
-            record.note = why;
-            return Ok(record);
-        }
-        Err(MeasureError::Failed(e)) => {
-            record.status = Status::Error;
-            record.note = e;
-            return Ok(record);
-        }
+        Err(e) => return fail(record, e),
     };
     let factor = preview::factor_for(m.image.width, THUMBNAIL_WIDTH);
     let stem = spec.file_stem();
@@ -350,6 +381,7 @@ fn run_one(
     record.scored = m.scored;
     record.reference_rel_mse = *reference_rel_mse;
     record.flicker = m.flicker;
+    record.image_mean_offset = Some(m.image_mean_offset).filter(|o| o.is_finite());
     record.nonfinite_estimates = m.nonfinite_estimates;
     record.stats = m.stats;
     record.image = Some(image_name);

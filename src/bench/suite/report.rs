@@ -124,6 +124,7 @@ pub fn markdown(results: &SuiteResults) -> String {
             );
         }
         md += "\n";
+        md += &equal_time_table(&runs);
         let with_stats: Vec<&&RunRecord> = runs.iter().filter(|r| !r.stats.is_empty()).collect();
         if !with_stats.is_empty() {
             md += "Method figures (averaged over each run's images):\n\n";
@@ -150,6 +151,79 @@ pub fn markdown(results: &SuiteResults) -> String {
                     r.label, r.budget, r.label
                 );
             }
+        }
+        md += "\n";
+    }
+    md
+}
+
+/// The mark of a scene's home method (the suite's `home`) in the equal-time table.
+pub const HOME_MARK: &str = "⌂";
+
+/// Per time budget of the scene, every run at that budget: its calibrated count, GPU time,
+/// error, and its speed against each reference (path tracer) label at the same budget:
+/// relMSE x GPU time of the path tracer over the run's (DESIGN.md "Speed at equal error"),
+/// so over 1 the run reaches lower error in the same time. Empty without time budgets.
+fn equal_time_table(runs: &[&RunRecord]) -> String {
+    let mut budgets: Vec<f64> = runs.iter().filter_map(|r| r.time_ms).collect();
+    budgets.sort_by(f64::total_cmp);
+    budgets.dedup();
+    if budgets.is_empty() {
+        return String::new();
+    }
+    let cost = |r: &RunRecord| -> Option<f64> {
+        let e = r.metrics?.rel_mse * r.gpu_ms?;
+        (r.status == Status::Ok && e.is_finite() && e > 0.0).then_some(e)
+    };
+    let mut md = String::new();
+    for budget in budgets {
+        let at: Vec<&RunRecord> = runs
+            .iter()
+            .copied()
+            .filter(|r| r.time_ms == Some(budget))
+            .collect();
+        let references: Vec<&RunRecord> = at
+            .iter()
+            .copied()
+            .filter(|r| r.method == "reference")
+            .collect();
+        let _ = writeln!(
+            md,
+            "Equal time, {budget} GPU ms ({HOME_MARK}: the scene's home method; image mean: the \
+             mean over the run's images (successive seeds) of the image mean against the \
+             reference's; speed: the path tracer's relMSE x GPU time over the run's, both from \
+             this device):\n"
+        );
+        md += "| | method | count | GPU ms | relMSE | image mean | outliers |";
+        for r in &references {
+            let _ = write!(md, " speed vs {} |", r.label);
+        }
+        md += "\n|---|---|---:|---:|---:|---:|---:|";
+        md += &"---:|".repeat(references.len());
+        md += "\n";
+        for r in &at {
+            let m = r.metrics;
+            let _ = write!(
+                md,
+                "| {} | {} | {} | {} | {} | {} | {} |",
+                if r.home { HOME_MARK } else { "" },
+                r.label,
+                r.calibrated_count
+                    .map(|c| c.to_string())
+                    .unwrap_or_else(|| "-".into()),
+                fixed(r.gpu_ms, 1),
+                sci(m.map(|m| m.rel_mse)),
+                signed_percent(r.image_mean_offset),
+                percent(m.map(|m| m.outliers)),
+            );
+            for reference in &references {
+                let speed = match (cost(reference), cost(r)) {
+                    (Some(a), Some(b)) => format!("{:.2}x", a / b),
+                    _ => "-".into(),
+                };
+                let _ = write!(md, " {speed} |");
+            }
+            md += "\n";
         }
         md += "\n";
     }
@@ -185,6 +259,13 @@ fn sci(v: Option<f64>) -> String {
 fn percent(v: Option<f64>) -> String {
     match v {
         Some(x) if x.is_finite() => format!("{:.2}%", 100.0 * x),
+        _ => "-".into(),
+    }
+}
+
+fn signed_percent(v: Option<f64>) -> String {
+    match v {
+        Some(x) if x.is_finite() => format!("{:+.2}%", 100.0 * x),
         _ => "-".into(),
     }
 }

@@ -12,6 +12,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::image::Metrics;
 
+use super::calibrate::Trial;
 use super::file::Shard;
 
 /// What became of a run.
@@ -48,12 +49,26 @@ pub struct RunRecord {
     pub method: String,
     pub label: String,
     pub budget: String,
+    /// A time budget's GPU milliseconds (suite `time_ms`), None for a fixed count.
+    #[serde(default)]
+    pub time_ms: Option<f64>,
+    /// The count (frames, or the reference's spp) the time budget calibrated; the run
+    /// rendered with it, and `parameters` holds it.
+    #[serde(default)]
+    pub calibrated_count: Option<u32>,
+    /// The calibration renders behind `calibrated_count` (calibrate.rs).
+    #[serde(default)]
+    pub calibration: Vec<Trial>,
     pub parameters: BTreeMap<String, serde_json::Value>,
     pub status: Status,
     /// Why a run was declined or failed.
     pub note: String,
     /// The scene's [failure] table names this method.
     pub expected_failure: bool,
+    /// The suite names this run's label among the scene's `home` methods (the ones it
+    /// showcases).
+    #[serde(default)]
+    pub home: bool,
     pub resolution: [u32; 2],
     /// Seed of the first timed repeat (repeat r used seed + r).
     pub seed: u32,
@@ -76,6 +91,10 @@ pub struct RunRecord {
     /// Mean over pixels and channels of the temporal standard deviation across the repeats'
     /// images (successive seeds) relative to the reference (`image::metrics::flicker`).
     pub flicker: Option<f64>,
+    /// The mean over the scored images (successive seeds) of the image mean, relative to the
+    /// reference's, minus 1 (signed; measure.rs).
+    #[serde(default)]
+    pub image_mean_offset: Option<f64>,
     /// Per-pixel estimates the method dropped as NaN or Inf, over all repeats (0 when right).
     pub nonfinite_estimates: u64,
     pub reference_spp: u32,
@@ -222,8 +241,13 @@ impl SuiteResults {
                 r.method.clone(),
                 r.label.clone(),
                 r.budget.clone(),
+                f(r.time_ms),
+                r.calibrated_count
+                    .map(|c| c.to_string())
+                    .unwrap_or_default(),
                 r.status.as_str().to_string(),
                 r.expected_failure.to_string(),
+                r.home.to_string(),
                 r.pareto.to_string(),
                 r.resolution[0].to_string(),
                 r.resolution[1].to_string(),
@@ -241,6 +265,7 @@ impl SuiteResults {
                 f(m.map(|m| m.outliers)),
                 m.map(|m| m.nan_inf.to_string()).unwrap_or_default(),
                 f(r.flicker),
+                f(r.image_mean_offset),
                 r.nonfinite_estimates.to_string(),
                 r.reference_spp.to_string(),
                 r.reference_seed.to_string(),
@@ -278,8 +303,11 @@ pub const FIXED_COLUMNS: &[&str] = &[
     "method",
     "label",
     "budget",
+    "time_ms",
+    "calibrated_count",
     "status",
     "expected_failure",
+    "home",
     "pareto",
     "width",
     "height",
@@ -297,6 +325,7 @@ pub const FIXED_COLUMNS: &[&str] = &[
     "outliers",
     "nan_inf",
     "flicker",
+    "image_mean_offset",
     "nonfinite_estimates",
     "reference_spp",
     "reference_seed",
@@ -387,10 +416,14 @@ mod tests {
             method: "reference".into(),
             label: "pt".into(),
             budget: String::new(),
+            time_ms: None,
+            calibrated_count: None,
+            calibration: vec![],
             parameters: BTreeMap::new(),
             status: Status::Ok,
             note: String::new(),
             expected_failure: false,
+            home: false,
             resolution: [1, 1],
             seed: 0,
             warmup: 0,
@@ -411,6 +444,7 @@ mod tests {
                 nan_inf: 0,
             }),
             flicker: None,
+            image_mean_offset: None,
             nonfinite_estimates: 0,
             reference_spp: 1,
             reference_seed: 9,

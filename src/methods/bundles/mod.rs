@@ -107,6 +107,10 @@ pub struct BundlesSettings {
     /// The direction table (pass "bundle directions"): once for a still map, per frame for a
     /// sequence (default), or every frame.
     pub rebuild: TableRebuild,
+    /// Direct-light samples per pixel and frame, each from its own camera ray (new subpixel
+    /// position), so direct light and the pixel footprint get this many samples while the
+    /// expensive indirect estimate gets one position per frame (`--direct-spp`).
+    pub direct_spp: u32,
     pub pixels: PixelSampling,
 }
 
@@ -125,6 +129,11 @@ impl Default for BundlesSettings {
             directions: DirectionDensity::Environment,
             env_offset: None,
             rebuild: TableRebuild::WhenChanged,
+            // Point and spot lights' next-event estimate has no light-sampling noise, so
+            // only the pixel footprint gains (measured, spot-light 128x128, 2 seeds,
+            // lavapipe: relMSE 2.645e-4 at 1 direct sample, 2.609e-4 at 32; glossy-cornell
+            // 4.382e-2 and 4.381e-2): direct light and footprint are 1.4% of the error at 1.
+            direct_spp: 1,
             pixels: PixelSampling::Jittered,
         }
     }
@@ -242,6 +251,7 @@ impl Bundles {
                     settings.pixels,
                     1,
                     false,
+                    settings.direct_spp,
                 )?;
                 if environment
                     && directions.density() == DirectionDensity::Environment

@@ -248,6 +248,7 @@ impl Env {
                     settings.pixels,
                     0,
                     true,
+                    0,
                 )?;
                 let rebuild = settings.rebuild.due(frame, sequence);
                 if strategy.uses_cube() {

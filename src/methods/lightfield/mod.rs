@@ -307,6 +307,7 @@ impl Lightfield {
                     settings.pixels,
                     1,
                     true,
+                    0,
                 )?;
                 for l in &luminaires {
                     let tables = [

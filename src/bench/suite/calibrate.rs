@@ -1,0 +1,153 @@
+//! Time budgets (`time_ms` in a suite budget): the count a method needs to fill that much GPU
+//! time on this device. Short calibration renders at growing counts (frames, or the
+//! reference's spp: `Method::count_key`) until one takes at least an eighth of the budget; a
+//! line through the last two (GPU time = fixed + count x per-count) gives the count that fills
+//! it. The run then renders with that count like any other budget, deterministic per seed, and
+//! records the count (a render with it gives the same bits) and the calibration renders.
+//!
+//! Calibration renders use seeds apart from the scored ones; their images are dropped.
+
+use serde::{Deserialize, Serialize};
+
+use crate::gpu::Context;
+use crate::methods::{Method, Renderers};
+use crate::scene::gpu::GpuScene;
+use crate::scene::Scene;
+
+use super::measure::MeasureError;
+
+/// The largest count a time budget calibrates to.
+pub const MAX_COUNT: u32 = 1 << 20;
+
+/// Added to the method's seed for calibration renders: far from the scored seeds.
+const CALIBRATION_SEED_OFFSET: u32 = 0x6361_6c69;
+
+/// One calibration render.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Trial {
+    pub count: u32,
+    /// Its GPU time (its wall time where the device has no timestamps).
+    pub ms: f64,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Calibration {
+    /// The count that fills the budget (at least 1, at most MAX_COUNT).
+    pub count: u32,
+    pub trials: Vec<Trial>,
+}
+
+/// The count of `method` that fills `time_ms` of GPU time; `progress(render, done, total)`
+/// reports the calibration renders.
+pub fn calibrate(
+    ctx: &Context,
+    renderers: &Renderers,
+    method: &Method,
+    scene: &Scene,
+    gpu_scene: &GpuScene,
+    time_ms: f64,
+    mut progress: impl FnMut(u32, u32, u32),
+) -> Result<Calibration, MeasureError> {
+    let seed = method.seed().wrapping_add(CALIBRATION_SEED_OFFSET);
+    let mut trials: Vec<Trial> = Vec::new();
+    let mut count = 1u32;
+    loop {
+        let m = method.with_count(count).with_seed(seed);
+        let render = trials.len() as u32;
+        let out = renderers.run(ctx, &m, scene, gpu_scene, |d, t| progress(render, d, t))?;
+        let ms = out.passes.total_gpu_ms().unwrap_or(out.wall_ms);
+        trials.push(Trial { count, ms });
+        if ms >= time_ms / 8.0 || count >= MAX_COUNT / 2 {
+            break;
+        }
+        // Aim the next render at a quarter of the budget, growing 2x to 16x a step.
+        let aim = (count as f64 * (time_ms / 4.0) / ms.max(1e-3)).ceil();
+        count = (aim.clamp(2.0 * count as f64, 16.0 * count as f64) as u32).min(MAX_COUNT / 2);
+    }
+    Ok(Calibration {
+        count: fill(&trials, time_ms),
+        trials,
+    })
+}
+
+/// The count whose predicted time is the budget, from the last two trials (one: proportional).
+pub fn fill(trials: &[Trial], time_ms: f64) -> u32 {
+    let Some(last) = trials.last() else {
+        return 1;
+    };
+    let b = last.count as f64;
+    // The fixed part (tables, set-up) from the line through the last two trials, kept within
+    // [0, half the last trial]: timing noise can tilt a line through two close points.
+    let fixed = match trials.len() {
+        0 | 1 => 0.0,
+        n => {
+            let prev = trials[n - 2];
+            let a = prev.count as f64;
+            let per = (last.ms - prev.ms) / (b - a);
+            (prev.ms - per * a).clamp(0.0, last.ms / 2.0)
+        }
+    };
+    let per = (last.ms - fixed) / b;
+    if per.is_nan() || per <= 0.0 {
+        return MAX_COUNT;
+    }
+    ((time_ms - fixed) / per)
+        .floor()
+        .clamp(1.0, MAX_COUNT as f64) as u32
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_line_through_two_trials_fills_the_budget() {
+        // 10 ms fixed + 5 ms per count: 1000 ms holds 198 counts.
+        let trials = [
+            Trial { count: 4, ms: 30.0 },
+            Trial {
+                count: 32,
+                ms: 170.0,
+            },
+        ];
+        assert_eq!(fill(&trials, 1000.0), 198);
+    }
+
+    #[test]
+    fn one_trial_is_proportional_and_a_count_is_at_least_one() {
+        assert_eq!(
+            fill(
+                &[Trial {
+                    count: 1,
+                    ms: 400.0
+                }],
+                2000.0
+            ),
+            5
+        );
+        assert_eq!(
+            fill(
+                &[Trial {
+                    count: 1,
+                    ms: 5000.0
+                }],
+                2000.0
+            ),
+            1
+        );
+    }
+
+    #[test]
+    fn a_noisy_line_keeps_the_fixed_part_within_half_the_last_trial() {
+        // The second trial faster than the first: the fitted fixed part would exceed it.
+        let trials = [
+            Trial {
+                count: 1,
+                ms: 100.0,
+            },
+            Trial { count: 2, ms: 90.0 },
+        ];
+        // fixed = 45, per = 22.5: (1000 - 45) / 22.5 = 42.4.
+        assert_eq!(fill(&trials, 1000.0), 42);
+    }
+}
