@@ -1341,7 +1341,10 @@ fn bench_suite(options: &ContextOptions, args: SuiteArgs) -> Result<()> {
                 }
                 current.set_length(total as u64);
                 current.set_position(done as u64);
-                current.set_message(format!("{id}: render {}/{renders}", render + 1));
+                current.set_message(match renders {
+                    0 => format!("{id}: calibration render {}", render + 1),
+                    _ => format!("{id}: render {}/{renders}", render + 1),
+                });
             }
             Event::Finished { run, record, .. } => {
                 overall.set_position(run as u64);

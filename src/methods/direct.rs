@@ -28,8 +28,8 @@ impl GBufferAndDirectLight {
     }
 
     /// Records the passes "gbuffer" and "direct light" of `frame`; `reflected_environment`
-    /// false leaves the environment's direct light out (bundles estimates it). `direct_spp` 0
-    /// starts the direct-light paths at the G-buffer's hits; K > 0 gives them K camera rays of
+    /// false leaves the environment's direct light out (bundles estimates it). `direct_spp` 0 or 1
+    /// starts the direct-light paths at the G-buffer's hits; K > 1 gives them K camera rays of
     /// their own per pixel and frame (`--direct-spp`), so direct light and the pixel footprint
     /// get K samples while the frame's expensive indirect estimate gets one position.
     #[allow(clippy::too_many_arguments)]
@@ -46,8 +46,10 @@ impl GBufferAndDirectLight {
         reflected_environment: bool,
         direct_spp: u32,
     ) -> GpuResult<()> {
+        // One sample from its own camera ray would be the G-buffer's (sample index and
+        // subpixel position `frame`): the G-buffer's hit saves the ray.
         let starts = match direct_spp {
-            0 => PathStarts::GBuffer,
+            0 | 1 => PathStarts::GBuffer,
             samples => PathStarts::Camera { samples, pixels },
         };
         cmd.pass("gbuffer", |cmd| {

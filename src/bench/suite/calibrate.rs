@@ -1,8 +1,8 @@
 //! Time budgets (`time_ms` in a suite budget): the count a method needs to fill that much GPU
 //! time on this device. Short calibration renders at growing counts (frames, or the
-//! reference's spp: `Method::count_key`) until one takes at least an eighth of the budget; a
-//! line through the last two (GPU time = fixed + count x per-count) gives the count that fills
-//! it. The run then renders with that count like any other budget, deterministic per seed, and
+//! reference's spp: `Method::count_key`), at least two, until one takes at least an eighth of
+//! the budget; a line through the last two (GPU time = fixed + count x per-count; the fixed
+//! part is what a render builds once: tables, set-up) gives the count that fills it, rounded. The run then renders with that count like any other budget, deterministic per seed, and
 //! records the count (a render with it gives the same bits) and the calibration renders.
 //!
 //! Calibration renders use seeds apart from the scored ones; their images are dropped.
@@ -57,7 +57,7 @@ pub fn calibrate(
         let out = renderers.run(ctx, &m, scene, gpu_scene, |d, t| progress(render, d, t))?;
         let ms = out.passes.total_gpu_ms().unwrap_or(out.wall_ms);
         trials.push(Trial { count, ms });
-        if ms >= time_ms / 8.0 || count >= MAX_COUNT / 2 {
+        if (trials.len() >= 2 && ms >= time_ms / 8.0) || count >= MAX_COUNT / 2 {
             break;
         }
         // Aim the next render at a quarter of the budget, growing 2x to 16x a step.
@@ -70,29 +70,37 @@ pub fn calibrate(
     })
 }
 
-/// The count whose predicted time is the budget, from the last two trials (one: proportional).
+/// The count whose predicted time is the budget, from the line through the last two trials
+/// (one trial, or a line that does not rise: proportional to the last), at most 4x the
+/// proportional count (a near-flat line through two noisy times would predict any count).
 pub fn fill(trials: &[Trial], time_ms: f64) -> u32 {
     let Some(last) = trials.last() else {
         return 1;
     };
     let b = last.count as f64;
-    // The fixed part (tables, set-up) from the line through the last two trials, kept within
-    // [0, half the last trial]: timing noise can tilt a line through two close points.
+    // The fixed part (tables, set-up, built once per render).
     let fixed = match trials.len() {
         0 | 1 => 0.0,
         n => {
             let prev = trials[n - 2];
             let a = prev.count as f64;
             let per = (last.ms - prev.ms) / (b - a);
-            (prev.ms - per * a).clamp(0.0, last.ms / 2.0)
+            let fixed = prev.ms - per * a;
+            if b > a && per > 0.0 && fixed.is_finite() {
+                fixed.clamp(0.0, prev.ms)
+            } else {
+                0.0
+            }
         }
     };
     let per = (last.ms - fixed) / b;
     if per.is_nan() || per <= 0.0 {
         return MAX_COUNT;
     }
+    let proportional = time_ms / last.ms * b;
     ((time_ms - fixed) / per)
-        .floor()
+        .min(4.0 * proportional)
+        .round()
         .clamp(1.0, MAX_COUNT as f64) as u32
 }
 
@@ -100,54 +108,31 @@ pub fn fill(trials: &[Trial], time_ms: f64) -> u32 {
 mod tests {
     use super::*;
 
+    fn trials(t: &[(u32, f64)]) -> Vec<Trial> {
+        t.iter().map(|&(count, ms)| Trial { count, ms }).collect()
+    }
+
     #[test]
     fn a_line_through_two_trials_fills_the_budget() {
         // 10 ms fixed + 5 ms per count: 1000 ms holds 198 counts.
-        let trials = [
-            Trial { count: 4, ms: 30.0 },
-            Trial {
-                count: 32,
-                ms: 170.0,
-            },
-        ];
-        assert_eq!(fill(&trials, 1000.0), 198);
+        assert_eq!(fill(&trials(&[(4, 30.0), (32, 170.0)]), 1000.0), 198);
+        // A large fixed part (a 400 ms table build, 100 ms a frame) is kept whole.
+        assert_eq!(fill(&trials(&[(1, 500.0), (2, 600.0)]), 2000.0), 16);
     }
 
     #[test]
     fn one_trial_is_proportional_and_a_count_is_at_least_one() {
-        assert_eq!(
-            fill(
-                &[Trial {
-                    count: 1,
-                    ms: 400.0
-                }],
-                2000.0
-            ),
-            5
-        );
-        assert_eq!(
-            fill(
-                &[Trial {
-                    count: 1,
-                    ms: 5000.0
-                }],
-                2000.0
-            ),
-            1
-        );
+        assert_eq!(fill(&trials(&[(1, 400.0)]), 2000.0), 5);
+        assert_eq!(fill(&trials(&[(1, 5000.0)]), 2000.0), 1);
+        // Two trials of one count: no line, proportional to the last.
+        assert_eq!(fill(&trials(&[(2, 100.0), (2, 100.0)]), 1000.0), 20);
     }
 
     #[test]
-    fn a_noisy_line_keeps_the_fixed_part_within_half_the_last_trial() {
-        // The second trial faster than the first: the fitted fixed part would exceed it.
-        let trials = [
-            Trial {
-                count: 1,
-                ms: 100.0,
-            },
-            Trial { count: 2, ms: 90.0 },
-        ];
-        // fixed = 45, per = 22.5: (1000 - 45) / 22.5 = 42.4.
-        assert_eq!(fill(&trials, 1000.0), 42);
+    fn a_noisy_line_never_predicts_wildly() {
+        // The second trial faster than the first: no line, proportional (1000 / 45).
+        assert_eq!(fill(&trials(&[(1, 100.0), (2, 90.0)]), 1000.0), 22);
+        // Nearly flat: the line would predict 10 x the proportional count; capped at 4x.
+        assert_eq!(fill(&trials(&[(1, 100.0), (2, 101.0)]), 1000.0), 79);
     }
 }

@@ -474,8 +474,12 @@ impl Suite {
                 let method = Method::from_params(&m.method, &params)
                     .map_err(|e| param_error(format!("method[{i}].budgets[{b}]"), e))?;
                 if let (Some(_), Some(v)) = (time_ms, params.get(method.count_key())) {
+                    let place = match m.params.contains_key(method.count_key()) {
+                        true => "params".to_string(),
+                        false => format!("budgets[{b}]"),
+                    };
                     return Err(field(
-                        &format!("method[{i}].budgets[{b}].{}", method.count_key()),
+                        &format!("method[{i}].{place}.{}", method.count_key()),
                         v.to_string(),
                         &format!(
                             "a time_ms budget calibrates {} itself: leave it out",

@@ -56,7 +56,8 @@ pub enum Event<'a> {
         cached: bool,
     },
     /// Run `run` of `of` (this shard's count): render `render` of `renders` (warm-up and
-    /// repeats), `done` of `total` samples.
+    /// repeats; `renders` 0: calibration render `render` of a time budget), `done` of `total`
+    /// samples.
     Render {
         run: usize,
         of: usize,

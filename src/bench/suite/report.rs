@@ -212,7 +212,12 @@ fn equal_time_table(runs: &[&RunRecord]) -> String {
                     .map(|c| c.to_string())
                     .unwrap_or_else(|| "-".into()),
                 fixed(r.gpu_ms, 1),
-                sci(m.map(|m| m.rel_mse)),
+                sci(m.map(|m| m.rel_mse))
+                    + if limited_by_reference(r) {
+                        LIMITED_MARK
+                    } else {
+                        ""
+                    },
                 signed_percent(r.image_mean_offset),
                 percent(m.map(|m| m.outliers)),
             );
