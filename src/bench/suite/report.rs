@@ -171,8 +171,9 @@ fn equal_time_table(runs: &[&RunRecord]) -> String {
     if budgets.is_empty() {
         return String::new();
     }
+    // relMSE x GPU time, from the relMSE with the reference's own noise taken out.
     let cost = |r: &RunRecord| -> Option<f64> {
-        let e = r.metrics?.rel_mse * r.gpu_ms?;
+        let e = net_rel_mse(r)? * r.gpu_ms?;
         (r.status == Status::Ok && e.is_finite() && e > 0.0).then_some(e)
     };
     let mut md = String::new();
@@ -191,21 +192,23 @@ fn equal_time_table(runs: &[&RunRecord]) -> String {
             md,
             "Equal time, {budget} GPU ms ({HOME_MARK}: the scene's home method; image mean: the \
              mean over the run's images (successive seeds) of the image mean against the \
-             reference's; speed: the path tracer's relMSE x GPU time over the run's, both from \
-             this device):\n"
+             reference's; net relMSE: relMSE less the reference's own, estimated from its two \
+             halves, so an estimate of the error against the converged image (- where the \
+             reference's noise swamps it); speed: the path tracer's net relMSE x GPU time over \
+             the run's, both from this device):\n"
         );
-        md += "| | method | count | GPU ms | relMSE | image mean | outliers |";
+        md += "| | method | count | GPU ms | relMSE | net relMSE | image mean | outliers |";
         for r in &references {
             let _ = write!(md, " speed vs {} |", r.label);
         }
-        md += "\n|---|---|---:|---:|---:|---:|---:|";
+        md += "\n|---|---|---:|---:|---:|---:|---:|---:|";
         md += &"---:|".repeat(references.len());
         md += "\n";
         for r in &at {
             let m = r.metrics;
             let _ = write!(
                 md,
-                "| {} | {} | {} | {} | {} | {} | {} |",
+                "| {} | {} | {} | {} | {} | {} | {} | {} |",
                 if r.home { HOME_MARK } else { "" },
                 r.label,
                 r.calibrated_count
@@ -218,6 +221,7 @@ fn equal_time_table(runs: &[&RunRecord]) -> String {
                     } else {
                         ""
                     },
+                sci(net_rel_mse(r).filter(|e| *e > 0.0)),
                 signed_percent(r.image_mean_offset),
                 percent(m.map(|m| m.outliers)),
             );
@@ -233,6 +237,14 @@ fn equal_time_table(runs: &[&RunRecord]) -> String {
         md += "\n";
     }
     md
+}
+
+/// The run's relMSE less the reference's own (estimated from its halves; references.rs): the
+/// expected squared error against the reference adds the reference's variance to the run's
+/// error against the converged image, so the difference estimates the latter. None without
+/// figures; the reference's own taken as 0 when unknown.
+fn net_rel_mse(r: &RunRecord) -> Option<f64> {
+    Some(r.metrics?.rel_mse - r.reference_rel_mse.unwrap_or(0.0))
 }
 
 /// Marks a relMSE within `LIMITED_FACTOR` of the reference's own: the reference's noise, not
