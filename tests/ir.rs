@@ -210,6 +210,9 @@ fn error_falls_with_vpls_and_clamping_darkens_corners() {
                         },
                         direct: DirectLight::Vpl,
                         pixels: PixelSampling::Centres,
+                        // One direct sample a frame (the G-buffer's hit), as measured: the
+                        // test is about the VPLs, and more direct samples only cost time.
+                        direct_spp: 1,
                         ..Default::default()
                     };
                     ir(ctx, &scene, &settings)
@@ -292,6 +295,9 @@ fn fractional_and_roulette_absorption_match_the_reference() {
                             clamp: VplClamp::Fixed(0.0),
                             compensate: false,
                         },
+                        // One direct sample a frame (the G-buffer's hit), as measured: the
+                        // test is about the VPLs, and more direct samples only cost time.
+                        direct_spp: 1,
                         ..Default::default()
                     };
                     luminance_mean(&ir(ctx, &scene, &settings))
