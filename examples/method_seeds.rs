@@ -17,7 +17,8 @@
 //! out) as mean, median and max over seeds, and the method's stats averaged. Unclamped VPLs have
 //! an infinite-variance per-pixel estimator wherever a VPL can land arbitrarily close to a
 //! visible surface, so the mean of relMSE over seeds is dominated by its largest seed and the
-//! median is the stable figure of a typical render.
+//! median is the stable figure of a typical render. METHOD_SEEDS_VERBOSE=1 also prints every
+//! seed's image mean (relative to the reference's), to tell a heavy tail from a broad spread.
 
 use std::path::{Path, PathBuf};
 
@@ -147,6 +148,13 @@ fn main() {
         }
     }
     let r_mean = luminance_mean(&r);
+    if std::env::var_os("METHOD_SEEDS_VERBOSE").is_some() {
+        println!(
+            "reference halves' means {:.4} {:.4}",
+            luminance_mean(&a) / r_mean,
+            luminance_mean(&b) / r_mean
+        );
+    }
     let black = Image {
         width,
         height,
@@ -176,6 +184,10 @@ fn main() {
             }
         }
         let (m, e) = mean_and_stderr(&means);
+        if std::env::var_os("METHOD_SEEDS_VERBOSE").is_some() {
+            let list: Vec<String> = means.iter().map(|m| format!("{m:.3}")).collect();
+            println!("{name}: per-seed means {}", list.join(" "));
+        }
         let mut sorted = errors.clone();
         sorted.sort_by(f64::total_cmp);
         let stats: Vec<String> = stats.iter().map(|(k, v)| format!("{k} {v:.3}")).collect();

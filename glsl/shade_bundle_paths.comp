@@ -7,10 +7,19 @@
 // (1: the balance heuristic, Eq. 6) over the area densities of Eq. 4-5, p1 = p_e(w01) |cos| /
 // d01^2 and p2 = p_r |cos| / d^2 (the light's selection probability is common to both and
 // cancels). Two-bounce: (x0, x1, x2, x3) through the edge x1-x2 (Eq. 7-8; its geometry term
-// optionally clamped, the paper's bias). Strategy 0 shades the VPL paths alone, 1 the bundle
+// optionally clamped, the paper's bias, and by default compensated: below). Strategy 0 shades the VPL paths alone, 1 the bundle
 // paths alone (weight 1 each), 2 both with MIS. Each iteration has `slots` light vertices
 // (one per light, or one chosen by roulette) sharing one bundle. The frame's estimate is the
 // mean over its I iterations; each chunk adds its share.
+//
+// The clamp's compensation (Kollig and Keller 2004, as include/compensation.glsl for the VPL
+// gathers): the clamp removes (G - b)+ of the x1-x2 edge wherever x1 lies near x2. Per
+// iteration, a BSDF-sampled direction from x2 finds y; where the edge's G(x2, y) (as the
+// two-bounce term computes it for x1 = y) exceeds b, y stands in for x1: the iteration's lights
+// light y directly (one shadow ray each, over each slot's selection probability, as its light
+// vertices were drawn), weighted f2 cos / pdf (1 - b / G). Bundles' paths end at two bounces,
+// so one level and no recursion: clamped term plus compensation is the unclamped term's
+// expectation. Random numbers: PCG keyed by (seed, pixel, iteration of the render, dimension).
 
 #extension GL_GOOGLE_include_directive : require
 
@@ -43,6 +52,9 @@ layout(push_constant) uniform ShadeParams {
     uint directions;       // the bundles' density (bundle_directions.glsl)
     uint environment;      // 1: add the environment's direct light through the bundles
     uint trace_bundles;    // 0: no bundle hits were traced (VPL paths alone)
+    uint frame_first;      // the frame's first iteration of the render (frame * I)
+    uint seed;
+    uint compensate;       // 1: compensate the two-bounce clamp (two_bounce > 0)
 } params;
 
 #define STRATEGY_VPL 0u
@@ -81,6 +93,57 @@ vec3 clamp_contribution(vec3 c) {
     if (params.suppression != SUPPRESS_CONTRIBUTION) return c;
     float peak = max(max(c.r, c.g), c.b);
     return peak > params.suppression_parameter ? c * (params.suppression_parameter / peak) : c;
+}
+
+// The two-bounce clamp's compensation at x2 for iteration k (its light vertices at `base`).
+vec3 two_bounce_compensation(uint index, uint k, uint base, vec3 x2, vec3 n2, vec3 side2,
+                             vec3 wo2, Material m2, vec3 origin2) {
+    float b = params.two_bounce;
+    vec3 u = vec3(random(params.seed, index, k, 0u), random(params.seed, index, k, 1u),
+                  random(params.seed, index, k, 2u));
+    vec3 wi;
+    if (!bsdf_sample(m2, n2, wo2, u, wi)) return vec3(0.0);
+    float pdf = bsdf_pdf(m2, n2, wo2, wi);
+    float cos_i = dot(wi, n2);
+    if (pdf <= 0.0 || cos_i <= 0.0 || dot(wi, side2) <= 0.0) return vec3(0.0);
+    // G > b needs |y - x2|^2 < 1 / b: a short ray (trace_compensation_paths.comp).
+    RayHit hit;
+    if (!trace_closest(origin2, wi, inversesqrt(b) + 2.0 * distance(origin2, x2), hit)) {
+        return vec3(0.0);
+    }
+    vec3 y = origin2 + hit.t * wi;
+    vec3 e = y - x2;
+    float dist2 = dot(e, e);
+    if (!(dist2 > 0.0)) return vec3(0.0);
+    vec3 w = e * inversesqrt(dist2);
+    vec3 ng_y = shading_triangles[hit.triangle].geometric_normal.xyz;
+    vec3 ns_y = shading_normal(hit.triangle, hit.barycentrics);
+    vec3 side_y = dot(-wi, ng_y) >= 0.0 ? ng_y : -ng_y;
+    vec3 n_y = dot(ns_y, side_y) >= 0.0 ? ns_y : -ns_y;
+    float g = max(dot(n2, w), 0.0) * max(dot(n_y, -w), 0.0) / dist2;
+    if (!(g > b)) return vec3(0.0);
+    vec3 weight = bsdf_eval(m2, n2, wo2, wi) * (cos_i / pdf) * (1.0 - b / g);
+    if (!any_positive(weight)) return vec3(0.0);
+    Material my = materials[triangle_material(hit.triangle)];
+    vec3 origin_y = offset_origin(y, side_y);
+    vec3 direct = vec3(0.0);
+    for (uint s = 0u; s < params.slots; ++s) {
+        LightVertex lv = light_vertices[base + s];
+        if (lv.power.w <= 0.0) continue;
+        Light l = lights[floatBitsToUint(lv.light.w)];
+        vec3 to_light = l.position.xyz - y;
+        float d2 = dot(to_light, to_light);
+        if (!(d2 > 0.0)) continue;
+        vec3 wl = to_light * inversesqrt(d2);
+        float cos_l = dot(wl, n_y);
+        if (cos_l <= 0.0 || dot(wl, side_y) <= 0.0) continue;
+        vec3 c = bsdf_eval(my, n_y, -wi, wl) * l.intensity.rgb *
+                 (emission_profile(l, -wl) * cos_l / (d2 * lv.power.w));
+        if (any_positive(c) && !trace_any(origin_y, l.position.xyz - origin_y, 0.9999)) {
+            direct += c;
+        }
+    }
+    return weight * direct;
 }
 
 void main() {
@@ -137,6 +200,12 @@ void main() {
                 origin2 = offset_origin(x2, side2);
                 cos2g_3 = -dot(side2, d);  // at x2, toward x3
             }
+        }
+
+        if (has_x2 && params.two_bounce > 0.0 && params.compensate != 0u) {
+            sum += f3 * (cos3 / p_r) *
+                   two_bounce_compensation(index, params.frame_first + params.first_index + j,
+                                           base, x2, n2, side2, -d, m2, origin2);
         }
 
         for (uint s = 0u; s < params.slots; ++s) {

@@ -74,8 +74,12 @@ void main() {
     float cos_i = dot(wi, n);
     if (pdf <= 0.0 || cos_i <= 0.0 || dot(wi, side) <= 0.0) return;
     vec3 origin = offset_origin(x, side);
+    // G > b needs |y - x|^2 < 1 / b (both cosines at most 1): the ray need not go further than
+    // 1 / sqrt(b) plus the origin's offset, and a short ray visits few BVH nodes. Same hits
+    // (a closest hit beyond the reach has G <= b and adds nothing), so the same bits.
+    float reach = inversesqrt(params.g_clamp) + 2.0 * distance(origin, x);
     RayHit hit;
-    if (!trace_closest(origin, wi, infinity(), hit)) return;
+    if (!trace_closest(origin, wi, reach, hit)) return;
     vec3 y = origin + hit.t * wi;
 
     // The gather's G for a VPL at y: its direction from x (not from the offset origin).

@@ -210,8 +210,9 @@ struct RenderArgs {
     /// pipeline does (for timing it; the same image bits for a still input).
     #[arg(long, value_enum, default_value_t = RebuildArg::WhenChanged)]
     rebuild_tables: RebuildArg,
-    /// ir, bir: with a clamp, add back exactly what it removed by short camera-side paths
-    /// (Kollig and Keller 2004; unbiased) [default: on], or leave the clamp's bias (off).
+    /// ir, bir, bundles: with a clamp (ir, bir: --clamp; bundles: --two-bounce-clamp), add
+    /// back exactly what it removed by short camera-side paths (Kollig and Keller 2004;
+    /// unbiased) [default: on], or leave the clamp's bias (off).
     #[arg(long, value_enum, default_value_t = OnOff::On)]
     compensate: OnOff,
     /// ir, bir, bundles: direct-light samples per pixel and frame, each from its own camera
@@ -282,10 +283,12 @@ struct RenderArgs {
     /// edge (Tokuyoshi Eq. 7-8).
     #[arg(long, value_enum, default_value_t = OnOff::On)]
     two_bounce: OnOff,
-    /// bundles: clamp the two-bounce paths' x1-x2 geometry term cos cos / d^2 at this value
-    /// (the paper's clamp: a bias, recorded in the JSON); 0 leaves it unclamped.
-    #[arg(long, default_value_t = 10.0)]
-    two_bounce_clamp: f32,
+    /// bundles: clamp the two-bounce paths' x1-x2 geometry term cos cos / d^2 at b (the
+    /// paper's clamp, 10 there; compensated by default, see --compensate, else a bias). "auto"
+    /// [default]: b = N / A for N light vertices per frame over the scene's area A, as --clamp;
+    /// a number sets b; 0 leaves the term unclamped. The b used is in the JSON's stats.
+    #[arg(long, default_value = "auto", value_parser = parse_clamp)]
+    two_bounce_clamp: VplClamp,
     /// bundles: glossy spike suppression of the one-bounce paths (Tokuyoshi Section 5, each a
     /// named bias): clamp the Phong exponent per sample by the density of samples around it
     /// (roughness), clamp each path's contribution (clamp), or none.
@@ -999,14 +1002,6 @@ fn render(options: &ContextOptions, args: RenderArgs) -> Result<()> {
             pixels,
         }),
         MethodArg::Bundles
-            if !(args.two_bounce_clamp.is_finite() && args.two_bounce_clamp >= 0.0) =>
-        {
-            bail!(
-                "--two-bounce-clamp {}: must be a finite number >= 0",
-                args.two_bounce_clamp
-            )
-        }
-        MethodArg::Bundles
             if !(args.roughness_m.is_finite()
                 && args.roughness_m >= 0.0
                 && args.contribution_clamp.is_finite()
@@ -1043,7 +1038,10 @@ fn render(options: &ContextOptions, args: RenderArgs) -> Result<()> {
                 HeuristicArg::Power => 2.0,
             },
             two_bounce: args.two_bounce == OnOff::On,
-            two_bounce_clamp: args.two_bounce_clamp,
+            two_bounce_clamp: ClampSettings {
+                clamp: args.two_bounce_clamp,
+                compensate: args.compensate == OnOff::On,
+            },
             suppression: match args.glossy {
                 GlossyArg::None => Suppression::None,
                 GlossyArg::Roughness => Suppression::Roughness {

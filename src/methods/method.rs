@@ -222,7 +222,9 @@ impl Method {
                 p.insert("two_bounce".into(), json!(s.two_bounce));
                 if s.two_bounce {
                     // 0: unclamped (the clamp is a named, measured bias).
-                    p.insert("two_bounce_clamp".into(), json!(s.two_bounce_clamp));
+                    p.insert("two_bounce_clamp".into(), s.two_bounce_clamp.clamp_param());
+                    // false: the paper's clamp, a named bias.
+                    p.insert("compensate".into(), json!(s.two_bounce_clamp.compensate));
                 }
                 p.insert("glossy".into(), json!(s.suppression.name()));
                 match s.suppression {
@@ -294,7 +296,7 @@ impl Method {
     /// compensate, interleave, direct, direct_spp, pixel_centres, seed; bir takes vpls, frames, strategy,
     /// pool, light_samples, ratio, floor, power_samples, batch, clamp, compensate,
     /// direct_spp, pixel_centres, seed; bundles takes iterations, frames, strategy, heuristic, two_bounce,
-    /// two_bounce_clamp, glossy, roughness_m, contribution_clamp, lights, directions,
+    /// two_bounce_clamp, compensate, glossy, roughness_m, contribution_clamp, lights, directions,
     /// env_offset, rebuild_tables, direct_spp, pixel_centres, seed; env takes spp, frames, strategy,
     /// face_resolution, light_only, integer_counts, alpha_samples, shadows, shared_samples,
     /// rebuild_tables,
@@ -338,7 +340,7 @@ impl Method {
                         Some(_) => Absorption::Fractional,
                         None => d.absorption,
                     },
-                    clamp: reader.clamp(d.clamp)?,
+                    clamp: reader.clamp("clamp", d.clamp)?,
                     interleave: reader.uint("interleave", d.interleave, 1, 16)?,
                     direct: match reader.choice("direct", &["nee", "vpl"])? {
                         Some("vpl") => DirectLight::Vpl,
@@ -371,7 +373,7 @@ impl Method {
                     batch: reader.uint("batch", d.batch, 0, 1 << 20)?,
                     light_cdf: reader.flag("light_cdf", d.light_cdf)?,
                     adaptive: reader.flag("adaptive", d.adaptive)?,
-                    clamp: reader.clamp(d.clamp)?,
+                    clamp: reader.clamp("clamp", d.clamp)?,
                     direct_spp: reader.uint("direct_spp", d.direct_spp, 1, MAX_DIRECT_SPP)?,
                     pixels: reader.pixels()?,
                 })
@@ -394,8 +396,7 @@ impl Method {
                         None => d.beta,
                     },
                     two_bounce: reader.flag("two_bounce", d.two_bounce)?,
-                    two_bounce_clamp: reader
-                        .non_negative("two_bounce_clamp", d.two_bounce_clamp)?,
+                    two_bounce_clamp: reader.clamp("two_bounce_clamp", d.two_bounce_clamp)?,
                     suppression: {
                         let m_prime = reader.non_negative("roughness_m", 16.0)?;
                         let max = reader.non_negative("contribution_clamp", 1.0)?;
@@ -571,15 +572,16 @@ impl<'a> Params<'a> {
         }
     }
 
-    /// `clamp` ("auto" or a number >= 0, 0 unclamped) and `compensate` (true or false).
-    fn clamp(&mut self, default: ClampSettings) -> Result<ClampSettings, ParamError> {
-        let clamp = match self.params.get("clamp") {
+    /// `key` (`clamp`, bundles' `two_bounce_clamp`: "auto" or a number >= 0, 0 unclamped) and
+    /// `compensate` (true or false).
+    fn clamp(&mut self, key: &str, default: ClampSettings) -> Result<ClampSettings, ParamError> {
+        let clamp = match self.params.get(key) {
             None => default.clamp,
             Some(v) if v.as_str() == Some("auto") => VplClamp::Auto,
             Some(v) if v.is_str() => {
-                return Err(self.error("clamp", v, "expected \"auto\" or a number >= 0"))
+                return Err(self.error(key, v, "expected \"auto\" or a number >= 0"))
             }
-            Some(_) => VplClamp::Fixed(self.non_negative("clamp", 0.0)?),
+            Some(_) => VplClamp::Fixed(self.non_negative(key, 0.0)?),
         };
         Ok(ClampSettings {
             clamp,
@@ -681,6 +683,7 @@ impl<'a> Params<'a> {
                 "heuristic",
                 "two_bounce",
                 "two_bounce_clamp",
+                "compensate",
                 "glossy",
                 "roughness_m",
                 "contribution_clamp",

@@ -20,6 +20,7 @@ use thiserror::Error;
 
 use crate::gpu::{Buffer, Context, GpuError};
 use crate::methods::accumulation::Accumulation;
+use crate::methods::compensation::ClampSettings;
 use crate::methods::direct::GBufferAndDirectLight;
 use crate::methods::gbuffer::{GBuffer, PixelSampling};
 use crate::methods::progressive;
@@ -94,8 +95,11 @@ pub struct BundlesSettings {
     pub beta: f32,
     /// Shade the two-bounce paths (x0, x1, x2, x3).
     pub two_bounce: bool,
-    /// Clamp of their x1-x2 geometry term (the paper's named bias); 0 leaves it unclamped.
-    pub two_bounce_clamp: f32,
+    /// Clamp of their x1-x2 geometry term (the paper's, there a named bias) and whether what
+    /// it removed is added back by a short path from x2 (Kollig and Keller 2004), so the clamp
+    /// removes the spikes without the bias (default). Auto: b = N / A as ir's gather
+    /// (compensation.rs), N the light vertices per frame.
+    pub two_bounce_clamp: ClampSettings,
     pub suppression: Suppression,
     /// Which lights each iteration's VPLs leave from.
     pub lights: LightSelection,
@@ -123,7 +127,7 @@ impl Default for BundlesSettings {
             strategy: Strategy::Mis,
             beta: 1.0,
             two_bounce: true,
-            two_bounce_clamp: 10.0,
+            two_bounce_clamp: ClampSettings::default(),
             suppression: Suppression::Roughness { m_prime: 16.0 },
             lights: LightSelection::All,
             directions: DirectionDensity::Environment,
@@ -227,7 +231,11 @@ impl Bundles {
         let shading = Shading {
             strategy: settings.strategy,
             beta: settings.beta,
-            two_bounce: settings.two_bounce.then_some(settings.two_bounce_clamp),
+            two_bounce: settings
+                .two_bounce
+                .then(|| settings.two_bounce_clamp.resolve(scene, per_frame * vertices.slots)),
+            compensate: settings.two_bounce_clamp.compensate,
+            seed: pcg::hash(&[settings.seed, 0x62636d70]),
             suppression: settings.suppression,
             environment,
         };
@@ -281,6 +289,7 @@ impl Bundles {
                         per_frame,
                         samples: per_frame * frames,
                         traced: trace_bundles,
+                        frame_first: first,
                     };
                     cmd.pass("bundle paths", |cmd| {
                         self.paths.record(
@@ -319,6 +328,8 @@ impl Bundles {
                 ("iterations_per_chunk".into(), chunk as f64),
                 ("light_vertices_per_iteration".into(), slots),
                 ("bundle_env_offset".into(), offset as f64),
+                // The two-bounce edge's b (0: unclamped or no two-bounce paths).
+                ("two_bounce_clamp".into(), shading.two_bounce.unwrap_or(0.0) as f64),
                 (
                     "rays_per_iteration_max".into(),
                     slots + pixels * (1.0 + slots * shadow_rays),

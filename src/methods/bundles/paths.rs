@@ -30,6 +30,9 @@ struct ShadeParams {
     directions: u32,
     environment: u32,
     trace_bundles: u32,
+    frame_first: u32,
+    seed: u32,
+    compensate: u32,
 }
 
 /// What one chunk of iterations shades.
@@ -43,6 +46,9 @@ pub struct Chunk {
     pub samples: u32,
     /// Whether the chunk's bundle hits were traced (not for the VPL paths alone).
     pub traced: bool,
+    /// The frame's first iteration of the render (frame * per_frame): keys the chunk's
+    /// random numbers.
+    pub frame_first: u32,
 }
 
 /// Which paths the shading adds, besides the one-bounce paths of `strategy`.
@@ -52,6 +58,11 @@ pub struct Shading {
     /// None leaves the two-bounce paths out; Some(0) shades them unclamped, Some(g) clamps
     /// their x1-x2 geometry term at g.
     pub two_bounce: Option<f32>,
+    /// Add back what the two-bounce clamp removed (Kollig and Keller 2004), so the clamp
+    /// leaves no bias.
+    pub compensate: bool,
+    /// Seed of the compensation's random numbers.
+    pub seed: u32,
     /// Applies to the one-bounce paths and the environment's direct light.
     pub suppression: Suppression,
     /// The environment's direct light through the bundles.
@@ -111,6 +122,9 @@ impl ShadeBundlePaths {
             directions: directions.mode_code(),
             environment: shading.environment as u32,
             trace_bundles: chunk.traced as u32,
+            frame_first: chunk.frame_first,
+            seed: shading.seed,
+            compensate: shading.compensate as u32,
         };
         self.0
             .dispatch(cmd, &bindings, &params, scene.image_workgroups())
