@@ -211,8 +211,9 @@ struct RenderArgs {
     #[arg(long, value_enum, default_value_t = RebuildArg::WhenChanged)]
     rebuild_tables: RebuildArg,
     /// ir, bir, bundles: with a clamp (ir, bir: --clamp; bundles: --two-bounce-clamp), add
-    /// back exactly what it removed by short camera-side paths (Kollig and Keller 2004;
-    /// unbiased) [default: on], or leave the clamp's bias (off).
+    /// back exactly what it removed by short paths from the shading point (bundles: from the
+    /// bundle hit x2; Kollig and Keller 2004; unbiased) [default: on], or leave the clamp's
+    /// bias (off).
     #[arg(long, value_enum, default_value_t = OnOff::On)]
     compensate: OnOff,
     /// ir, bir, bundles: direct-light samples per pixel and frame, each from its own camera

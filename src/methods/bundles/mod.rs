@@ -234,7 +234,8 @@ impl Bundles {
             two_bounce: settings
                 .two_bounce
                 .then(|| settings.two_bounce_clamp.resolve(scene, per_frame * vertices.slots)),
-            compensate: settings.two_bounce_clamp.compensate,
+            // Without point or spot lights there is no two-bounce light to compensate.
+            compensate: settings.two_bounce_clamp.compensate && vertices.lights > 0,
             seed: pcg::hash(&[settings.seed, 0x62636d70]),
             suppression: settings.suppression,
             environment,
@@ -313,12 +314,15 @@ impl Bundles {
         let pixels = gpu_scene.pixel_count() as f64;
         // Per iteration: each light vertex's ray, and per pixel the bundle ray and, per light
         // vertex, at most three shadow rays (to x1, from x2 to the light, and x1-x2 for two
-        // bounces).
+        // bounces); the two-bounce compensation adds per pixel one ray from x2 and, per light
+        // vertex, at most one shadow ray.
         let slots = vertices.slots as f64;
+        let compensated = shading.two_bounce.is_some_and(|b| b > 0.0) && shading.compensate;
         let shadow_rays = match settings.strategy {
             Strategy::Vpl | Strategy::Bundle => 1.0,
             Strategy::Mis => 2.0,
-        } + if settings.two_bounce { 1.0 } else { 0.0 };
+        } + if settings.two_bounce { 1.0 } else { 0.0 }
+            + if compensated { 1.0 } else { 0.0 };
         Ok(RenderOutput {
             image: accumulation.resolve(frames),
             passes,
@@ -332,7 +336,7 @@ impl Bundles {
                 ("two_bounce_clamp".into(), shading.two_bounce.unwrap_or(0.0) as f64),
                 (
                     "rays_per_iteration_max".into(),
-                    slots + pixels * (1.0 + slots * shadow_rays),
+                    slots + pixels * (1.0 + compensated as u32 as f64 + slots * shadow_rays),
                 ),
             ],
             maps: vec![],
