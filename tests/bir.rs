@@ -40,8 +40,11 @@ fn reference_mean(ctx: &Context, scene: &Scene, spp: u32) -> f64 {
 #[test]
 fn every_strategy_matches_the_reference_mean_in_the_cornell_box() {
     with_gpu(|ctx| {
-        let scene = small_cornell(64);
-        let r = reference_mean(ctx, &scene, 2048);
+        // 32x32: the image mean's spread over seeds comes from each render's VPLs, shared by
+        // every pixel, so a quarter of the pixels leaves it about where it was (at 64x64 this
+        // test took 255 s of CI).
+        let scene = small_cornell(32);
+        let r = reference_mean(ctx, &scene, 4096);
         let gpu = GpuScene::upload(ctx, &scene).unwrap();
         let bir = Bir::new(ctx).unwrap();
         let cases = [
