@@ -60,6 +60,23 @@ fn renders(
         .collect()
 }
 
+/// The image mean over `seeds` renders relative to `r`: its mean and standard error.
+fn relative_mean(
+    ctx: &Context,
+    bundles: &Bundles,
+    scene: &Scene,
+    gpu: &GpuScene,
+    base: BundlesSettings,
+    seeds: u32,
+    r: f64,
+) -> (f64, f64) {
+    let means: Vec<f64> = renders(ctx, bundles, scene, gpu, base, seeds)
+        .iter()
+        .map(|i| luminance_mean(i) / r)
+        .collect();
+    mean_and_stderr(&means)
+}
+
 /// With the two-bounce paths off, every strategy estimates direct light plus one bounce, as
 /// the path tracer limited to two scattering events does: the image mean over seeds within 2%
 /// of the reference's (standard error checked small enough for that to mean something). In
@@ -99,11 +116,7 @@ fn every_strategy_matches_the_path_length_limited_reference_mean() {
                         suppression: Suppression::None,
                         ..Default::default()
                     };
-                    let means: Vec<f64> = renders(ctx, &bundles, &scene, &gpu, base, 8)
-                        .iter()
-                        .map(|i| luminance_mean(i) / r)
-                        .collect();
-                    let (mean, stderr) = mean_and_stderr(&means);
+                    let (mean, stderr) = relative_mean(ctx, &bundles, &scene, &gpu, base, 8, r);
                     eprintln!(
                         "{name}, {} two-bounce {two_bounce}: mean / reference {mean:.4} ± {stderr:.4}",
                         strategy.name()
@@ -146,11 +159,7 @@ fn the_compensated_two_bounce_clamp_keeps_the_mean() {
                 suppression: Suppression::None,
                 ..Default::default()
             };
-            let means: Vec<f64> = renders(ctx, &bundles, &scene, &gpu, base, 8)
-                .iter()
-                .map(|i| luminance_mean(i) / r)
-                .collect();
-            mean_and_stderr(&means)
+            relative_mean(ctx, &bundles, &scene, &gpu, base, 8, r)
         };
         let (compensated, stderr) = mean(true);
         let (plain, plain_stderr) = mean(false);
@@ -345,11 +354,7 @@ fn roulette_over_lights_keeps_the_mean() {
                 lights,
                 ..Default::default()
             };
-            let means: Vec<f64> = renders(ctx, &bundles, &scene, &gpu, base, 12)
-                .iter()
-                .map(|i| luminance_mean(i) / r)
-                .collect();
-            let (mean, stderr) = mean_and_stderr(&means);
+            let (mean, stderr) = relative_mean(ctx, &bundles, &scene, &gpu, base, 12, r);
             eprintln!(
                 "lights {}: mean / reference {mean:.4} ± {stderr:.4}",
                 lights.name()

@@ -231,9 +231,11 @@ impl Bundles {
         let shading = Shading {
             strategy: settings.strategy,
             beta: settings.beta,
-            two_bounce: settings
-                .two_bounce
-                .then(|| settings.two_bounce_clamp.resolve(scene, per_frame * vertices.slots)),
+            two_bounce: settings.two_bounce.then(|| {
+                settings
+                    .two_bounce_clamp
+                    .resolve(scene, per_frame * vertices.slots)
+            }),
             // Without point or spot lights there is no two-bounce light to compensate.
             compensate: settings.two_bounce_clamp.compensate && vertices.lights > 0,
             seed: pcg::hash(&[settings.seed, 0x62636d70]),
@@ -333,7 +335,10 @@ impl Bundles {
                 ("light_vertices_per_iteration".into(), slots),
                 ("bundle_env_offset".into(), offset as f64),
                 // The two-bounce edge's b (0: unclamped or no two-bounce paths).
-                ("two_bounce_clamp".into(), shading.two_bounce.unwrap_or(0.0) as f64),
+                (
+                    "two_bounce_clamp".into(),
+                    shading.two_bounce.unwrap_or(0.0) as f64,
+                ),
                 (
                     "rays_per_iteration_max".into(),
                     slots + pixels * (1.0 + compensated as u32 as f64 + slots * shadow_rays),
