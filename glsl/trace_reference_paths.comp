@@ -5,14 +5,27 @@
 // the power heuristic (Veach 1997 Section 9.2), Russian roulette from bounce 3 on. Delta
 // lights are reached by next-event estimation only, with weight 1.
 //
-// Path regeneration was measured and not kept (issue 21 item 5): S paths per invocation from
-// camera rays traced in this kernel, an ended path replaced at once by the pixel's next sample,
-// every loop iteration tracing one closest-hit ray (a bounce's or a new camera ray) on one code
-// path. Cornell box 256x256, 32 spp, lavapipe, medians of 3 interleaved runs: G-buffer pass +
-// this kernel 6.14 s; regeneration S = 1 6.33 s, S = 4 5.86 s, S = 8 5.72 s (1.07x at best;
-// same image to f32 rounding). Lanes idle inside the traversal (rays needing different node
-// counts), not on ended paths, so regeneration leaves most of it; a wavefront with compaction
-// keeps the same per-ray traversal divergence.
+// Speed on lavapipe (issue 21 item 5). gallivm runs every instruction of a kernel under
+// lane masks: both sides of every branch whether any lane takes it, every loop body to its end
+// before it tests for live lanes, every storage-buffer load as a loop over the lanes. So the
+// time is the code run per loop iteration, and it is won by running less code, not by keeping
+// lanes busy. Cornell box 256x256, 32 spp, medians of interleaved runs, in steps (total GPU
+// time, G-buffer pass included): 2.63 s before; specialized to the scene's features
+// (scene.glsl) 2.29 s; each new hit handled at the end of the iteration that found it (the
+// loop exits there instead of after one more masked body) 2.04 s; scene constants in a uniform
+// block 1.93 s; each hit's triangle and material loaded once 1.92 s (1.83 s in another run);
+// one shadow-ray traversal instead of two (environment and finite) 1.80 s: 1.46x in all, the
+// same bits. Tried and not kept: the pixel's camera ray traced here instead of read from the
+// G-buffer (1.08x slower: the traversal's code a third time in the kernel); the BVH in uniform
+// blocks (gathered loads; 0.6-1.0x on `irad bench rays`); the hash of (seed, pixel, sample)
+// computed once per path (no change: LLVM hoists it already).
+//
+// Path regeneration was measured and not kept: S paths per invocation from camera rays traced
+// in this kernel, an ended path replaced at once by the pixel's next sample, every loop
+// iteration tracing one closest-hit ray (a bounce's or a new camera ray) on one code path.
+// Cornell box 256x256, 32 spp, lavapipe, medians of 3 interleaved runs: G-buffer pass + this
+// kernel 6.14 s; regeneration S = 1 6.33 s, S = 4 5.86 s, S = 8 5.72 s (1.07x at best; same
+// image to f32 rounding).
 //
 // Random dimensions per (seed, pixel, frame), 8 per bounce from 2: light selection (+0), light
 // position (+1, +2), environment texel (+7), BSDF lobe and direction (+3..+5), roulette (+6).
@@ -72,24 +85,20 @@ vec3 path_radiance(uint index, uint sample_index, vec3 dir, bool found, vec3 p, 
     vec3 beta = vec3(1.0);
     float bsdf_pdf_prev = 0.0;
 
+    // The first hit, then the loop, which looks at each new hit at the end of the iteration
+    // that found it: gallivm (lavapipe) runs a loop body to its end under masks and tests for
+    // live lanes there, so an exit decided at the top of an iteration costs a whole body.
+    if (!found) {
+        vec3 le = SCENE_HAS_ENVIRONMENT ? env_radiance(dir) : vec3(0.0);
+        return le;
+    }
+    // The material at the path's vertex, loaded once per hit.
+    Material m = materials[mat];
+    if (m.ke.w > 0.0 && dot(-dir, ng) > 0.0) L += m.ke.rgb;
+    if (params.max_depth == 0u) return L;
+
     for (uint depth = 0u;; ++depth) {
-        if (!found) {
-            if (depth > 0u && params.environment == 0u) break;
-            vec3 le = env_radiance(dir);
-            if (max_component(le) > 0.0) {
-                float w = depth == 0u ? 1.0 : power_heuristic(bsdf_pdf_prev, light_pdf_environment(dir));
-                L += beta * le * w;
-            }
-            break;
-        }
-        Material m = materials[mat];
         vec3 wo = -dir;
-        if (m.ke.w > 0.0 && dot(wo, ng) > 0.0) {
-            float light_pdf = mass > 0.0 ? light_pdf_triangle(tri, dir, t) / mass : 0.0;
-            float w = depth == 0u ? 1.0 : power_heuristic(bsdf_pdf_prev, light_pdf);
-            L += beta * m.ke.rgb * w;
-        }
-        if (depth >= params.max_depth) break;
 
         // Two-sided scattering: work on the side the path arrives from.
         vec3 side = dot(wo, ng) >= 0.0 ? ng : -ng;
@@ -111,15 +120,12 @@ vec3 path_radiance(uint index, uint sample_index, vec3 dir, bool found, vec3 p, 
             if (cos_i > 0.0 && dot(ls.direction, side) > 0.0) {
                 vec3 f = bsdf_eval(m, n, wo, ls.direction);
                 if (max_component(f) > 0.0) {
-                    bool visible;
-                    if (isinf(ls.distance)) {
-                        visible = !trace_any(origin, ls.direction, infinity());
-                    } else {
-                        // Aim at the light point itself and stop just short of it.
-                        vec3 to_light = p + ls.direction * ls.distance - origin;
-                        visible = !trace_any(origin, to_light, 0.9999);
-                    }
-                    if (visible) {
+                    // Toward the environment, or at the light point itself, stopping just
+                    // short of it; one call, as gallivm runs both sides of a branch.
+                    bool distant = isinf(ls.distance);
+                    vec3 to_light = distant ? ls.direction
+                                            : p + ls.direction * ls.distance - origin;
+                    if (!trace_any(origin, to_light, distant ? infinity() : 0.9999)) {
                         float w = ls.delta ? 1.0 : power_heuristic(ls.pdf, bsdf_pdf(m, n, wo, ls.direction));
                         L += beta * f * cos_i * ls.radiance * (w / ls.pdf);
                     }
@@ -148,14 +154,26 @@ vec3 path_radiance(uint index, uint sample_index, vec3 dir, bool found, vec3 p, 
         RayHit hit;
         dir = wi;
         found = trace_closest(origin, wi, infinity(), hit);
-        if (found) {
-            tri = hit.triangle;
-            t = hit.t;
-            p = origin + t * wi;
-            ns = shading_normal(tri, hit.barycentrics);
-            ng = shading_triangles[tri].geometric_normal.xyz;
-            mat = triangle_material(tri);
+        if (!found) {
+            if (params.environment != 0u && SCENE_HAS_ENVIRONMENT) {
+                vec3 le = env_radiance(dir);
+                if (max_component(le) > 0.0) {
+                    L += beta * le * power_heuristic(bsdf_pdf_prev, light_pdf_environment(dir));
+                }
+            }
+            break;
         }
+        t = hit.t;
+        p = origin + t * wi;
+        ShadingTriangle st = shading_triangles[hit.triangle];
+        ns = interpolated_normal(st, hit.barycentrics);
+        ng = st.geometric_normal.xyz;
+        m = materials[floatBitsToUint(st.n0.w)];
+        if (m.ke.w > 0.0 && dot(-dir, ng) > 0.0) {
+            float light_pdf = mass > 0.0 ? light_pdf_shading_triangle(st, dir, t) / mass : 0.0;
+            L += beta * m.ke.rgb * power_heuristic(bsdf_pdf_prev, light_pdf);
+        }
+        if (depth + 1u >= params.max_depth) break;
     }
     return L;
 }
@@ -181,18 +199,21 @@ void main() {
         vec2 subpixel = params.centred != 0u ? vec2(0.5)
                                              : subpixel_position(params.seed, index, sample_index);
         vec3 dir = camera_direction(pixel, subpixel);
+        // One call of path_radiance for hits and misses alike: gallivm runs both sides of
+        // a branch, so two calls would run two copies of the path loop.
         RayHit hit;
-        vec3 L;
-        if (trace_closest(origin, dir, infinity(), hit)) {
-            uint tri = hit.triangle;
-            L = path_radiance(index, sample_index, dir, true, origin + hit.t * dir, hit.t, tri,
-                              shading_normal(tri, hit.barycentrics),
-                              shading_triangles[tri].geometric_normal.xyz,
-                              triangle_material(tri));
-        } else {
-            L = path_radiance(index, sample_index, dir, false, origin, -1.0, 0u, vec3(0.0),
-                              vec3(0.0), 0u);
+        bool found = trace_closest(origin, dir, infinity(), hit);
+        uint tri = found ? hit.triangle : 0u;
+        vec3 ns = vec3(0.0);
+        vec3 ng = vec3(0.0);
+        uint mat = 0u;
+        if (found) {
+            ns = shading_normal(tri, hit.barycentrics);
+            ng = shading_triangles[tri].geometric_normal.xyz;
+            mat = triangle_material(tri);
         }
+        vec3 L = path_radiance(index, sample_index, dir, found, origin + hit.t * dir,
+                               found ? hit.t : -1.0, tri, ns, ng, mat);
         // A non-finite sample is dropped whole (and counted) by accumulate_radiance below.
         sum += L;
     }

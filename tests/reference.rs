@@ -428,3 +428,44 @@ fn alpha_direct_light_is_unbiased_and_lowers_the_variance() {
         assert!(alpha_variance < 0.9 * balance_variance);
     });
 }
+
+/// The kernel specialized to a scene's features (scene.glsl's SCENE_HAS_* constants) compiles
+/// out only code the scene never runs: its image has the bits of the general kernel's.
+#[test]
+fn kernels_specialized_to_a_scene_give_the_general_kernels_bits() {
+    use irad::scene::gpu::SceneFeatures;
+    let cases = [
+        // (scene, its features: environment, delta lights, glossy)
+        ("cornell-box", [false, false, false]),
+        ("failure/corner-light", [false, true, false]),
+        ("spot-light", [false, true, true]),
+        ("failure/glossy-cornell", [false, true, true]),
+        ("glossy-env", [true, false, true]),
+    ];
+    with_gpu(|ctx| {
+        let reference = Reference::new(ctx).expect("kernels");
+        let settings = ReferenceSettings {
+            spp: 4,
+            seed: 3,
+            ..Default::default()
+        };
+        for (name, [environment, delta_lights, glossy]) in cases {
+            let scene = common::scene_file(name, 24, 24);
+            let mut gpu = GpuScene::upload(ctx, &scene).expect("upload");
+            let features = SceneFeatures {
+                environment,
+                delta_lights,
+                glossy,
+            };
+            assert_eq!(gpu.features, features, "{name}");
+            let specialized = reference.render(ctx, &gpu, &settings, |_, _| {}).unwrap();
+            gpu.features = SceneFeatures::ALL;
+            let general = reference.render(ctx, &gpu, &settings, |_, _| {}).unwrap();
+            assert!(
+                specialized.image.pixels.iter().any(|p| p[0] > 0.0),
+                "{name}: a black image tests nothing"
+            );
+            assert_eq!(specialized.image.pixels, general.image.pixels, "{name}");
+        }
+    });
+}

@@ -22,7 +22,7 @@ vec3 bsdf_eval(Material m, vec3 n, vec3 wo, vec3 wi) {
     vec3 f = m.kd.rgb * INV_PI;
     float exponent = m.ks.w;
     float c = dot(phong_mirror(wo, n), wi);
-    if (c > 0.0 && max(max(m.ks.r, m.ks.g), m.ks.b) > 0.0) {
+    if (SCENE_HAS_GLOSSY && c > 0.0 && max(max(m.ks.r, m.ks.g), m.ks.b) > 0.0) {
         f += m.ks.rgb * ((exponent + 2.0) * (0.5 * INV_PI) * pow(c, exponent));
     }
     return f;
@@ -35,7 +35,7 @@ float bsdf_pdf(Material m, vec3 n, vec3 wo, vec3 wi) {
     float p_spec = m.kd.w;
     float pdf = cos_theta > 0.0 ? (1.0 - p_spec) * cos_theta * INV_PI : 0.0;
     float c = dot(phong_mirror(wo, n), wi);
-    if (c > 0.0 && p_spec > 0.0) {
+    if (SCENE_HAS_GLOSSY && c > 0.0 && p_spec > 0.0) {
         float exponent = m.ks.w;
         pdf += p_spec * (exponent + 1.0) * (0.5 * INV_PI) * pow(c, exponent);
     }
@@ -47,7 +47,7 @@ float bsdf_pdf(Material m, vec3 n, vec3 wo, vec3 wi) {
 bool bsdf_sample(Material m, vec3 n, vec3 wo, vec3 u, out vec3 wi) {
     float p_spec = m.kd.w;
     if (max(max(m.kd.r, m.kd.g), m.kd.b) <= 0.0 && p_spec <= 0.0) return false;
-    if (u.x < p_spec) {
+    if (SCENE_HAS_GLOSSY && u.x < p_spec) {
         float exponent = m.ks.w;
         float cos_alpha = pow(u.y, 1.0 / (exponent + 1.0));
         float sin_alpha = sqrt(max(0.0, 1.0 - cos_alpha * cos_alpha));

@@ -74,23 +74,28 @@ bool sample_light_among(vec3 p, uint r_select, uint count, float mass, uint r_te
         s.pdf = e.probability * dist2 / (cos_light * t.e2.w);
         return s.pdf > 0.0;
     }
-    if (e.kind == 3u) {
+    if (SCENE_HAS_ENVIRONMENT && e.kind == 3u) {
         s.direction = env_sample(r_texel, u, s.radiance, s.pdf);
         s.pdf *= e.probability;
         s.distance = infinity();
         return s.pdf > 0.0;
     }
-    Light l = lights[e.index];
-    vec3 d = l.position.xyz - p;
-    float dist2 = dot(d, d);
-    if (dist2 <= 0.0) return false;
-    s.distance = sqrt(dist2);
-    s.direction = d / s.distance;
-    float falloff = e.kind == 2u ? spot_falloff(l, -s.direction) : 1.0;
-    s.radiance = l.intensity.rgb * (falloff / dist2);
-    s.pdf = e.probability;
-    s.delta = true;
-    return falloff > 0.0;
+    // (Not `!SCENE_HAS_DELTA_LIGHTS`: an operation on a specialization constant is an
+    // OpSpecConstantOp, which naga's reflection rejects.)
+    if (SCENE_HAS_DELTA_LIGHTS) {
+        Light l = lights[e.index];
+        vec3 d = l.position.xyz - p;
+        float dist2 = dot(d, d);
+        if (dist2 <= 0.0) return false;
+        s.distance = sqrt(dist2);
+        s.direction = d / s.distance;
+        float falloff = e.kind == 2u ? spot_falloff(l, -s.direction) : 1.0;
+        s.radiance = l.intensity.rgb * (falloff / dist2);
+        s.pdf = e.probability;
+        s.delta = true;
+        return falloff > 0.0;
+    }
+    return false;
 }
 
 bool sample_light(vec3 p, uint r_select, uint r_texel, vec2 u, out LightSample s) {
@@ -98,12 +103,17 @@ bool sample_light(vec3 p, uint r_select, uint r_texel, vec2 u, out LightSample s
 }
 
 // Solid-angle pdf with which sample_light picks the point hit at distance t along unit
-// direction d on GPU triangle `triangle`, from the emitting side.
-float light_pdf_triangle(uint triangle, vec3 d, float t) {
-    ShadingTriangle st = shading_triangles[triangle];
+// direction d on triangle st (loaded once per hit by the caller: on lavapipe every
+// storage-buffer load is a loop over the lanes), from the emitting side.
+float light_pdf_shading_triangle(ShadingTriangle st, vec3 d, float t) {
     float cos_light = -dot(d, st.geometric_normal.xyz);
     if (cos_light <= 0.0) return 0.0;
     return st.n1.w * t * t / (cos_light * st.n2.w);
+}
+
+// The same for GPU triangle `triangle`.
+float light_pdf_triangle(uint triangle, vec3 d, float t) {
+    return light_pdf_shading_triangle(shading_triangles[triangle], d, t);
 }
 
 float light_pdf_environment(vec3 d) {

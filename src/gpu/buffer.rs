@@ -52,9 +52,12 @@ impl RawBuffer {
         let device = ctx.device();
         // Vulkan forbids empty buffers; an empty one still gets a few bytes.
         let alloc_bytes = bytes.max(16);
+        // Uniform too: the scene's constants are a uniform block (scene.glsl: gallivm loads a
+        // uniform block's fields once per subgroup, a storage buffer's once per lane).
         let usage = match placement {
             Placement::Device => {
                 vk::BufferUsageFlags::STORAGE_BUFFER
+                    | vk::BufferUsageFlags::UNIFORM_BUFFER
                     | vk::BufferUsageFlags::TRANSFER_SRC
                     | vk::BufferUsageFlags::TRANSFER_DST
             }

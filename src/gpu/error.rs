@@ -37,6 +37,16 @@ pub enum GpuError {
     },
 
     #[error(
+        "kernel {kernel}: buffer `{binding}` of {bytes} bytes is bound as a uniform block, over the {limit} bytes every Vulkan device allows (maxUniformBufferRange's minimum)"
+    )]
+    UniformBlockTooLarge {
+        kernel: String,
+        binding: String,
+        bytes: u64,
+        limit: u64,
+    },
+
+    #[error(
         "buffer `{name}`: {bytes} bytes asked for, over the device's {limit_name} of {limit} bytes"
     )]
     BufferTooLarge {

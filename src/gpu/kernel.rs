@@ -17,6 +17,9 @@ pub struct Binding<'a> {
     pub buffer: &'a dyn GpuBuffer,
 }
 
+/// Bytes a uniform block may span on every Vulkan device (the minimum maxUniformBufferRange).
+pub const MAX_UNIFORM_BLOCK_BYTES: u64 = 16384;
+
 pub fn bind<'a>(name: &'a str, buffer: &'a dyn GpuBuffer) -> Binding<'a> {
     Binding { name, buffer }
 }
@@ -36,10 +39,25 @@ impl Kernel {
         let bytes = spirv::embedded(name).ok_or_else(|| GpuError::KernelNotEmbedded {
             kernel: name.into(),
         })?;
-        Self::from_spirv(ctx, name, bytes)
+        Self::from_spirv(ctx, name, bytes, &[])
     }
 
-    pub fn from_spirv(ctx: &Context, name: &str, bytes: &[u8]) -> GpuResult<Self> {
+    /// The kernel with its specialization constants 0, 1, .. set to `constants` (32-bit
+    /// values: a GLSL `layout(constant_id = i) const bool` takes 0 or 1); the module's defaults
+    /// stand for ids past the slice.
+    pub fn specialized(ctx: &Context, name: &str, constants: &[u32]) -> GpuResult<Self> {
+        let bytes = spirv::embedded(name).ok_or_else(|| GpuError::KernelNotEmbedded {
+            kernel: name.into(),
+        })?;
+        Self::from_spirv(ctx, name, bytes, constants)
+    }
+
+    pub fn from_spirv(
+        ctx: &Context,
+        name: &str,
+        bytes: &[u8],
+        constants: &[u32],
+    ) -> GpuResult<Self> {
         let reflection = reflect(name, bytes)?;
         let words = ash::util::read_spv(&mut std::io::Cursor::new(bytes)).map_err(|e| {
             GpuError::Reflection {
@@ -85,10 +103,24 @@ impl Kernel {
         let module_info = vk::ShaderModuleCreateInfo::default().code(&words);
         let module = unsafe { device.create_shader_module(&module_info, None) }
             .vk("vkCreateShaderModule")?;
-        let stage = vk::PipelineShaderStageCreateInfo::default()
+        let entries: Vec<vk::SpecializationMapEntry> = (0..constants.len() as u32)
+            .map(|i| {
+                vk::SpecializationMapEntry::default()
+                    .constant_id(i)
+                    .offset(4 * i)
+                    .size(4)
+            })
+            .collect();
+        let specialization = vk::SpecializationInfo::default()
+            .map_entries(&entries)
+            .data(bytemuck::cast_slice(constants));
+        let mut stage = vk::PipelineShaderStageCreateInfo::default()
             .stage(vk::ShaderStageFlags::COMPUTE)
             .module(module)
             .name(c"main");
+        if !constants.is_empty() {
+            stage = stage.specialization_info(&specialization);
+        }
         let create = [vk::ComputePipelineCreateInfo::default()
             .stage(stage)
             .layout(kernel.pipeline_layout)];
@@ -128,6 +160,18 @@ impl Kernel {
         groups: [u32; 3],
     ) -> GpuResult<()> {
         let buffers = self.resolve(bindings)?;
+        for (info, buffer) in &buffers {
+            if info.kind == BindingKind::UniformBuffer
+                && buffer.byte_size() > MAX_UNIFORM_BLOCK_BYTES
+            {
+                return Err(GpuError::UniformBlockTooLarge {
+                    kernel: self.name.clone(),
+                    binding: info.name.clone(),
+                    bytes: buffer.byte_size(),
+                    limit: MAX_UNIFORM_BLOCK_BYTES,
+                });
+            }
+        }
         let push = bytemuck::bytes_of(push);
         if push.len() != self.reflection.push_constant_bytes as usize {
             return Err(GpuError::PushConstantSize {

@@ -5,10 +5,12 @@
 //! for the emission the camera sees. `reflected_environment` false leaves the environment's
 //! light on surfaces out (the camera still sees the map) for a method that estimates it itself.
 
+use std::cell::OnceCell;
+
 use bytemuck::{Pod, Zeroable};
 
 use crate::gpu::{bind, Commands, Context, GpuResult, Kernel};
-use crate::scene::gpu::GpuScene;
+use crate::scene::gpu::{GpuScene, SceneFeatures};
 
 use super::accumulation::Accumulation;
 use super::gbuffer::{GBuffer, PixelSampling};
@@ -43,11 +45,29 @@ pub enum PathStarts {
 /// stay well inside the budget and more are split across dispatches.
 const CAMERA_SAMPLES_PER_DISPATCH: u32 = 16;
 
-pub struct TracePaths(Kernel);
+/// The kernel, specialized to each scene's features (scene.glsl) the first time a scene with
+/// them records it.
+pub struct TracePaths {
+    ctx: Context,
+    variants: [OnceCell<Kernel>; 8],
+}
 
 impl TracePaths {
     pub fn new(ctx: &Context) -> GpuResult<Self> {
-        Ok(TracePaths(Kernel::new(ctx, "trace_reference_paths")?))
+        Ok(TracePaths {
+            ctx: ctx.clone(),
+            variants: Default::default(),
+        })
+    }
+
+    fn kernel(&self, features: SceneFeatures) -> GpuResult<&Kernel> {
+        let cell = &self.variants[features.index()];
+        if cell.get().is_none() {
+            let kernel =
+                Kernel::specialized(&self.ctx, "trace_reference_paths", &features.constants())?;
+            let _ = cell.set(kernel);
+        }
+        Ok(cell.get().expect("set above"))
     }
 
     #[allow(clippy::too_many_arguments)]
@@ -64,6 +84,7 @@ impl TracePaths {
         reflected_environment: bool,
         starts: PathStarts,
     ) -> GpuResult<()> {
+        let kernel = self.kernel(scene.features)?;
         let mut bindings = scene.bindings();
         bindings.push(bind("GBuffer", &gbuffer.texels));
         bindings.extend(accumulation.bindings());
@@ -80,8 +101,7 @@ impl TracePaths {
         };
         match starts {
             PathStarts::GBuffer => {
-                self.0
-                    .dispatch(cmd, &bindings, &params, scene.image_workgroups())
+                kernel.dispatch(cmd, &bindings, &params, scene.image_workgroups())
             }
             PathStarts::Camera { samples, pixels } => {
                 let samples = samples.max(1);
@@ -93,8 +113,7 @@ impl TracePaths {
                     params.sample_count = CAMERA_SAMPLES_PER_DISPATCH.min(samples - first);
                     // (Each dispatch adds into the same pixels; dispatches are ordered by
                     // the barrier Commands records after each.)
-                    self.0
-                        .dispatch(cmd, &bindings, &params, scene.image_workgroups())?;
+                    kernel.dispatch(cmd, &bindings, &params, scene.image_workgroups())?;
                     first += params.sample_count;
                 }
                 Ok(())

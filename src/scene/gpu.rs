@@ -88,6 +88,39 @@ pub struct LightTable {
     pub environment_probability: f64,
 }
 
+/// What a scene holds, for kernels specialized to it (scene.glsl's specialization constants
+/// SCENE_HAS_*, in this order): code for what a scene lacks is compiled out.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct SceneFeatures {
+    /// An environment map (still, a sequence or the procedural sky).
+    pub environment: bool,
+    /// Point or spot lights.
+    pub delta_lights: bool,
+    /// A material with a Phong lobe (Ks > 0).
+    pub glossy: bool,
+}
+
+impl SceneFeatures {
+    /// Every feature: what a kernel built without specialization handles.
+    pub const ALL: SceneFeatures = SceneFeatures {
+        environment: true,
+        delta_lights: true,
+        glossy: true,
+    };
+
+    /// The values of specialization constants 0, 1, 2.
+    pub fn constants(self) -> [u32; 3] {
+        [self.environment, self.delta_lights, self.glossy].map(u32::from)
+    }
+
+    /// A dense index (0..8), for a kernel's table of specialized variants.
+    pub fn index(self) -> usize {
+        usize::from(self.environment)
+            | usize::from(self.delta_lights) << 1
+            | usize::from(self.glossy) << 2
+    }
+}
+
 pub struct GpuScene {
     pub bvh: GpuBvh,
     pub shading_triangles: Buffer<ShadingTriangle>,
@@ -106,6 +139,7 @@ pub struct GpuScene {
     pub width: u32,
     pub height: u32,
     pub triangle_count: usize,
+    pub features: SceneFeatures,
 }
 
 /// The probability with which bsdf.glsl samples the Phong lobe of `m` (Material.kd.w):
@@ -394,6 +428,11 @@ impl GpuScene {
             width: cam.width,
             height: cam.height,
             triangle_count: scene.triangles.len(),
+            features: SceneFeatures {
+                environment: env_size[2] != 0,
+                delta_lights: !scene.lights.is_empty(),
+                glossy: scene.materials.iter().any(|m| m.ks.max_element() > 0.0),
+            },
         })
     }
 
