@@ -14,11 +14,14 @@
 // (scene.glsl) 2.29 s; each new hit handled at the end of the iteration that found it (the
 // loop exits there instead of after one more masked body) 2.04 s; scene constants in a uniform
 // block 1.93 s; each hit's triangle and material loaded once 1.92 s (1.83 s in another run);
-// one shadow-ray traversal instead of two (environment and finite) 1.80 s: 1.46x in all, the
-// same bits. Tried and not kept: the pixel's camera ray traced here instead of read from the
-// G-buffer (1.08x slower: the traversal's code a third time in the kernel); the BVH in uniform
-// blocks (gathered loads; 0.6-1.0x on `irad bench rays`); the hash of (seed, pixel, sample)
-// computed once per path (no change: LLVM hoists it already).
+// one shadow-ray traversal instead of two (environment and finite) 1.80 s. In a later run,
+// 2.59 s before, 1.70 s with those; bvh.glsl's triangle loop a do-while 1.67 s (closest-hit
+// rays 10-20% faster on `irad bench rays`); the start (G-buffer or camera) a specialization
+// constant, so the path loop is in the kernel once, not twice, 1.46 s: 1.77x in all, the same
+// bits (camera starts, ir's and bir's direct light: the same pixels, 2x faster). Tried and
+// not kept: the reference's camera ray traced here instead of read from the G-buffer (1.56 s
+// against 1.46 s); the BVH in uniform blocks (gathered loads; 0.6-1.0x on `irad bench rays`);
+// the hash of (seed, pixel, sample) computed once per path (no change: LLVM hoists it).
 //
 // Path regeneration was measured and not kept: S paths per invocation from camera rays traced
 // in this kernel, an ended path replaced at once by the pixel's next sample, every loop
@@ -61,6 +64,11 @@ layout(push_constant) uniform PathParams {
                           // past lavapipe's loop budget: src/methods/paths.rs)
     uint centred;         // with camera_samples: 1 aims every camera ray at the pixel centre
 } params;
+
+// Where paths start (src/methods/paths.rs specializes it): false, the G-buffer's hit; true,
+// params.camera_samples camera rays traced here. A constant, not a push constant: gallivm
+// would run the other mode's copy of the path loop too, masked (scene.glsl says why).
+layout(constant_id = 3) const bool CAMERA_STARTS = false;
 
 const uint DIMENSIONS_PER_BOUNCE = 8u;
 
@@ -183,39 +191,42 @@ void main() {
     if (pixel.x >= scene.size.x || pixel.y >= scene.size.y) return;
     uint index = pixel.y * scene.size.x + pixel.x;
 
-    if (params.camera_samples == 0u) {
+    if (CAMERA_STARTS) {
+        vec3 sum = vec3(0.0);
+        vec3 origin = scene.camera_position.xyz;
+        // A do-while (bvh.glsl's triangle loop says why); sample_count is at least 1.
+        uint k = params.first_sample;
+        do {
+            uint sample_index = params.frame * params.camera_samples + k;
+            vec2 subpixel = params.centred != 0u
+                ? vec2(0.5) : subpixel_position(params.seed, index, sample_index);
+            vec3 dir = camera_direction(pixel, subpixel);
+            // One call of path_radiance for hits and misses alike: gallivm runs both sides of
+            // a branch, so two calls would run two copies of the path loop.
+            RayHit hit;
+            bool found = trace_closest(origin, dir, infinity(), hit);
+            uint tri = found ? hit.triangle : 0u;
+            vec3 ns = vec3(0.0);
+            vec3 ng = vec3(0.0);
+            uint mat = 0u;
+            if (found) {
+                ShadingTriangle st = shading_triangles[tri];
+                ns = interpolated_normal(st, hit.barycentrics);
+                ng = st.geometric_normal.xyz;
+                mat = floatBitsToUint(st.n0.w);
+            }
+            // A non-finite sample is dropped whole (and counted) by accumulate_radiance.
+            sum += path_radiance(index, sample_index, dir, found, origin + hit.t * dir,
+                                 found ? hit.t : -1.0, tri, ns, ng, mat);
+            ++k;
+        } while (k < params.first_sample + params.sample_count);
+        accumulate_radiance(index, sum / float(params.camera_samples));
+    } else {
         GBufferTexel g = gbuffer[index];
         vec3 L = path_radiance(index, params.frame, g.direction.xyz, g.position.w >= 0.0,
                                g.position.xyz, g.position.w, floatBitsToUint(g.geometric_normal.w),
                                g.shading_normal.xyz, g.geometric_normal.xyz,
                                floatBitsToUint(g.shading_normal.w));
         accumulate_radiance(index, L);
-        return;
     }
-    vec3 sum = vec3(0.0);
-    vec3 origin = scene.camera_position.xyz;
-    for (uint k = params.first_sample; k < params.first_sample + params.sample_count; ++k) {
-        uint sample_index = params.frame * params.camera_samples + k;
-        vec2 subpixel = params.centred != 0u ? vec2(0.5)
-                                             : subpixel_position(params.seed, index, sample_index);
-        vec3 dir = camera_direction(pixel, subpixel);
-        // One call of path_radiance for hits and misses alike: gallivm runs both sides of
-        // a branch, so two calls would run two copies of the path loop.
-        RayHit hit;
-        bool found = trace_closest(origin, dir, infinity(), hit);
-        uint tri = found ? hit.triangle : 0u;
-        vec3 ns = vec3(0.0);
-        vec3 ng = vec3(0.0);
-        uint mat = 0u;
-        if (found) {
-            ns = shading_normal(tri, hit.barycentrics);
-            ng = shading_triangles[tri].geometric_normal.xyz;
-            mat = triangle_material(tri);
-        }
-        vec3 L = path_radiance(index, sample_index, dir, found, origin + hit.t * dir,
-                               found ? hit.t : -1.0, tri, ns, ng, mat);
-        // A non-finite sample is dropped whole (and counted) by accumulate_radiance below.
-        sum += L;
-    }
-    accumulate_radiance(index, sum / float(params.camera_samples));
 }

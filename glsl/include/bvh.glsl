@@ -163,20 +163,24 @@ bool bvh_traverse(vec3 origin, vec3 direction, float t_max, bool any_hit, out Ra
             node_group = uvec2(0u);
         }
 
-        while (triangle_group.y != 0u) {
-            uint bit = uint(findMSB(triangle_group.y));
-            triangle_group.y &= ~(1u << bit);
-            uint index = triangle_group.x + bit;
-            float t;
-            vec2 uv;
-            if (bvh_intersect_triangle(origin, direction, index, hit.t, t, uv)) {
-                hit.t = t;
-                hit.triangle = index;
-                hit.barycentrics = uv;
-                if (any_hit) {
-                    return true;
+        // A guarded do-while, not a while: gallivm tests a loop's lanes at the end of its
+        // body, so a test at the top costs one more whole body, run with every lane masked.
+        if (triangle_group.y != 0u) {
+            do {
+                uint bit = uint(findMSB(triangle_group.y));
+                triangle_group.y &= ~(1u << bit);
+                uint index = triangle_group.x + bit;
+                float t;
+                vec2 uv;
+                if (bvh_intersect_triangle(origin, direction, index, hit.t, t, uv)) {
+                    hit.t = t;
+                    hit.triangle = index;
+                    hit.barycentrics = uv;
+                    if (any_hit) {
+                        return true;
+                    }
                 }
-            }
+            } while (triangle_group.y != 0u);
         }
 
         if ((node_group.y & 0xff000000u) == 0u) {

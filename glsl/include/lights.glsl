@@ -22,9 +22,12 @@ struct LightSample {
 uint select_light_among(uint r, uint count) {
     uint lo = 0u;
     uint hi = count - 1u;
-    while (lo < hi) {
-        uint mid = (lo + hi) / 2u;
-        if (r < light_entries[mid].upper) hi = mid; else lo = mid + 1u;
+    // A guarded do-while (bvh.glsl's triangle loop says why).
+    if (lo < hi) {
+        do {
+            uint mid = (lo + hi) / 2u;
+            if (r < light_entries[mid].upper) hi = mid; else lo = mid + 1u;
+        } while (lo < hi);
     }
     return lo;
 }

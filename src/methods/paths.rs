@@ -49,7 +49,8 @@ const CAMERA_SAMPLES_PER_DISPATCH: u32 = 16;
 /// them records it.
 pub struct TracePaths {
     ctx: Context,
-    variants: [OnceCell<Kernel>; 8],
+    /// By SceneFeatures::index, plus 8 for camera starts (CAMERA_STARTS).
+    variants: [OnceCell<Kernel>; 16],
 }
 
 impl TracePaths {
@@ -60,11 +61,12 @@ impl TracePaths {
         })
     }
 
-    fn kernel(&self, features: SceneFeatures) -> GpuResult<&Kernel> {
-        let cell = &self.variants[features.index()];
+    fn kernel(&self, features: SceneFeatures, camera_starts: bool) -> GpuResult<&Kernel> {
+        let cell = &self.variants[features.index() + 8 * usize::from(camera_starts)];
         if cell.get().is_none() {
-            let kernel =
-                Kernel::specialized(&self.ctx, "trace_reference_paths", &features.constants())?;
+            let [environment, delta_lights, glossy] = features.constants();
+            let constants = [environment, delta_lights, glossy, u32::from(camera_starts)];
+            let kernel = Kernel::specialized(&self.ctx, "trace_reference_paths", &constants)?;
             let _ = cell.set(kernel);
         }
         Ok(cell.get().expect("set above"))
@@ -84,7 +86,7 @@ impl TracePaths {
         reflected_environment: bool,
         starts: PathStarts,
     ) -> GpuResult<()> {
-        let kernel = self.kernel(scene.features)?;
+        let kernel = self.kernel(scene.features, starts != PathStarts::GBuffer)?;
         let mut bindings = scene.bindings();
         bindings.push(bind("GBuffer", &gbuffer.texels));
         bindings.extend(accumulation.bindings());
