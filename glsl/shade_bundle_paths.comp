@@ -127,8 +127,12 @@ vec3 two_bounce_compensation(uint index, uint k, uint base, vec3 x2, vec3 n2, ve
     Material my = materials[triangle_material(hit.triangle)];
     vec3 origin_y = offset_origin(y, side_y);
     vec3 direct = vec3(0.0);
-    for (uint s = 0u; s < params.slots; ++s) {
+    // Do-whiles (slots and count are at least 1): gallivm tests a loop's lanes at the end of
+    // its body, so a test at the top costs one more whole body, masked (bvh.glsl).
+    uint s = 0u;
+    do {
         LightVertex lv = light_vertices[base + s];
+        ++s;
         if (lv.power.w <= 0.0) continue;
         Light l = lights[floatBitsToUint(lv.light.w)];
         vec3 to_light = l.position.xyz - y;
@@ -142,7 +146,7 @@ vec3 two_bounce_compensation(uint index, uint k, uint base, vec3 x2, vec3 n2, ve
         if (any_positive(c) && !trace_any(origin_y, l.position.xyz - origin_y, 0.9999)) {
             direct += c;
         }
-    }
+    } while (s < params.slots);
     return weight * direct;
 }
 
@@ -160,7 +164,9 @@ void main() {
     float m_prime = params.suppression_parameter;
 
     vec3 sum = vec3(0.0);
-    for (uint j = 0u; j < params.count; ++j) {
+    if (params.count == 0u || params.slots == 0u) return;
+    uint j = 0u;
+    do {
         uint base = (params.first_index + j) * params.slots;
         vec4 bundle = light_vertices[base].bundle;
         // The point's bundle ray, its density, and what it hit.
@@ -208,8 +214,10 @@ void main() {
                                            base, x2, n2, side2, -d, m2, origin2);
         }
 
-        for (uint s = 0u; s < params.slots; ++s) {
+        uint s = 0u;
+        do {
             LightVertex lv = light_vertices[base + s];
+            ++s;
             if (lv.power.w <= 0.0) continue;
             Light l = lights[floatBitsToUint(lv.light.w)];
             vec3 x0 = lv.light.xyz;
@@ -302,7 +310,8 @@ void main() {
                     }
                 }
             }
-        }
-    }
+        } while (s < params.slots);
+        ++j;
+    } while (j < params.count);
     accumulate_radiance(index, sum / float(params.per_frame));
 }

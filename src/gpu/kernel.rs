@@ -52,6 +52,14 @@ impl Kernel {
         Self::from_spirv(ctx, name, bytes, constants)
     }
 
+    /// Checks that spv/<name>.spv is embedded and its layout reflects, building nothing.
+    pub fn check_embedded(name: &str) -> GpuResult<()> {
+        let bytes = spirv::embedded(name).ok_or_else(|| GpuError::KernelNotEmbedded {
+            kernel: name.into(),
+        })?;
+        reflect(name, bytes).map(|_| ())
+    }
+
     pub fn from_spirv(
         ctx: &Context,
         name: &str,

@@ -18,7 +18,8 @@ use std::ops::Range;
 use bytemuck::{Pod, Zeroable};
 use glam::Vec4;
 
-use crate::gpu::{bind, Buffer, Commands, Context, GpuResult, Kernel};
+use crate::gpu::{bind, Buffer, Commands, Context, GpuResult};
+use crate::methods::scene_kernel::SceneKernel;
 use crate::scene::gpu::GpuScene;
 use crate::scene::Scene;
 
@@ -171,15 +172,15 @@ pub struct VplSource<'a> {
 }
 
 pub struct ClampCompensation {
-    trace: Kernel,
-    gather: Kernel,
+    trace: SceneKernel,
+    gather: SceneKernel,
 }
 
 impl ClampCompensation {
     pub fn new(ctx: &Context) -> GpuResult<Self> {
         Ok(ClampCompensation {
-            trace: Kernel::new(ctx, "trace_compensation_paths")?,
-            gather: Kernel::new(ctx, "gather_compensation_vpls")?,
+            trace: SceneKernel::new(ctx, "trace_compensation_paths")?,
+            gather: SceneKernel::new(ctx, "gather_compensation_vpls")?,
         })
     }
 
@@ -219,6 +220,7 @@ impl ClampCompensation {
                 direct_weight,
             };
             self.trace
+                .get(scene.features)?
                 .dispatch_threads(cmd, &bindings, &params, threads)?;
 
             // The last level's gather is unclamped: nothing is left to compensate.
@@ -241,6 +243,7 @@ impl ClampCompensation {
                         weight: source.weight,
                     };
                     self.gather
+                        .get(scene.features)?
                         .dispatch_threads(cmd, &bindings, &params, threads)?;
                     begin = end;
                 }

@@ -18,6 +18,7 @@ pub mod paths;
 pub mod progressive;
 pub mod rebuild;
 pub mod reference;
+pub mod scene_kernel;
 
 pub use method::{Method, ParamError, Renderers, RunError, METHOD_NAMES};
 

@@ -5,15 +5,14 @@
 //! for the emission the camera sees. `reflected_environment` false leaves the environment's
 //! light on surfaces out (the camera still sees the map) for a method that estimates it itself.
 
-use std::cell::OnceCell;
-
 use bytemuck::{Pod, Zeroable};
 
-use crate::gpu::{bind, Commands, Context, GpuResult, Kernel};
-use crate::scene::gpu::{GpuScene, SceneFeatures};
+use crate::gpu::{bind, Commands, Context, GpuResult};
+use crate::scene::gpu::GpuScene;
 
 use super::accumulation::Accumulation;
 use super::gbuffer::{GBuffer, PixelSampling};
+use super::scene_kernel::SceneKernel;
 
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
@@ -45,31 +44,13 @@ pub enum PathStarts {
 /// stay well inside the budget and more are split across dispatches.
 const CAMERA_SAMPLES_PER_DISPATCH: u32 = 16;
 
-/// The kernel, specialized to each scene's features (scene.glsl) the first time a scene with
-/// them records it.
-pub struct TracePaths {
-    ctx: Context,
-    /// By SceneFeatures::index, plus 8 for camera starts (CAMERA_STARTS).
-    variants: [OnceCell<Kernel>; 16],
-}
+/// The kernel, specialized to each scene's features and to where paths start (its constant
+/// CAMERA_STARTS).
+pub struct TracePaths(SceneKernel);
 
 impl TracePaths {
     pub fn new(ctx: &Context) -> GpuResult<Self> {
-        Ok(TracePaths {
-            ctx: ctx.clone(),
-            variants: Default::default(),
-        })
-    }
-
-    fn kernel(&self, features: SceneFeatures, camera_starts: bool) -> GpuResult<&Kernel> {
-        let cell = &self.variants[features.index() + 8 * usize::from(camera_starts)];
-        if cell.get().is_none() {
-            let [environment, delta_lights, glossy] = features.constants();
-            let constants = [environment, delta_lights, glossy, u32::from(camera_starts)];
-            let kernel = Kernel::specialized(&self.ctx, "trace_reference_paths", &constants)?;
-            let _ = cell.set(kernel);
-        }
-        Ok(cell.get().expect("set above"))
+        Ok(TracePaths(SceneKernel::new(ctx, "trace_reference_paths")?))
     }
 
     #[allow(clippy::too_many_arguments)]
@@ -86,7 +67,9 @@ impl TracePaths {
         reflected_environment: bool,
         starts: PathStarts,
     ) -> GpuResult<()> {
-        let kernel = self.kernel(scene.features, starts != PathStarts::GBuffer)?;
+        let kernel = self
+            .0
+            .get_with(scene.features, starts != PathStarts::GBuffer)?;
         let mut bindings = scene.bindings();
         bindings.push(bind("GBuffer", &gbuffer.texels));
         bindings.extend(accumulation.bindings());

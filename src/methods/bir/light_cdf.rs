@@ -9,6 +9,7 @@ use bytemuck::{Pod, Zeroable};
 use crate::gpu::prefix_sum::PrefixSum;
 use crate::gpu::{bind, Buffer, Commands, Context, GpuResult, Kernel};
 use crate::methods::gbuffer::GBuffer;
+use crate::methods::scene_kernel::SceneKernel;
 use crate::scene::gpu::{GpuScene, LightEntry};
 
 /// Camera samples the light contributions are measured at.
@@ -31,7 +32,7 @@ struct CdfParams {
 }
 
 pub struct LightCdf {
-    estimate: Kernel,
+    estimate: SceneKernel,
     build: Kernel,
     entries: u32,
     contributions: Buffer<f32>,
@@ -47,7 +48,7 @@ impl LightCdf {
         let entries = scene.light_entries.len().max(1) as u32;
         let n = (entries * SAMPLES) as usize;
         Ok(LightCdf {
-            estimate: Kernel::new(ctx, "estimate_light_contributions")?,
+            estimate: SceneKernel::new(ctx, "estimate_light_contributions")?,
             build: Kernel::new(ctx, "build_light_cdf")?,
             entries,
             contributions: Buffer::zeroed(ctx, "Contributions", n)?,
@@ -76,7 +77,7 @@ impl LightCdf {
             seed,
             pixels: scene.pixel_count() as u32,
         };
-        self.estimate.dispatch(
+        self.estimate.get(scene.features)?.dispatch(
             cmd,
             &bindings,
             &params,

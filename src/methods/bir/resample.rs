@@ -9,6 +9,7 @@ use crate::gpu::prefix_sum::PrefixSum;
 use crate::gpu::{bind, Buffer, Commands, Context, GpuResult, Kernel};
 use crate::methods::gbuffer::GBuffer;
 use crate::methods::ir::walk::Vpl;
+use crate::methods::scene_kernel::SceneKernel;
 use crate::scene::gpu::GpuScene;
 
 #[repr(C)]
@@ -75,11 +76,14 @@ impl ResampleBuffers {
     }
 }
 
-pub struct EstimateVplPower(Kernel);
+pub struct EstimateVplPower(SceneKernel);
 
 impl EstimateVplPower {
     pub fn new(ctx: &Context) -> GpuResult<Self> {
-        Ok(EstimateVplPower(Kernel::new(ctx, "estimate_vpl_power")?))
+        Ok(EstimateVplPower(SceneKernel::new(
+            ctx,
+            "estimate_vpl_power",
+        )?))
     }
 
     /// Weights candidates `offset..offset + count` from slots `source_begin..` of `source`.
@@ -116,6 +120,7 @@ impl EstimateVplPower {
             scale,
         };
         self.0
+            .get(scene.features)?
             .dispatch(cmd, &bindings, &params, [count.div_ceil(64), 1, 1])
     }
 }

@@ -11,6 +11,7 @@ use bytemuck::{Pod, Zeroable};
 use crate::gpu::{bind, Buffer, Commands, Context, GpuResult, Kernel};
 use crate::methods::gbuffer::GBuffer;
 use crate::methods::ir::walk::Vpl;
+use crate::methods::scene_kernel::SceneKernel;
 use crate::scene::gpu::GpuScene;
 
 #[repr(C)]
@@ -79,11 +80,14 @@ impl TraceReverseVpls {
     }
 }
 
-pub struct ShadeReverseVpls(Kernel);
+pub struct ShadeReverseVpls(SceneKernel);
 
 impl ShadeReverseVpls {
     pub fn new(ctx: &Context) -> GpuResult<Self> {
-        Ok(ShadeReverseVpls(Kernel::new(ctx, "shade_reverse_vpls")?))
+        Ok(ShadeReverseVpls(SceneKernel::new(
+            ctx,
+            "shade_reverse_vpls",
+        )?))
     }
 
     /// Sets each reverse VPL's power from its radiance, lit by `light_samples` next-event
@@ -118,6 +122,7 @@ impl ShadeReverseVpls {
             depth: depth.max(1),
         };
         self.0
+            .get(scene.features)?
             .dispatch(cmd, &bindings, &params, [count.div_ceil(64), 1, 1])
     }
 }

@@ -6,7 +6,8 @@
 use bytemuck::{Pod, Zeroable};
 use glam::Vec4;
 
-use crate::gpu::{bind, Buffer, Commands, Context, GpuResult, Kernel};
+use crate::gpu::{bind, Buffer, Commands, Context, GpuResult};
+use crate::methods::scene_kernel::SceneKernel;
 use crate::scene::gpu::{GpuScene, LIGHT_ENVIRONMENT, LIGHT_POINT, LIGHT_SPOT};
 
 use super::directions::BundleDirections;
@@ -97,11 +98,11 @@ struct LightVertexParams {
     directions: u32,
 }
 
-pub struct TraceLightVertices(Kernel);
+pub struct TraceLightVertices(SceneKernel);
 
 impl TraceLightVertices {
     pub fn new(ctx: &Context) -> GpuResult<Self> {
-        Ok(TraceLightVertices(Kernel::new(
+        Ok(TraceLightVertices(SceneKernel::new(
             ctx,
             "trace_light_vertices",
         )?))
@@ -130,6 +131,7 @@ impl TraceLightVertices {
             directions: directions.mode_code(),
         };
         self.0
+            .get(scene.features)?
             .dispatch_threads(cmd, &bindings, &params, [total, 1, 1])
     }
 }

@@ -4,9 +4,10 @@
 
 use bytemuck::{Pod, Zeroable};
 
-use crate::gpu::{bind, Buffer, Commands, Context, GpuResult, Kernel};
+use crate::gpu::{bind, Buffer, Commands, Context, GpuResult};
 use crate::methods::accumulation::Accumulation;
 use crate::methods::gbuffer::GBuffer;
+use crate::methods::scene_kernel::SceneKernel;
 use crate::scene::gpu::GpuScene;
 
 use super::directions::BundleDirections;
@@ -69,11 +70,14 @@ pub struct Shading {
     pub environment: bool,
 }
 
-pub struct ShadeBundlePaths(Kernel);
+pub struct ShadeBundlePaths(SceneKernel);
 
 impl ShadeBundlePaths {
     pub fn new(ctx: &Context) -> GpuResult<Self> {
-        Ok(ShadeBundlePaths(Kernel::new(ctx, "shade_bundle_paths")?))
+        Ok(ShadeBundlePaths(SceneKernel::new(
+            ctx,
+            "shade_bundle_paths",
+        )?))
     }
 
     #[allow(clippy::too_many_arguments)]
@@ -127,6 +131,7 @@ impl ShadeBundlePaths {
             compensate: shading.compensate as u32,
         };
         self.0
+            .get(scene.features)?
             .dispatch(cmd, &bindings, &params, scene.image_workgroups())
     }
 }

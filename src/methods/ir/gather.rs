@@ -7,9 +7,10 @@ use bytemuck::{Pod, Zeroable};
 
 use glam::Vec4;
 
-use crate::gpu::{bind, Buffer, Commands, Context, GpuResult, Kernel};
+use crate::gpu::{bind, Buffer, Commands, Context, GpuResult};
 use crate::methods::accumulation::Accumulation;
 use crate::methods::gbuffer::GBuffer;
+use crate::methods::scene_kernel::SceneKernel;
 use crate::scene::gpu::GpuScene;
 
 use super::walk::Vpl;
@@ -27,11 +28,14 @@ struct GatherParams {
     weight: f32,
 }
 
-pub struct AccumulateVpls(Kernel);
+pub struct AccumulateVpls(SceneKernel);
 
 impl AccumulateVpls {
     pub fn new(ctx: &Context) -> GpuResult<Self> {
-        Ok(AccumulateVpls(Kernel::new(ctx, "accumulate_vpls_tiled")?))
+        Ok(AccumulateVpls(SceneKernel::new(
+            ctx,
+            "accumulate_vpls_tiled",
+        )?))
     }
 
     /// Shades the VPL slots `slots` of `vpls`, each contribution times `weight`; `g_clamp` 0
@@ -63,6 +67,7 @@ impl AccumulateVpls {
         // once they have run 65535 iterations together (LP_MAX_TGSI_LOOP_ITERATIONS; README
         // "Kernels"). Short dispatches also keep real GPUs under watchdog limits. tests/ir.rs
         // checks large slot counts against the reference.
+        let kernel = self.0.get(scene.features)?;
         let mut begin = slots.start;
         while begin < slots.end {
             let end = slots.end.min(begin + SLOTS_PER_DISPATCH);
@@ -73,8 +78,7 @@ impl AccumulateVpls {
                 interleave: interleave.max(1),
                 weight,
             };
-            self.0
-                .dispatch(cmd, &bindings, &params, scene.image_workgroups())?;
+            kernel.dispatch(cmd, &bindings, &params, scene.image_workgroups())?;
             begin = end;
         }
         Ok(())

@@ -4,7 +4,8 @@
 use bytemuck::{Pod, Zeroable};
 use glam::Vec4;
 
-use crate::gpu::{bind, Buffer, Commands, Context, GpuResult, Kernel};
+use crate::gpu::{bind, Buffer, Commands, Context, GpuResult};
+use crate::methods::scene_kernel::SceneKernel;
 use crate::scene::gpu::{GpuScene, LightEntry};
 
 use super::schedule::Schedule;
@@ -55,11 +56,11 @@ impl VplBuffers {
     }
 }
 
-pub struct TraceVpls(Kernel);
+pub struct TraceVpls(SceneKernel);
 
 impl TraceVpls {
     pub fn new(ctx: &Context) -> GpuResult<Self> {
-        Ok(TraceVpls(Kernel::new(ctx, "trace_vpls")?))
+        Ok(TraceVpls(SceneKernel::new(ctx, "trace_vpls")?))
     }
 
     /// Clears the slots (a path that ends early leaves its later slots empty) and walks,
@@ -90,7 +91,7 @@ impl TraceVpls {
             seed,
             survival: buffers.layout.mean_albedo as f32,
         };
-        self.0.dispatch(
+        self.0.get(scene.features)?.dispatch(
             cmd,
             &bindings,
             &params,
