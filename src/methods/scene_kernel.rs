@@ -12,8 +12,9 @@ use crate::scene::gpu::SceneFeatures;
 pub struct SceneKernel {
     ctx: Context,
     name: &'static str,
-    /// By SceneFeatures::index, plus 8 when the kernel's own constant is set.
-    variants: [OnceCell<Kernel>; 16],
+    /// By SceneFeatures::index, plus 8 when the kernel's own constant is given false and 16
+    /// when true (so a kernel's own default never shares a slot with an explicit value).
+    variants: [OnceCell<Kernel>; 24],
 }
 
 impl SceneKernel {
@@ -27,8 +28,8 @@ impl SceneKernel {
         })
     }
 
-    /// The kernel for a scene with `features` (for kernels without a constant 3 of their own:
-    /// it takes the module's default, and shares its slot with `get_with(features, false)`).
+    /// The kernel for a scene with `features` (a constant 3 of the kernel's own keeps the
+    /// module's default).
     pub fn get(&self, features: SceneFeatures) -> GpuResult<&Kernel> {
         self.build(features, None)
     }
@@ -39,7 +40,12 @@ impl SceneKernel {
     }
 
     fn build(&self, features: SceneFeatures, flag: Option<bool>) -> GpuResult<&Kernel> {
-        let cell = &self.variants[features.index() + 8 * usize::from(flag == Some(true))];
+        let own = match flag {
+            None => 0,
+            Some(false) => 1,
+            Some(true) => 2,
+        };
+        let cell = &self.variants[features.index() + 8 * own];
         if let Some(kernel) = cell.get() {
             return Ok(kernel);
         }
