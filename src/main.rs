@@ -354,8 +354,9 @@ struct RenderArgs {
     /// follow how often each side brought more camera power in earlier batches.
     #[arg(long)]
     fixed_weights: bool,
-    /// Seed of every random and quasi-random number: same seed, same device, same bits.
-    #[arg(long, default_value_t = 0)]
+    /// Seed of every random and quasi-random number: same seed, same device, same bits
+    /// (0..=4294967295).
+    #[arg(long, default_value_t = 0, allow_hyphen_values = true, value_parser = parse_seed)]
     seed: u32,
     /// Most scattering events per path (a safety cap: Russian roulette ends paths first).
     #[arg(long, default_value_t = 1024)]
@@ -663,6 +664,24 @@ fn parse_case(s: &str) -> Result<scan_bench::ScanCase, String> {
         row_length,
         row_count,
     })
+}
+
+/// Memory available to a new allocation (Linux: /proc/meminfo MemAvailable), when known.
+fn available_memory() -> Option<u64> {
+    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib * 1024)
+}
+
+/// A seed: any whole number 0..=4294967295. Negative values are taken as values (not flags) so
+/// that `--seed -1` gets this message rather than clap's tip to write `-- -1`.
+fn parse_seed(text: &str) -> Result<u32, String> {
+    match text.trim().parse::<i128>() {
+        Ok(v) if (0..=i128::from(u32::MAX)).contains(&v) => Ok(v as u32),
+        Ok(_) => Err("seeds are whole numbers 0..=4294967295".into()),
+        Err(_) => Err("not a whole number (seeds are 0..=4294967295)".into()),
+    }
 }
 
 fn main() -> ExitCode {
@@ -1588,6 +1607,44 @@ fn generate_luminaire(args: &GenerateArgs) -> Result<()> {
         grid.0 <= 64 && grid.1 <= 64 && resolution.0 <= 4096 && resolution.1 <= 4096,
         "--grid at most 64x64 and --resolution at most 4096x4096"
     );
+    // Sizes up front (issue 22 item 1d): the renderer holds each atlas as one storage buffer of
+    // 16 bytes a texel (at most 4 GiB on any device, 128 MiB guaranteed), and generation holds
+    // every frame's images in memory at 12 bytes a texel, twice while writing.
+    let texels = u64::from(grid.0 * grid.1) * u64::from(resolution.0) * u64::from(resolution.1);
+    let gpu_bytes = texels * 16;
+    let host_bytes = texels * 12 * (u64::from(args.frames) + 1);
+    let gib = |b: u64| b as f64 / (1u64 << 30) as f64;
+    anyhow::ensure!(
+        gpu_bytes <= u64::from(u32::MAX),
+        "--grid {}x{} --resolution {}x{}: {texels} texels, a {:.1} GiB buffer on the GPU, over the \
+         4 GiB any Vulkan device binds as one storage buffer (fewer images or texels)",
+        grid.0,
+        grid.1,
+        resolution.0,
+        resolution.1,
+        gib(gpu_bytes)
+    );
+    if let Some(available) = available_memory() {
+        anyhow::ensure!(
+            host_bytes <= available,
+            "--grid {}x{} --resolution {}x{} --frames {}: generating needs {:.1} GiB of memory, \
+             over the {:.1} GiB available",
+            grid.0,
+            grid.1,
+            resolution.0,
+            resolution.1,
+            args.frames,
+            gib(host_bytes),
+            gib(available)
+        );
+    }
+    if gpu_bytes > 1 << 27 {
+        eprintln!(
+            "warning: the atlas is a {:.2} GiB buffer on the GPU, over the 128 MiB every Vulkan \
+             device binds (maxStorageBufferRange; `irad info` shows a device's)",
+            gib(gpu_bytes)
+        );
+    }
     let grid = [grid.0 as usize, grid.1 as usize];
     // The grid spans the emitter's diameter (a single node sits at its centre).
     let pitch = |n: usize| {
@@ -1649,6 +1706,9 @@ fn generate_luminaire(args: &GenerateArgs) -> Result<()> {
             },
             Ok,
         )?;
+    // The folder first, so a bad --out fails before the minutes of generation.
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("--out {}: cannot create the folder", args.out.display()))?;
     let bar = progress(emitters.len() as u64, "luminaire generate");
     let mut frames: Vec<Luminaire> = emitters
         .iter()

@@ -315,3 +315,60 @@ fn bench_lightfield_prints_the_breakdown() {
     let o = irad(&["bench", "lightfield", scene, "--strategies", "nope"], &[]);
     assert_clean_error(&o, &["--strategies", "nope", "restricted"]);
 }
+
+/// Issue 22 items 1f-1h: a missing file's OS error once; an unwritable luminaire folder named;
+/// a negative seed one clear message (not clap's tip to write `-- -1`).
+#[test]
+fn file_and_seed_errors_say_it_once_and_name_the_path() {
+    let o = irad(&["render", "no/such/scene.toml"], &[]);
+    assert_clean_error(&o, &["no/such/scene.toml", "cannot read it"]);
+    assert_eq!(
+        stderr(&o).matches("os error 2").count(),
+        1,
+        "{}",
+        stderr(&o)
+    );
+
+    let o = irad(
+        &[
+            "luminaire",
+            "generate",
+            "--emitter",
+            "disk",
+            "-o",
+            "/proc/irad-lumx",
+        ],
+        &[],
+    );
+    assert_clean_error(&o, &["/proc/irad-lumx", "cannot create the folder"]);
+
+    // Issue 22 item 1d: an 824 GB atlas is refused at once, with its size.
+    let o = irad(
+        &[
+            "luminaire",
+            "generate",
+            "--emitter",
+            "disk",
+            "--grid",
+            "64x64",
+            "--resolution",
+            "4096x4096",
+            "-o",
+            "/tmp/irad-never-written",
+        ],
+        &[],
+    );
+    assert_clean_error(&o, &["68719476736 texels", "GiB", "4 GiB"]);
+    assert!(!std::path::Path::new("/tmp/irad-never-written/images.exr").exists());
+
+    for seed in ["-1", "4294967296", "x"] {
+        let o = irad(&["render", "--seed", seed, "--spp", "1"], &[]);
+        let err = stderr(&o);
+        assert!(!o.status.success(), "--seed {seed}: {err}");
+        assert!(!err.contains("panicked") && !err.contains("-- -1"), "{err}");
+        assert!(
+            err.contains("0..=4294967295") && err.contains(seed),
+            "{err}"
+        );
+    }
+}

@@ -469,3 +469,36 @@ fn kernels_specialized_to_a_scene_give_the_general_kernels_bits() {
         }
     });
 }
+
+/// A scene at the loader's coordinate limit (1e8, src/scene/obj.rs MAX_COORDINATE) renders as
+/// the same scene at unit scale does: radiance does not change when lengths scale by s and the
+/// point light's intensity by s^2 (issue 22 item 1b: at 1e10 the image came out black).
+#[test]
+fn a_scene_at_the_coordinate_limit_renders_as_at_unit_scale() {
+    with_gpu(|ctx| {
+        let mean_at = |scale: f32| {
+            let mut scene = scene(
+                "far",
+                camera(
+                    Vec3::new(0.0, 0.6, 0.9) * scale,
+                    Vec3::ZERO,
+                    Vec3::Y,
+                    40.0,
+                    16,
+                ),
+                plane_y(scale, 0.0, 0),
+                vec![material("grey", 0.5, 0.0, 0.0, 0.0)],
+            );
+            scene.lights.push(Light::Point {
+                position: Vec3::new(0.0, 0.5, 0.0) * scale,
+                intensity: Vec3::splat(scale * scale),
+            });
+            let image = render(ctx, &scene, 16, 5);
+            image.pixels.iter().map(|p| p[0] as f64).sum::<f64>() / image.pixels.len() as f64
+        };
+        let (unit, far) = (mean_at(1.0), mean_at(1e8));
+        eprintln!("image mean at unit scale {unit:.6}, at 1e8 {far:.6}");
+        assert!(unit > 0.01, "{unit}");
+        assert!((far / unit - 1.0).abs() < 0.01, "{far} against {unit}");
+    });
+}

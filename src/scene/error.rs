@@ -5,12 +5,13 @@
 #[derive(Debug, thiserror::Error)]
 pub enum SceneError {
     /// A file could not be read; `referenced_by` says which file and field named it.
-    #[error("{path}: cannot read it ({referenced_by}): {source}")]
+    /// (The I/O error is in the message, not the source chain, which anyhow's `{:#}` would
+    /// print a second time.)
+    #[error("{path}: cannot read it ({referenced_by}): {error}")]
     Read {
         path: String,
         referenced_by: String,
-        #[source]
-        source: std::io::Error,
+        error: std::io::Error,
     },
     /// The scene file is not valid TOML or does not match the schema (unknown field, wrong
     /// type, missing field); `message` is toml's, with line and column.

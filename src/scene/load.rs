@@ -11,17 +11,18 @@ use super::sky::MovingSun;
 use super::{camera, environment, failure, file, lights, luminaire, obj};
 use super::{Environment, Material, Scene, SceneError, Triangle};
 
-/// A triangle whose area is at most this times the squared diagonal of the scene's bounding
-/// box is degenerate and dropped (with a warning).
+/// A triangle whose area is at most this times the square of its own longest edge is
+/// degenerate (collinear or repeated corners, to f32 rounding) and dropped with a warning. Each
+/// triangle is judged by its own size, so a small triangle beside a huge one is kept.
 pub const DEGENERATE_AREA: f64 = 1e-12;
 
 /// Loads the scene file at `path`; files it names are relative to its folder.
 pub fn load(path: &Path) -> Result<Scene, SceneError> {
     let display = path.display().to_string();
-    let bytes = std::fs::read(path).map_err(|source| SceneError::Read {
+    let bytes = std::fs::read(path).map_err(|error| SceneError::Read {
         path: display.clone(),
         referenced_by: "the scene file".into(),
-        source,
+        error,
     })?;
     let text = String::from_utf8(bytes).map_err(|e| SceneError::File {
         file: display.clone(),
@@ -107,10 +108,10 @@ impl Files<'_> {
         let display = self.display(rel);
         let bytes = match self {
             Files::Disk(base) => {
-                std::fs::read(base.join(rel)).map_err(|source| SceneError::Read {
+                std::fs::read(base.join(rel)).map_err(|error| SceneError::Read {
                     path: display.clone(),
                     referenced_by,
-                    source,
+                    error,
                 })?
             }
             Files::Embedded { files, .. } => {
@@ -121,7 +122,7 @@ impl Files<'_> {
                     .ok_or_else(|| SceneError::Read {
                         path: display.clone(),
                         referenced_by,
-                        source: std::io::ErrorKind::NotFound.into(),
+                        error: std::io::ErrorKind::NotFound.into(),
                     })?
             }
         };
@@ -311,10 +312,10 @@ fn load_environment(
         let (dir, pattern) = environment::split_glob(exr);
         let folder = files.disk_path(&dir).ok_or_else(unsupported_embedded)?;
         let found =
-            environment::expand_glob(&folder, &pattern).map_err(|source| SceneError::Read {
+            environment::expand_glob(&folder, &pattern).map_err(|error| SceneError::Read {
                 path: folder.display().to_string(),
                 referenced_by: format!("{file}: environment.exr = {exr:?} (its folder)"),
-                source,
+                error,
             })?;
         if found.is_empty() {
             return Err(SceneError::Invalid {
@@ -360,40 +361,37 @@ fn load_environment(
     Ok(maps)
 }
 
-/// Drops triangles of (near) zero area, relative to the whole scene's extent, with one
-/// warning per mesh file that had any.
+/// Drops triangles of (near) zero area for their own size, with one warning per mesh file
+/// that had any.
 fn drop_degenerate(
     meshes: Vec<(String, Vec<Triangle>)>,
     warnings: &mut Vec<String>,
 ) -> Vec<Triangle> {
-    let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
-    for t in meshes.iter().flat_map(|(_, ts)| ts) {
-        for p in t.positions {
-            lo = lo.min(p);
-            hi = hi.max(p);
-        }
-    }
-    let extent2 = if lo.x <= hi.x {
-        (hi.as_dvec3() - lo.as_dvec3()).length_squared()
-    } else {
-        0.0
-    };
-    let threshold = DEGENERATE_AREA * extent2;
     let mut kept = Vec::new();
     for (obj_file, triangles) in meshes {
         let (count, kept_before) = (triangles.len(), kept.len());
         kept.extend(
             triangles
                 .into_iter()
-                .filter(|t| 0.5 * obj::double_area(t.positions) > threshold),
+                .filter(|t| !is_degenerate(t.positions)),
         );
         let dropped = count - (kept.len() - kept_before);
         if dropped > 0 {
             warnings.push(format!(
                 "{obj_file}: dropped {dropped} degenerate triangles (area <= {DEGENERATE_AREA:e} \
-                 x the squared scene extent)"
+                 x the square of the triangle's longest edge)"
             ));
         }
     }
     kept
+}
+
+/// Whether a triangle has (near) zero area for its own size.
+pub fn is_degenerate(p: [Vec3; 3]) -> bool {
+    let [a, b, c] = p.map(|v| v.as_dvec3());
+    let longest2 = (b - a)
+        .length_squared()
+        .max((c - b).length_squared())
+        .max((a - c).length_squared());
+    0.5 * obj::double_area(p) <= DEGENERATE_AREA * longest2
 }

@@ -194,10 +194,10 @@ impl Luminaire {
     /// Reads `path` (the TOML) and its atlas; errors name the file, field and value.
     pub fn load(path: &Path) -> Result<Luminaire, SceneError> {
         let display = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|source| SceneError::Read {
+        let text = std::fs::read_to_string(path).map_err(|error| SceneError::Read {
             path: display.clone(),
             referenced_by: "the luminaire file".into(),
-            source,
+            error,
         })?;
         let f: LuminaireFile = toml::from_str(&text).map_err(|e| SceneError::File {
             file: display.clone(),
@@ -262,10 +262,10 @@ impl Luminaire {
                 });
             }
             let found =
-                expand_glob(&folder.join(&dir), &pattern).map_err(|source| SceneError::Read {
+                expand_glob(&folder.join(&dir), &pattern).map_err(|error| SceneError::Read {
                     path: folder.join(&dir).display().to_string(),
                     referenced_by: format!("{display}: atlas = {:?} (its folder)", f.atlas),
-                    source,
+                    error,
                 })?;
             if found.is_empty() {
                 return Err(invalid(
@@ -367,15 +367,20 @@ impl Luminaire {
     /// Writes `<dir>/luminaire.toml` and `<dir>/images.exr` (a sequence: `images_000.exr`,
     /// `images_001.exr`, ... and `atlas = "images_*.exr"`); returns the TOML's path.
     pub fn write(&self, dir: &Path) -> anyhow::Result<PathBuf> {
-        std::fs::create_dir_all(dir)?;
+        use anyhow::Context as _;
+        std::fs::create_dir_all(dir)
+            .with_context(|| format!("{}: cannot create the folder", dir.display()))?;
         let g = &self.geometry;
         let [w, h] = g.grid;
         let [rs, rt] = g.resolution;
         let frames = self.frames();
         // A sequence written over an older one must not leave its extra atlases behind (the
         // glob would read them back).
-        for stale in expand_glob(dir, "images_*.exr")? {
-            std::fs::remove_file(stale)?;
+        for stale in expand_glob(dir, "images_*.exr")
+            .with_context(|| format!("{}: cannot list the folder", dir.display()))?
+        {
+            std::fs::remove_file(&stale)
+                .with_context(|| format!("{}: cannot remove it", stale.display()))?;
         }
         for (f, images) in frames.iter().enumerate() {
             let mut atlas = Image::new((w * rs) as u32, (h * rt) as u32);
@@ -416,7 +421,8 @@ impl Luminaire {
             g.image_size[0],
             g.image_size[1]
         );
-        std::fs::write(&toml_path, text)?;
+        std::fs::write(&toml_path, text)
+            .with_context(|| format!("{}: cannot write it", toml_path.display()))?;
         Ok(toml_path)
     }
 }

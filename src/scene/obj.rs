@@ -172,6 +172,11 @@ pub fn geometric_normal(p: [Vec3; 3]) -> Vec3 {
 }
 
 /// Twice the area of a triangle, in f64.
+/// The largest coordinate magnitude a vertex may have. Beyond it f32 arithmetic fails the
+/// renderer: at 1e10 every image came out black (hit offsets and light pdfs out of range), at
+/// 1e19 obvhs's CWBVH conversion panicked; scenes at 1e8 render (tests/scene_loading.rs).
+pub const MAX_COORDINATE: f32 = 1e8;
+
 pub fn double_area(p: [Vec3; 3]) -> f64 {
     let [a, b, c]: [DVec3; 3] = p.map(|v| v.as_dvec3());
     (b - a).cross(c - a).length()
@@ -237,6 +242,13 @@ fn check(file: &str, text: &str) -> Result<Checked, SceneError> {
                 };
                 if !p.iter().all(|x| x.is_finite()) {
                     return Err(error(format!("vertex position {} is not finite", fmt3(p))));
+                }
+                if p.iter().any(|x| x.abs() > MAX_COORDINATE) {
+                    return Err(error(format!(
+                        "vertex position {}: a coordinate's magnitude is over {MAX_COORDINATE:e}, \
+                         the most irad's f32 rays and BVH handle (scale the scene down)",
+                        fmt3(p)
+                    )));
                 }
                 positions += 1;
                 out.push_str(&format!("v {} {} {}", p[0], p[1], p[2]));
