@@ -1422,7 +1422,9 @@ fn bench_suite(options: &ContextOptions, args: SuiteArgs) -> Result<()> {
 fn progress(len: u64, what: &str) -> ProgressBar {
     let bar = ProgressBar::new(len);
     bar.set_style(
-        ProgressStyle::with_template(&format!("{what} [{{bar:30}}] {{pos}}/{{len}} {{msg}}"))
+        ProgressStyle::with_template(&format!(
+            "{what} [{{bar:30}}] {{pos}}/{{len}} ({{elapsed}} elapsed, {{eta}} left) {{msg}}"
+        ))
             .expect("static template")
             .progress_chars("=> "),
     );
