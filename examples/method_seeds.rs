@@ -121,6 +121,7 @@ fn main() {
     let ctx = Context::new(&ContextOptions {
         device: None,
         validation: Validation::Off,
+        force_staging: false,
     })
     .expect("a Vulkan device");
     let mut scene = irad::scene::load(&scene_path).unwrap_or_else(|e| panic!("{e}"));

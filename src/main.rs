@@ -704,6 +704,7 @@ fn run(cli: Cli) -> Result<()> {
     let options = ContextOptions {
         device: cli.device.clone(),
         validation,
+        force_staging: ContextOptions::force_staging_from_env(),
     };
     match cli.command {
         Command::Info => info(cli.device.as_ref()),
@@ -1425,8 +1426,8 @@ fn progress(len: u64, what: &str) -> ProgressBar {
         ProgressStyle::with_template(&format!(
             "{what} [{{bar:30}}] {{pos}}/{{len}} ({{elapsed}} elapsed, {{eta}} left) {{msg}}"
         ))
-            .expect("static template")
-            .progress_chars("=> "),
+        .expect("static template")
+        .progress_chars("=> "),
     );
     bar
 }
@@ -1490,6 +1491,12 @@ fn info(selector: Option<&DeviceSelector>) -> Result<()> {
         println!(
             "    device-local memory        {:.0} MiB (largest heap)",
             mib(d.device_local_heap)
+        );
+    }
+    if ContextOptions::force_staging_from_env() {
+        println!(
+            "staging: forced (IRAD_FORCE_STAGING): every buffer device-local only, written and \
+             read through staging buffers, as on a discrete GPU"
         );
     }
     chosen?;

@@ -111,6 +111,7 @@ pub fn render(
         samples: job.method.samples(),
         device: info.name.clone(),
         driver: info.driver.clone(),
+        staging: ctx.force_staging().then(|| "forced".to_string()),
         passes: output
             .passes
             .passes

@@ -47,3 +47,38 @@ fn a_buffer_over_max_storage_buffer_range_is_an_error_naming_it_and_the_sizes() 
         );
     });
 }
+
+/// Forced staging (issue 22 item 2; IRAD_FORCE_STAGING=1): device buffers stay unmapped, as on a
+/// discrete GPU, and uploads, zeroing and readbacks go through staging copies with no
+/// validation message; without it lavapipe's buffers are mapped.
+#[test]
+fn forced_staging_keeps_device_buffers_unmapped_and_still_round_trips() {
+    use irad::gpu::{Context, ContextOptions, Validation};
+    for force_staging in [false, true] {
+        let validation = if irad::gpu::validation_layer_available() {
+            Validation::On
+        } else {
+            Validation::Off
+        };
+        let ctx = Context::new(&ContextOptions {
+            device: None,
+            validation,
+            force_staging,
+        })
+        .unwrap();
+        let log = ctx.validation_log();
+        assert_eq!(ctx.force_staging(), force_staging);
+        let data: Vec<u32> = (0..777).map(|i| i * 3 + 5).collect();
+        let b = Buffer::from_slice(&ctx, "staged numbers", &data).unwrap();
+        let z = Buffer::<[f32; 4]>::zeroed(&ctx, "staged zeros", 9).unwrap();
+        assert_eq!(b.read().unwrap(), data);
+        assert_eq!(z.read().unwrap(), vec![[0.0; 4]; 9]);
+        if force_staging {
+            assert!(!b.host_mapped() && !z.host_mapped());
+        } else if ctx.info().kind == irad::gpu::DeviceKind::Cpu {
+            assert!(b.host_mapped(), "lavapipe's buffers are host-visible");
+        }
+        drop((b, z, ctx));
+        assert!(log.messages().is_empty(), "{:?}", log.messages());
+    }
+}

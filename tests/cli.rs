@@ -372,3 +372,36 @@ fn file_and_seed_errors_say_it_once_and_name_the_path() {
         );
     }
 }
+
+/// IRAD_FORCE_STAGING=1 (issue 22 item 2): `irad info` and the render JSON say staging is forced,
+/// and the image is the one rendered without it.
+#[test]
+fn forced_staging_is_reported_and_changes_no_pixel() {
+    let o = irad(&["info"], &[("IRAD_FORCE_STAGING", "1")]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("staging: forced"));
+
+    let dir = temp_dir("staging");
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/spot-light/scene.toml");
+    let render = |name: &str, env: &[(&str, &str)]| {
+        let out = dir.join(name);
+        let o = irad(
+            &["render", scene, "--spp", "2", "-o", out.to_str().unwrap()],
+            env,
+        );
+        assert!(o.status.success(), "{}", stderr(&o));
+        (
+            irad::image::exr::read(&out.with_extension("exr")).unwrap(),
+            irad::image::RenderRecord::read(&out.with_extension("json")).unwrap(),
+        )
+    };
+    let (staged, record) = render(
+        "staged",
+        &[("IRAD_FORCE_STAGING", "1"), ("IRAD_VALIDATE", "1")],
+    );
+    assert_eq!(record.staging.as_deref(), Some("forced"));
+    let (mapped, record) = render("mapped", &[]);
+    assert_eq!(record.staging, None);
+    assert_eq!(staged.pixels, mapped.pixels);
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -72,7 +72,9 @@ impl RawBuffer {
         let buffer = unsafe { device.create_buffer(&create, None) }.vk("vkCreateBuffer")?;
         let req = unsafe { device.get_buffer_memory_requirements(buffer) };
         let host = vk::MemoryPropertyFlags::HOST_VISIBLE | vk::MemoryPropertyFlags::HOST_COHERENT;
-        let unified = matches!(info.kind, DeviceKind::Cpu | DeviceKind::Integrated);
+        // Forced staging (IRAD_FORCE_STAGING) places and uses buffers as on a discrete GPU.
+        let unified =
+            matches!(info.kind, DeviceKind::Cpu | DeviceKind::Integrated) && !ctx.force_staging();
         let (required, preferred) = match placement {
             Placement::Device if unified => (vk::MemoryPropertyFlags::DEVICE_LOCAL, host),
             Placement::Device => (
@@ -131,7 +133,10 @@ impl RawBuffer {
             name: name.to_string(),
         };
         unsafe { device.bind_buffer_memory(buffer, memory, 0) }.vk("vkBindBufferMemory")?;
-        if ctx.memory_flags(type_index).contains(host) {
+        // Under forced staging a device buffer is never mapped, even in host-visible memory
+        // (lavapipe has no other), so its uploads and readbacks take the staging path.
+        let staged = placement == Placement::Device && ctx.force_staging();
+        if ctx.memory_flags(type_index).contains(host) && !staged {
             let ptr = unsafe {
                 device.map_memory(memory, 0, vk::WHOLE_SIZE, vk::MemoryMapFlags::empty())
             }
@@ -256,6 +261,12 @@ impl<T: Pod> Buffer<T> {
 
     pub fn len(&self) -> usize {
         self.len
+    }
+
+    /// Whether the host writes and reads this buffer directly through a mapping (false: through
+    /// staging copies, as on a discrete GPU or under forced staging).
+    pub fn host_mapped(&self) -> bool {
+        self.raw.mapped.is_some()
     }
 
     pub fn is_empty(&self) -> bool {

@@ -14,14 +14,26 @@ use super::instance::{Instance, Validation, ValidationLog};
 pub struct ContextOptions {
     pub device: Option<DeviceSelector>,
     pub validation: Validation,
+    /// Every buffer device-local only, written and read through staging buffers, as on a
+    /// discrete GPU, even where device memory is host-visible (lavapipe, integrated GPUs): so
+    /// the staging path runs in CI. IRAD_FORCE_STAGING=1.
+    pub force_staging: bool,
+}
+
+impl ContextOptions {
+    /// Whether IRAD_FORCE_STAGING asks for forced staging (set, not empty, not 0).
+    pub fn force_staging_from_env() -> bool {
+        matches!(std::env::var("IRAD_FORCE_STAGING"), Ok(v) if !v.is_empty() && v != "0")
+    }
 }
 
 impl Default for ContextOptions {
-    /// The best device; validation as IRAD_VALIDATE says.
+    /// The best device; validation as IRAD_VALIDATE says, staging as IRAD_FORCE_STAGING says.
     fn default() -> Self {
         ContextOptions {
             device: None,
             validation: Validation::from_env(),
+            force_staging: Self::force_staging_from_env(),
         }
     }
 }
@@ -47,6 +59,7 @@ pub(crate) struct Shared {
     pub(crate) command_pool: Mutex<vk::CommandPool>,
     pub(crate) memory: vk::PhysicalDeviceMemoryProperties,
     pub(crate) info: DeviceInfo,
+    pub(crate) force_staging: bool,
     pub(crate) debug_names: Option<ash::ext::debug_utils::Device>,
     // Dropped last: the device must go before the instance.
     pub(crate) instance: Arc<Instance>,
@@ -126,6 +139,7 @@ impl Context {
                 command_pool: Mutex::new(command_pool),
                 memory,
                 info,
+                force_staging: options.force_staging,
                 debug_names,
                 instance,
             }),
@@ -134,6 +148,11 @@ impl Context {
 
     pub fn info(&self) -> &DeviceInfo {
         &self.shared.info
+    }
+
+    /// Whether buffers are forced behind staging copies (ContextOptions::force_staging).
+    pub fn force_staging(&self) -> bool {
+        self.shared.force_staging
     }
 
     /// Whether the validation layer is on for this context.
@@ -273,6 +292,7 @@ mod tests {
         let ctx = Context::new(&ContextOptions {
             device: None,
             validation: Validation::On,
+            force_staging: false,
         })
         .unwrap();
         let log = ctx.validation_log();

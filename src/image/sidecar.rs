@@ -35,6 +35,9 @@ pub struct RenderRecord {
     /// Device name and driver as Vulkan reports them.
     pub device: String,
     pub driver: String,
+    /// "forced" when every buffer went through staging copies (IRAD_FORCE_STAGING).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub staging: Option<String>,
     /// GPU time per pass, in the order the passes first ran.
     pub passes: Vec<PassRecord>,
     /// Sum of the passes' GPU times; `None` when the device has no timestamps.
