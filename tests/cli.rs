@@ -405,3 +405,39 @@ fn forced_staging_is_reported_and_changes_no_pixel() {
     assert_eq!(staged.pixels, mapped.pixels);
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// Sizes that can never run are refused before any rendering, naming the device limit (issue
+/// 22 item 1e).
+#[test]
+fn sizes_over_the_device_limits_are_refused_before_rendering() {
+    let spot = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/spot-light/scene.toml");
+    let cases: [(&[&str], &str); 2] = [
+        (
+            &[
+                "render",
+                spot,
+                "--method",
+                "bundles",
+                "--iterations",
+                "65536",
+            ],
+            "BundleHits",
+        ),
+        (&["render", "--method", "ir", "--vpls", "1048576"], "Vpls"),
+    ];
+    for (args, buffer) in cases {
+        let start = std::time::Instant::now();
+        let o = irad(args, &[]);
+        let err = stderr(&o);
+        assert!(!o.status.success() && !err.contains("panicked"), "{err}");
+        assert!(
+            err.contains(buffer) && err.contains("maxStorageBufferRange"),
+            "{err}"
+        );
+        assert!(
+            start.elapsed().as_secs() < 20,
+            "{args:?} took {:?}",
+            start.elapsed()
+        );
+    }
+}
