@@ -514,6 +514,7 @@ fn record() -> RenderRecord {
         samples: 1024,
         device: "llvmpipe (LLVM 19.1.7, 256 bits) \u{e9}".into(),
         driver: "Mesa 25.0.7".into(),
+        staging: None,
         passes: vec![
             PassRecord {
                 name: "gbuffer".into(),

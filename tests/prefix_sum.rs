@@ -120,3 +120,14 @@ fn empty_rows_total_zero() {
         assert_eq!(totals.read().unwrap(), [0.0; 3]);
     });
 }
+
+/// The device numbers subgroup lanes in invocation order, as the scans need (issue 22 item 3;
+/// src/gpu/subgroup_layout.rs). scripts/test.sh runs this at 8 and at 4 lanes.
+#[test]
+fn the_device_numbers_subgroup_lanes_in_invocation_order() {
+    common::with_gpu(|ctx| {
+        ctx.check_subgroup_layout().unwrap();
+        // Cached: a second check runs nothing and agrees.
+        ctx.check_subgroup_layout().unwrap();
+    });
+}

@@ -8,7 +8,8 @@
 // Requires: GL_KHR_shader_subgroup_arithmetic, a 1D workgroup of at most WORKGROUP_SUM_SLOTS
 // subgroups, and at most one call per workgroup invocation (the shared slots are not reset).
 // The sums run in (gl_SubgroupID, lane) order; callers index data by gl_LocalInvocationIndex,
-// which every driver we know maps onto that order linearly (the spec does not promise it).
+// which every driver we know maps onto that order (the spec does not promise it), so
+// src/gpu/subgroup_layout.rs checks it once per device before the first scan.
 
 #ifndef WORKGROUP_SCAN_GLSL
 #define WORKGROUP_SCAN_GLSL

@@ -60,6 +60,8 @@ pub(crate) struct Shared {
     pub(crate) memory: vk::PhysicalDeviceMemoryProperties,
     pub(crate) info: DeviceInfo,
     pub(crate) force_staging: bool,
+    /// The verdict of src/gpu/subgroup_layout.rs, probed at the first scan.
+    pub(crate) subgroup_layout: std::sync::OnceLock<Result<(), String>>,
     pub(crate) debug_names: Option<ash::ext::debug_utils::Device>,
     // Dropped last: the device must go before the instance.
     pub(crate) instance: Arc<Instance>,
@@ -140,6 +142,7 @@ impl Context {
                 memory,
                 info,
                 force_staging: options.force_staging,
+                subgroup_layout: std::sync::OnceLock::new(),
                 debug_names,
                 instance,
             }),
@@ -153,6 +156,26 @@ impl Context {
     /// Whether buffers are forced behind staging copies (ContextOptions::force_staging).
     pub fn force_staging(&self) -> bool {
         self.shared.force_staging
+    }
+
+    /// Checks, once per context, that subgroup lanes follow the invocation order the scans
+    /// rely on (src/gpu/subgroup_layout.rs).
+    pub fn check_subgroup_layout(&self) -> GpuResult<()> {
+        if let Some(verdict) = self.shared.subgroup_layout.get() {
+            return verdict.clone().map_err(|detail| GpuError::SubgroupLayout {
+                device: self.info().name.clone(),
+                detail,
+            });
+        }
+        let result = super::subgroup_layout::probe(self);
+        let verdict = match &result {
+            Ok(()) => Ok(()),
+            Err(GpuError::SubgroupLayout { detail, .. }) => Err(detail.clone()),
+            // A failure to run the probe is reported, not cached.
+            Err(_) => return result,
+        };
+        let _ = self.shared.subgroup_layout.set(verdict);
+        result
     }
 
     /// Whether the validation layer is on for this context.

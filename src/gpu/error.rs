@@ -37,6 +37,11 @@ pub enum GpuError {
     },
 
     #[error(
+        "device `{device}` numbers a workgroup's subgroup lanes in another order than its invocations ({detail}); irad's scans (glsl/include/workgroup_scan.glsl) need the two orders to agree: please report the device and driver"
+    )]
+    SubgroupLayout { device: String, detail: String },
+
+    #[error(
         "kernel {kernel}: buffer `{binding}` of {bytes} bytes is bound as a uniform block, over the {limit} bytes every Vulkan device allows (maxUniformBufferRange's minimum)"
     )]
     UniformBlockTooLarge {

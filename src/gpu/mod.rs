@@ -13,6 +13,7 @@ pub mod kernel;
 pub mod prefix_sum;
 pub mod reflect;
 pub mod spirv;
+pub mod subgroup_layout;
 pub mod timing;
 
 pub use buffer::{Buffer, GpuBuffer};

@@ -131,6 +131,7 @@ impl PrefixSum {
             .checked_mul(row_count_u32)
             .ok_or_else(|| too_long("data"))?;
 
+        ctx.check_subgroup_layout()?;
         let reduce = ReduceBlocks::new(ctx)?;
         let scan = ScanBlocks::new(ctx)?;
         let block = scan.0.workgroup_size()[0] * ITEMS_PER_INVOCATION;
