@@ -441,3 +441,46 @@ fn sizes_over_the_device_limits_are_refused_before_rendering() {
         );
     }
 }
+
+/// A long render shows a progress bar with its time left (issue 22 item 1i: `--spp 2000000000`
+/// printed nothing for minutes). The bar draws only on a terminal, so the render runs under
+/// `script` (util-linux), stopped after a few seconds.
+#[test]
+fn a_long_render_shows_its_time_left() {
+    let have = |tool: &str| {
+        Command::new(tool)
+            .arg("--version")
+            .output()
+            .is_ok_and(|o| o.status.success())
+    };
+    if !have("script") || !have("timeout") {
+        assert!(
+            !common_under_ci(),
+            "`script` and `timeout` (util-linux, coreutils) are needed"
+        );
+        eprintln!("note: no `script` or `timeout`; skipping");
+        return;
+    }
+    let dir = temp_dir("progress");
+    let render = format!(
+        "timeout 4 {} render --spp 2000000000 -o {}",
+        env!("CARGO_BIN_EXE_irad"),
+        dir.join("never").display()
+    );
+    let o = Command::new("script")
+        .args(["-q", "-c", &render, "/dev/null"])
+        .env_remove("IRAD_VALIDATE")
+        .output()
+        .unwrap();
+    std::fs::remove_dir_all(&dir).ok();
+    let screen = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        screen.contains("/2000000000 (") && screen.contains("elapsed,") && screen.contains("left)"),
+        "{screen}"
+    );
+}
+
+/// As tests/common's under_ci (this file does not use the GPU helpers).
+fn common_under_ci() -> bool {
+    std::env::var("CI").is_ok_and(|v| !v.is_empty() && v != "false" && v != "0")
+}
