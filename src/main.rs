@@ -34,8 +34,9 @@ use irad::shaders::ShaderTree;
 #[derive(Parser)]
 #[command(name = "irad", version, about, long_about)]
 struct Cli {
-    /// Device to run on: an index or part of a name, as `irad info` lists them.
-    /// Default: the first discrete GPU, else integrated, else virtual, else CPU (lavapipe).
+    /// Device to run on: an index or part of a name, as `irad info` lists them (also
+    /// IRAD_DEVICE). Default: the first discrete GPU, else integrated, else virtual, else CPU
+    /// (lavapipe).
     #[arg(long, global = true, value_name = "INDEX|NAME")]
     device: Option<DeviceSelector>,
 
@@ -695,7 +696,20 @@ fn main() -> ExitCode {
     }
 }
 
-fn run(cli: Cli) -> Result<()> {
+fn run(mut cli: Cli) -> Result<()> {
+    // IRAD_DEVICE stands for --device when the flag is not given (scripts/gpu-check.sh; the
+    // tests read it too).
+    if cli.device.is_none() {
+        if let Ok(value) = std::env::var("IRAD_DEVICE") {
+            if !value.trim().is_empty() {
+                cli.device = Some(
+                    value
+                        .parse()
+                        .map_err(|e| anyhow::anyhow!("IRAD_DEVICE={value}: {e}"))?,
+                );
+            }
+        }
+    }
     let validation = if cli.validate {
         Validation::On
     } else {

@@ -518,6 +518,51 @@ fn excerpt(text: &[u8], at: usize) -> String {
         .to_string()
 }
 
+/// What a loaded scene breaks of the loader's promises (src/scene/mod.rs), if anything:
+/// triangles with finite positions within `MAX_COORDINATE`, unit finite normals and a
+/// material that exists; finite non-negative materials within energy conservation; a light.
+fn broken_invariant(scene: &irad::scene::Scene) -> Option<String> {
+    if scene.triangles.is_empty() {
+        return Some("no triangles".into());
+    }
+    for (i, t) in scene.triangles.iter().enumerate() {
+        if !t
+            .positions
+            .iter()
+            .all(|p| p.is_finite() && p.abs().max_element() <= 1e8)
+        {
+            return Some(format!("triangle {i} positions {:?}", t.positions));
+        }
+        if !t
+            .normals
+            .iter()
+            .all(|n| n.is_finite() && (n.length() - 1.0).abs() < 1e-3)
+        {
+            return Some(format!("triangle {i} normals {:?}", t.normals));
+        }
+        if t.material as usize >= scene.materials.len() {
+            return Some(format!("triangle {i} material {}", t.material));
+        }
+    }
+    for m in &scene.materials {
+        let channels = [m.kd, m.ks, m.ke];
+        let ok = channels
+            .iter()
+            .all(|c| c.is_finite() && c.min_element() >= 0.0)
+            && m.ns.is_finite()
+            && m.ns >= 0.0
+            && (m.kd + m.ks).max_element() <= 1.0 + 1e-5;
+        if !ok {
+            return Some(format!("material {m:?}"));
+        }
+    }
+    let c = &scene.camera;
+    if !(c.width >= 1 && c.height >= 1 && c.fov_y > 0.0 && c.fov_y < 180.0) {
+        return Some(format!("camera {c:?}"));
+    }
+    None
+}
+
 thread_local! {
     /// The message and location of the last panic on this thread, set by the fuzz hook.
     static LAST_PANIC: RefCell<Option<String>> = const { RefCell::new(None) };
@@ -592,7 +637,12 @@ fn mutated_scenes_load_or_fail_cleanly() {
             )
         };
         match result {
-            Ok(Ok(_)) => ok += 1,
+            Ok(Ok(loaded)) => {
+                ok += 1;
+                if let Some(problem) = broken_invariant(&loaded) {
+                    failures.push(format!("{}\n    loaded, but {problem}", context()));
+                }
+            }
             Ok(Err(e)) => {
                 err += 1;
                 let message = e.to_string();
