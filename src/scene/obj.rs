@@ -128,10 +128,18 @@ pub fn load(file: &str, text: &str, read_mtl: &mut MtlReader) -> Result<ObjMesh,
             let geometric = geometric_normal(positions);
             let normals = [0, 1, 2].map(|c| {
                 let n = given_normal(3 * t + c);
-                if n.is_finite() && n.length_squared() > 0.0 {
+                if n.length_squared().is_normal() {
                     n.normalize()
                 } else {
-                    geometric
+                    // length_squared overflowed (a component over ~1.8e19), is subnormal or
+                    // zero, or NaN: f64 still normalizes the finite non-zero ones.
+                    let d = n.as_dvec3();
+                    let length = d.length();
+                    if length > 0.0 && length.is_finite() {
+                        (d / length).as_vec3()
+                    } else {
+                        geometric
+                    }
                 }
             });
             if material.is_none() {
