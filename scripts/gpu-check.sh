@@ -21,8 +21,7 @@ elif [ -n "${1:-}" ]; then
   echo "usage: scripts/gpu-check.sh [--device INDEX|NAME]" >&2
   exit 2
 fi
-device_args=()
-[ -n "${IRAD_DEVICE:-}" ] && device_args=(--device "$IRAD_DEVICE")
+# irad and the tests both read IRAD_DEVICE (as --device).
 
 # Packages: installed when missing and reachable; an offline machine goes on with what it has.
 bash scripts/setup.sh || echo "gpu-check: setup could not install everything; going on" >&2
@@ -30,7 +29,7 @@ cargo build --release --locked --quiet || exit 1
 irad=./target/release/irad
 
 # The device's name, as irad would pick it, names the output folder.
-name=$("$irad" info "${device_args[@]}" 2>/dev/null | sed -n 's/^\* [0-9]*: //p' | sed 's/ ([A-Za-z -]*, Vulkan [0-9].*//' | head -1)
+name=$("$irad" info 2>/dev/null | sed -n 's/^\* [0-9]*: //p' | sed 's/ ([A-Za-z -]*, Vulkan [0-9].*//' | head -1)
 slug=$(printf '%s' "${name:-unknown-device}" | tr -c 'A-Za-z0-9._-' '-' | sed 's/--*/-/g; s/-$//')
 out="out/gpu-check/$slug"
 mkdir -p "$out"
@@ -52,15 +51,15 @@ step() {  # step NAME COMMAND...: runs it, its output into $out/NAME.log
   tail -n 5 "$out/$step_name.log" | sed 's/^/   | /'
 }
 
-step info "$irad" info "${device_args[@]}"
-step selfcheck "$irad" selfcheck "${device_args[@]}"
+step info "$irad" info
+step selfcheck "$irad" selfcheck
 # The tests pick IRAD_DEVICE (tests/common/mod.rs), with the validation layer on when installed.
 step tests cargo test --release --locked
-step rays "$irad" bench rays "${device_args[@]}"
-step scan "$irad" bench scan "${device_args[@]}"
-step env "$irad" bench env "${device_args[@]}" --resolution 1024x768
-step lightfield "$irad" bench lightfield "${device_args[@]}" --resolution 1024x768
-step suite "$irad" bench suite scenes/suites/standard.toml "${device_args[@]}" \
+step rays "$irad" bench rays
+step scan "$irad" bench scan
+step env "$irad" bench env --resolution 1024x768
+step lightfield "$irad" bench lightfield --resolution 1024x768
+step suite "$irad" bench suite scenes/suites/standard.toml \
   -o "$out/standard" --cache "$out/references"
 
 if ((${#failed[@]})); then

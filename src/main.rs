@@ -1634,17 +1634,22 @@ fn generate_luminaire(args: &GenerateArgs) -> Result<()> {
     // 16 bytes a texel (at most 4 GiB on any device, 128 MiB guaranteed), and generation holds
     // every frame's images in memory at 12 bytes a texel, twice while writing.
     let texels = u64::from(grid.0 * grid.1) * u64::from(resolution.0) * u64::from(resolution.1);
-    let gpu_bytes = texels * 16;
-    let host_bytes = texels * 12 * (u64::from(args.frames) + 1);
+    // A sequence's atlases share one buffer (lightfield/tables.rs), beside the current frame's;
+    // generation holds every frame's images, the first twice for a sequence, and one atlas.
+    let frames = u64::from(args.frames);
+    let gpu_bytes = texels * 16 * if frames > 1 { frames } else { 1 };
+    let host_bytes = texels * 12 * (frames + 1 + u64::from(frames > 1));
     let gib = |b: u64| b as f64 / (1u64 << 30) as f64;
     anyhow::ensure!(
         gpu_bytes <= u64::from(u32::MAX),
-        "--grid {}x{} --resolution {}x{}: {texels} texels, a {:.1} GiB buffer on the GPU, over the \
-         4 GiB any Vulkan device binds as one storage buffer (fewer images or texels)",
+        "--grid {}x{} --resolution {}x{} --frames {}: {texels} texels an atlas, a {:.1} GiB \
+         buffer on the GPU, over the 4 GiB any Vulkan device binds as one storage buffer (fewer \
+         images, texels or frames)",
         grid.0,
         grid.1,
         resolution.0,
         resolution.1,
+        args.frames,
         gib(gpu_bytes)
     );
     if let Some(available) = available_memory() {

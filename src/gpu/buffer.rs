@@ -167,7 +167,8 @@ impl RawBuffer {
         self.ctx.one_shot(|cb| unsafe {
             self.ctx
                 .device()
-                .cmd_copy_buffer(cb, staging.buffer, self.buffer, &region)
+                .cmd_copy_buffer(cb, staging.buffer, self.buffer, &region);
+            device_writes_visible(&self.ctx, cb);
         })
     }
 
@@ -189,6 +190,8 @@ impl RawBuffer {
         let region = [vk::BufferCopy::default().size(self.bytes)];
         self.ctx.one_shot(|cb| unsafe {
             let device = self.ctx.device();
+            // Earlier submissions' shader and transfer writes, before the copy reads them.
+            device_writes_visible(&self.ctx, cb);
             device.cmd_copy_buffer(cb, self.buffer, staging.buffer, &region);
             // A fence wait alone does not make device writes visible to the host.
             let to_host = [vk::MemoryBarrier::default()
@@ -206,6 +209,34 @@ impl RawBuffer {
         })?;
         staging.read_bytes(out)
     }
+}
+
+/// A memory barrier from every shader and transfer write recorded before it (in this or an
+/// earlier submission of the queue) to every shader and transfer access after it (in this or a
+/// later one): a fence wait alone makes device writes available to no later device access. Where
+/// buffers are not mapped (discrete GPUs, forced staging), uploads, fills and readbacks are
+/// transfers in their own submissions, ordered against the kernels only by this.
+///
+/// # Safety
+/// `cb` must be recording.
+unsafe fn device_writes_visible(ctx: &Context, cb: vk::CommandBuffer) {
+    let barrier = [vk::MemoryBarrier::default()
+        .src_access_mask(vk::AccessFlags::SHADER_WRITE | vk::AccessFlags::TRANSFER_WRITE)
+        .dst_access_mask(
+            vk::AccessFlags::SHADER_READ
+                | vk::AccessFlags::SHADER_WRITE
+                | vk::AccessFlags::TRANSFER_READ
+                | vk::AccessFlags::TRANSFER_WRITE,
+        )];
+    ctx.device().cmd_pipeline_barrier(
+        cb,
+        vk::PipelineStageFlags::COMPUTE_SHADER | vk::PipelineStageFlags::TRANSFER,
+        vk::PipelineStageFlags::COMPUTE_SHADER | vk::PipelineStageFlags::TRANSFER,
+        vk::DependencyFlags::empty(),
+        &barrier,
+        &[],
+        &[],
+    );
 }
 
 impl Drop for RawBuffer {
@@ -237,7 +268,8 @@ impl<T: Pod> Buffer<T> {
         } else {
             let b = buffer.raw.buffer;
             ctx.one_shot(|cb| unsafe {
-                ctx.device().cmd_fill_buffer(cb, b, 0, vk::WHOLE_SIZE, 0)
+                ctx.device().cmd_fill_buffer(cb, b, 0, vk::WHOLE_SIZE, 0);
+                device_writes_visible(ctx, cb);
             })?;
         }
         Ok(buffer)

@@ -179,12 +179,12 @@ pub fn geometric_normal(p: [Vec3; 3]) -> Vec3 {
     }
 }
 
-/// Twice the area of a triangle, in f64.
 /// The largest coordinate magnitude a vertex may have. Beyond it f32 arithmetic fails the
 /// renderer: at 1e10 every image came out black (hit offsets and light pdfs out of range), at
 /// 1e19 obvhs's CWBVH conversion panicked; scenes at 1e8 render (tests/scene_loading.rs).
 pub const MAX_COORDINATE: f32 = 1e8;
 
+/// Twice the area of a triangle, in f64.
 pub fn double_area(p: [Vec3; 3]) -> f64 {
     let [a, b, c]: [DVec3; 3] = p.map(|v| v.as_dvec3());
     (b - a).cross(c - a).length()
