@@ -33,30 +33,30 @@ pub struct Kernel {
     pipeline: vk::Pipeline,
 }
 
+/// The embedded spv/<name>.spv, or the error naming the kernel.
+fn embedded(name: &str) -> GpuResult<&'static [u8]> {
+    spirv::embedded(name).ok_or_else(|| GpuError::KernelNotEmbedded {
+        kernel: name.into(),
+    })
+}
+
 impl Kernel {
     /// The kernel built from the embedded spv/<name>.spv.
     pub fn new(ctx: &Context, name: &str) -> GpuResult<Self> {
-        let bytes = spirv::embedded(name).ok_or_else(|| GpuError::KernelNotEmbedded {
-            kernel: name.into(),
-        })?;
-        Self::from_spirv(ctx, name, bytes, &[])
+        Self::specialized(ctx, name, &[])
     }
 
     /// The kernel with its specialization constants 0, 1, .. set to `constants` (32-bit
     /// values: a GLSL `layout(constant_id = i) const bool` takes 0 or 1); the module's defaults
     /// stand for ids past the slice.
     pub fn specialized(ctx: &Context, name: &str, constants: &[u32]) -> GpuResult<Self> {
-        let bytes = spirv::embedded(name).ok_or_else(|| GpuError::KernelNotEmbedded {
-            kernel: name.into(),
-        })?;
+        let bytes = embedded(name)?;
         Self::from_spirv(ctx, name, bytes, constants)
     }
 
     /// Checks that spv/<name>.spv is embedded and its layout reflects, building nothing.
     pub fn check_embedded(name: &str) -> GpuResult<()> {
-        let bytes = spirv::embedded(name).ok_or_else(|| GpuError::KernelNotEmbedded {
-            kernel: name.into(),
-        })?;
+        let bytes = embedded(name)?;
         reflect(name, bytes).map(|_| ())
     }
 
