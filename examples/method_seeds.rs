@@ -25,8 +25,8 @@ use std::path::{Path, PathBuf};
 use irad::gpu::{Context, ContextOptions, Validation};
 use irad::image::{exr, metrics, Image};
 use irad::methods::gbuffer::PixelSampling;
-use irad::methods::method::{Method, Renderers};
 use irad::methods::reference::{Reference, ReferenceSettings};
+use irad::methods::{Method, Renderers};
 use irad::scene::gpu::GpuScene;
 
 fn luminance_mean(image: &Image) -> f64 {

@@ -40,6 +40,17 @@ pub enum PixelSampling {
     Centres,
 }
 
+impl PixelSampling {
+    /// `Centres` when `centres`, else `Jittered` (the `pixel_centres` setting).
+    pub fn from_centres(centres: bool) -> PixelSampling {
+        if centres {
+            PixelSampling::Centres
+        } else {
+            PixelSampling::Jittered
+        }
+    }
+}
+
 pub struct GBuffer {
     pub texels: Buffer<GBufferTexel>,
 }

@@ -18,9 +18,13 @@ pub mod paths;
 pub mod progressive;
 pub mod rebuild;
 pub mod reference;
+pub mod renderers;
 pub mod scene_kernel;
+pub mod settings;
 
-pub use method::{Method, ParamError, Renderers, RunError, METHOD_NAMES};
+pub use method::{Method, METHODS, METHOD_NAMES};
+pub use renderers::{Renderers, RunError};
+pub use settings::ParamError;
 
 use crate::gpu::PassTotals;
 use crate::image::Image;

@@ -14,14 +14,12 @@ pub enum TableRebuild {
     EveryFrame,
 }
 
-impl TableRebuild {
-    pub fn name(self) -> &'static str {
-        match self {
-            TableRebuild::WhenChanged => "when-changed",
-            TableRebuild::EveryFrame => "every-frame",
-        }
-    }
+crate::methods::settings::named_choices!(TableRebuild {
+    WhenChanged => "when-changed",
+    EveryFrame => "every-frame",
+});
 
+impl TableRebuild {
     /// Whether `frame` builds a table whose input changes from frame to frame when
     /// `sequence`.
     pub fn due(self, frame: u32, sequence: bool) -> bool {

@@ -15,6 +15,7 @@ use super::envmap;
 use super::gbuffer::{GBuffer, PixelSampling, WriteGBuffer};
 use super::paths::{PathStarts, TracePaths};
 use super::progressive;
+use super::settings::{common_settings, field_setting, Kind, Setting, Value};
 use super::RenderOutput;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -45,6 +46,62 @@ impl Default for ReferenceSettings {
         }
     }
 }
+
+/// The reference's settings (`irad methods reference`).
+pub const SETTINGS: &[Setting<ReferenceSettings>] = &[
+    field_setting!(
+        "spp",
+        spp,
+        Kind::Count {
+            min: 1,
+            max: u32::MAX
+        },
+        Count,
+        "Samples per pixel: one path per pixel per frame.",
+    ),
+    common_settings!(seed),
+    field_setting!(
+        "max_depth",
+        max_depth,
+        Kind::Count {
+            min: 1,
+            max: u32::MAX
+        },
+        Count,
+        "Most scattering events per path (a safety cap: Russian roulette ends paths first).",
+    ),
+    field_setting!(
+        "roulette_depth",
+        roulette_depth,
+        Kind::Count {
+            min: 0,
+            max: u32::MAX
+        },
+        Count,
+        "First bounce at which Russian roulette may end a path.",
+    ),
+    Setting::<ReferenceSettings>::new(
+        "alpha_frames",
+        Kind::Count {
+            min: 0,
+            max: u32::MAX,
+        },
+        "With max_depth 1: split the direct light between light and BSDF sampling per pixel \
+         by Lu 14 ch. 5's alpha, estimated over the first M frames (one sample of each, \
+         balance heuristic); later frames take 2 alpha BSDF and 2 (1 - alpha) light samples. \
+         Writes OUT.alpha.{exr,png} (red: light, green: BSDF).",
+        |s| s.alpha_frames.map(Value::Count),
+        |s, v| {
+            if s.max_depth != 1 {
+                return Err("splits the direct light only: needs max_depth = 1".into());
+            }
+            s.alpha_frames = Some(v.count());
+            Ok(())
+        },
+    )
+    .unset("off (the power heuristic's one light and one BSDF sample)"),
+    common_settings!(pixel_centres),
+];
 
 pub struct Reference {
     gbuffer: WriteGBuffer,

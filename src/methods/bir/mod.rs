@@ -28,6 +28,9 @@ use crate::methods::ir::gather::AccumulateVpls;
 use crate::methods::ir::schedule::{mean_albedo, Absorption, Schedule};
 use crate::methods::ir::walk::{TraceVpls, Vpl, VplBuffers};
 use crate::methods::progressive;
+use crate::methods::settings::{
+    common_settings, field_setting, named_choices, Kind, Setting, Value,
+};
 use crate::methods::RenderOutput;
 use crate::sampling::pcg;
 use crate::scene::gpu::GpuScene;
@@ -45,15 +48,11 @@ pub enum Strategy {
     Both,
 }
 
-impl Strategy {
-    pub fn name(self) -> &'static str {
-        match self {
-            Strategy::Standard => "standard",
-            Strategy::Reverse => "reverse",
-            Strategy::Both => "both",
-        }
-    }
-}
+named_choices!(Strategy {
+    Standard => "standard",
+    Reverse => "reverse",
+    Both => "both",
+});
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BirSettings {
@@ -131,6 +130,133 @@ impl Default for BirSettings {
         }
     }
 }
+
+/// Bidirectional instant radiosity's settings (`irad methods bir`).
+pub const SETTINGS: &[Setting<BirSettings>] = &[
+    field_setting!(
+        "vpls",
+        vpls,
+        Kind::Count {
+            min: 2,
+            max: 1 << 20
+        },
+        Count,
+        "VPLs per frame, standard and reverse together (the candidates, with resampling).",
+    ),
+    field_setting!(
+        "frames",
+        frames,
+        crate::methods::settings::FRAMES,
+        Count,
+        "Frames, each with fresh VPLs and fresh subpixel positions.",
+    ),
+    common_settings!(seed),
+    Setting::new(
+        "strategy",
+        Kind::Choice(Strategy::NAMES),
+        "Which VPLs are shaded: standard (from the lights), reverse (ends of length-2 camera \
+         paths) or both, resampled together.",
+        |s| Some(Value::Name(s.strategy.name())),
+        |s, v| {
+            s.strategy = Strategy::from_name(v.name()).expect("a checked name");
+            Ok(())
+        },
+    ),
+    field_setting!(
+        "pool",
+        pool,
+        Kind::Count {
+            min: 1,
+            max: 1 << 16
+        },
+        Count,
+        "Camera points per frame the reverse VPLs start from (the M of Segovia's Eq. 7).",
+    ),
+    field_setting!(
+        "light_samples",
+        light_samples,
+        Kind::Count { min: 1, max: 1024 },
+        Count,
+        "Next-event samples per reverse VPL for its outgoing radiance.",
+    ),
+    field_setting!(
+        "connections",
+        connections,
+        Kind::Count {
+            min: 0,
+            max: 1 << 20
+        },
+        Count,
+        "Standard VPLs each bounce from a reverse VPL connects to for its radiance (drawn \
+         uniformly, weighted; 0: every one).",
+    ),
+    field_setting!(
+        "depth",
+        depth,
+        Kind::Count { min: 1, max: 64 },
+        Count,
+        "Vertices the paths from a reverse VPL go on for (next-event estimation at each) \
+         before they connect to the standard VPLs.",
+    ),
+    field_setting!(
+        "ratio",
+        ratio,
+        Kind::Count {
+            min: 0,
+            max: 1 << 16
+        },
+        Count,
+        "Candidates per kept VPL (the paper's resampling ratio r); 0 shades every candidate, \
+         no resampling.",
+    ),
+    field_setting!(
+        "floor",
+        floor,
+        Kind::Number,
+        Number,
+        "The resampling CDF's uniform floor, a fraction of the mean candidate power (1: half \
+         the draws uniform over the candidates; 0: none, which darkens the image where powers \
+         are underestimated: Segovia Fig. 3).",
+    ),
+    field_setting!(
+        "power_samples",
+        power_samples,
+        Kind::Count { min: 1, max: 1024 },
+        Count,
+        "Camera points per candidate for its power estimate.",
+    ),
+    field_setting!(
+        "batch",
+        batch,
+        Kind::Count {
+            min: 0,
+            max: 1 << 20
+        },
+        Count,
+        "Candidates resampled together (0: the whole frame's), so storage stays O(batch + \
+         kept VPLs).",
+    ),
+    field_setting!(
+        "light_cdf",
+        light_cdf,
+        Kind::Switch,
+        Switch,
+        "Choose the lights that start light paths by their measured contribution to what the \
+         camera sees (Segovia Section 4.1), or by their power (false).",
+    ),
+    field_setting!(
+        "adaptive",
+        adaptive,
+        Kind::Switch,
+        Switch,
+        "With strategy both: side weights that follow how often each side brought more camera \
+         power in earlier batches, or the paper's fixed 1/2 (false).",
+    ),
+    common_settings!(clamp),
+    common_settings!(compensate),
+    common_settings!(direct_spp),
+    common_settings!(pixel_centres),
+];
 
 #[derive(Debug, Error)]
 pub enum BirError {

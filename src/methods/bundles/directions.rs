@@ -19,14 +19,10 @@ pub enum DirectionDensity {
     Environment,
 }
 
-impl DirectionDensity {
-    pub fn name(self) -> &'static str {
-        match self {
-            DirectionDensity::Uniform => "uniform",
-            DirectionDensity::Environment => "environment",
-        }
-    }
-}
+crate::methods::settings::named_choices!(DirectionDensity {
+    Uniform => "uniform",
+    Environment => "environment",
+});
 
 /// The density and its table (placeholders for uniform directions).
 pub struct BundleDirections {

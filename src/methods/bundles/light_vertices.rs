@@ -38,14 +38,10 @@ pub enum LightSelection {
     Roulette,
 }
 
-impl LightSelection {
-    pub fn name(self) -> &'static str {
-        match self {
-            LightSelection::All => "all",
-            LightSelection::Roulette => "roulette",
-        }
-    }
-}
+crate::methods::settings::named_choices!(LightSelection {
+    All => "all",
+    Roulette => "roulette",
+});
 
 /// One frame's light vertices: `slots` per iteration, iteration-major.
 pub struct FrameLightVertices {

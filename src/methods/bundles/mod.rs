@@ -25,6 +25,9 @@ use crate::methods::direct::GBufferAndDirectLight;
 use crate::methods::gbuffer::{GBuffer, PixelSampling};
 use crate::methods::progressive;
 use crate::methods::rebuild::TableRebuild;
+use crate::methods::settings::{
+    common_settings, field_setting, named_choices, Kind, Setting, Value,
+};
 use crate::methods::RenderOutput;
 use crate::sampling::environment::sampling_weights;
 use crate::sampling::pcg;
@@ -47,15 +50,12 @@ pub enum Strategy {
     Mis,
 }
 
-impl Strategy {
-    pub fn name(self) -> &'static str {
-        match self {
-            Strategy::Vpl => "vpl",
-            Strategy::Bundle => "bundle",
-            Strategy::Mis => "mis",
-        }
-    }
-}
+// In the order of glsl/shade_bundle_paths.comp's STRATEGY_* codes (`Strategy as u32`).
+named_choices!(Strategy {
+    Vpl => "vpl",
+    Bundle => "bundle",
+    Mis => "mis",
+});
 
 /// Glossy spike suppression of the one-bounce paths (Tokuyoshi 12 Section 5): each a named,
 /// measured bias.
@@ -128,7 +128,9 @@ impl Default for BundlesSettings {
             beta: 1.0,
             two_bounce: true,
             two_bounce_clamp: ClampSettings::default(),
-            suppression: Suppression::Roughness { m_prime: 16.0 },
+            suppression: Suppression::Roughness {
+                m_prime: ROUGHNESS_M,
+            },
             lights: LightSelection::All,
             directions: DirectionDensity::Environment,
             env_offset: None,
@@ -142,6 +144,194 @@ impl Default for BundlesSettings {
         }
     }
 }
+
+/// `glossy = "roughness"`'s m' where `roughness_m` does not set it (the paper's).
+pub const ROUGHNESS_M: f32 = 16.0;
+/// `glossy = "clamp"`'s largest channel where `contribution_clamp` does not set it.
+pub const CONTRIBUTION_CLAMP: f32 = 1.0;
+
+/// Global ray bundles' settings (`irad methods bundles`).
+pub const SETTINGS: &[Setting<BundlesSettings>] = &[
+    field_setting!(
+        "iterations",
+        iterations,
+        Kind::Count {
+            min: 1,
+            max: 1 << 16
+        },
+        Count,
+        "Iterations per frame, each one VPL and one global ray bundle (the paper's 21).",
+    ),
+    field_setting!(
+        "frames",
+        frames,
+        crate::methods::settings::FRAMES,
+        Count,
+        "Frames, each with fresh VPLs, bundles and subpixel positions.",
+    ),
+    common_settings!(seed),
+    Setting::new(
+        "strategy",
+        Kind::Choice(Strategy::NAMES),
+        "Which one-bounce paths: through the VPLs (vpl), through the ray bundles (bundle), or \
+         both combined by MIS (mis).",
+        |s| Some(Value::Name(s.strategy.name())),
+        |s, v| {
+            s.strategy = Strategy::from_name(v.name()).expect("a checked name");
+            Ok(())
+        },
+    ),
+    Setting::new(
+        "heuristic",
+        Kind::Choice(&["balance", "power"]),
+        "The MIS weights of the one-bounce paths: the balance heuristic (the paper's) or the \
+         power heuristic (exponent 2).",
+        |s| Some(Value::Name(if s.beta == 1.0 { "balance" } else { "power" })),
+        |s, v| {
+            s.beta = if v.name() == "power" { 2.0 } else { 1.0 };
+            Ok(())
+        },
+    ),
+    field_setting!(
+        "two_bounce",
+        two_bounce,
+        Kind::Switch,
+        Switch,
+        "Shade the two-bounce paths (x0, x1, x2, x3) through the VPL-to-bundle-hit edge \
+         (Tokuyoshi Eq. 7-8).",
+    ),
+    Setting::<BundlesSettings>::new(
+        "two_bounce_clamp",
+        Kind::Clamp,
+        "Clamp the two-bounce paths' x1-x2 geometry term cos cos / d^2 at b (the paper's \
+         clamp, 10 there; compensated unless compensate is false, else a bias). auto: b = N / \
+         A for N light vertices per frame over the scene's area A, as ir's clamp; a number \
+         sets b; 0 leaves the term unclamped. The b used is in the JSON's stats.",
+        |s| {
+            s.two_bounce
+                .then_some(Value::Clamp(s.two_bounce_clamp.clamp))
+        },
+        |s, v| {
+            if !s.two_bounce {
+                return Err("applies with two_bounce = true".into());
+            }
+            s.two_bounce_clamp.clamp = v.clamp();
+            Ok(())
+        },
+    )
+    .unset("auto (with two_bounce)"),
+    Setting::<BundlesSettings>::new(
+        "compensate",
+        Kind::Switch,
+        "With two_bounce_clamp, add back exactly what it removed by short paths from the \
+         bundle hit x2 (Kollig and Keller 2004; unbiased), or leave the clamp's bias (false).",
+        |s| {
+            s.two_bounce
+                .then_some(Value::Switch(s.two_bounce_clamp.compensate))
+        },
+        |s, v| {
+            if !s.two_bounce {
+                return Err("applies with two_bounce = true".into());
+            }
+            s.two_bounce_clamp.compensate = v.switch();
+            Ok(())
+        },
+    )
+    .unset("true (with two_bounce)"),
+    Setting::new(
+        "glossy",
+        Kind::Choice(&["none", "roughness", "clamp"]),
+        "Glossy spike suppression of the one-bounce paths (Tokuyoshi Section 5, each a named \
+         bias): clamp the Phong exponent per sample by the density of samples around it \
+         (roughness), clamp each path's contribution (clamp), or none.",
+        |s| Some(Value::Name(s.suppression.name())),
+        |s, v| {
+            s.suppression = match v.name() {
+                "none" => Suppression::None,
+                "clamp" => Suppression::Contribution {
+                    max: CONTRIBUTION_CLAMP,
+                },
+                _ => Suppression::Roughness {
+                    m_prime: ROUGHNESS_M,
+                },
+            };
+            Ok(())
+        },
+    ),
+    Setting::<BundlesSettings>::new(
+        "roughness_m",
+        Kind::Number,
+        "With glossy roughness: the paper's m' (neighbours per kernel; larger blurs more).",
+        |s| match s.suppression {
+            Suppression::Roughness { m_prime } => Some(Value::Number(m_prime)),
+            _ => None,
+        },
+        |s, v| match &mut s.suppression {
+            Suppression::Roughness { m_prime } => {
+                *m_prime = v.number();
+                Ok(())
+            }
+            _ => Err("applies with glossy = \"roughness\"".into()),
+        },
+    )
+    .unset("16 (with glossy roughness)"),
+    Setting::<BundlesSettings>::new(
+        "contribution_clamp",
+        Kind::Number,
+        "With glossy clamp: the largest channel a path's contribution may have.",
+        |s| match s.suppression {
+            Suppression::Contribution { max } => Some(Value::Number(max)),
+            _ => None,
+        },
+        |s, v| match &mut s.suppression {
+            Suppression::Contribution { max } => {
+                *max = v.number();
+                Ok(())
+            }
+            _ => Err("applies with glossy = \"clamp\"".into()),
+        },
+    )
+    .unset("1 (with glossy clamp)"),
+    Setting::new(
+        "lights",
+        Kind::Choice(LightSelection::NAMES),
+        "The lights each iteration's VPLs leave from: one VPL from every point and spot light \
+         (all, the paper's default), or one light chosen by power (roulette, for many lights; \
+         Tokuyoshi Section 4.1).",
+        |s| Some(Value::Name(s.lights.name())),
+        |s, v| {
+            s.lights = LightSelection::from_name(v.name()).expect("a checked name");
+            Ok(())
+        },
+    ),
+    Setting::new(
+        "directions",
+        Kind::Choice(DirectionDensity::NAMES),
+        "The density of the bundle directions: uniform on the sphere, or, in a scene with an \
+         environment map, Tokuyoshi's Eq. 2 (Le(w) + Le(-w) + 2 Lo), which importance samples \
+         the map's direct light (environment; uniform where there is no map).",
+        |s| Some(Value::Name(s.directions.name())),
+        |s, v| {
+            s.directions = DirectionDensity::from_name(v.name()).expect("a checked name");
+            Ok(())
+        },
+    ),
+    Setting::<BundlesSettings>::new(
+        "env_offset",
+        Kind::Number,
+        "With directions environment: Eq. 2's offset Lo (luminance) for the indirect light \
+         the map does not show.",
+        |s| s.env_offset.map(Value::Number),
+        |s, v| {
+            s.env_offset = Some(v.number());
+            Ok(())
+        },
+    )
+    .unset("0 when the map is the only light, else the map's mean luminance"),
+    common_settings!(rebuild_tables),
+    common_settings!(direct_spp),
+    common_settings!(pixel_centres),
+];
 
 #[derive(Debug, Error)]
 pub enum BundlesError {

@@ -104,11 +104,8 @@ impl ShadeBundlePaths {
             first_index: chunk.first_index,
             count: chunk.count,
             per_frame: chunk.per_frame,
-            strategy: match shading.strategy {
-                Strategy::Vpl => 0,
-                Strategy::Bundle => 1,
-                Strategy::Mis => 2,
-            },
+            // Declared in the order of the GLSL's STRATEGY_* codes (a unit test checks them).
+            strategy: shading.strategy as u32,
             beta: shading.beta,
             two_bounce: shading.two_bounce.map_or(-1.0, |g| g.max(0.0)),
             samples: chunk.samples,

@@ -18,6 +18,9 @@ use crate::methods::direct::GBufferAndDirectLight;
 use crate::methods::gbuffer::{GBuffer, PixelSampling};
 use crate::methods::progressive;
 use crate::methods::rebuild::TableRebuild;
+use crate::methods::settings::{
+    common_settings, field_setting, named_choices, Kind, Setting, Value,
+};
 use crate::methods::RenderOutput;
 use crate::sampling::pcg;
 use crate::scene::gpu::GpuScene;
@@ -51,40 +54,22 @@ pub enum Strategy {
     Alpha,
 }
 
+// In the order of glsl/shade_env.comp's STRATEGY_* codes (`code`).
+named_choices!(Strategy {
+    Dynamic => "dynamic",
+    UniformFaces => "uniform-faces",
+    Brdf => "brdf",
+    Cosine => "cosine",
+    Latlong => "latlong",
+    Hierarchical => "hierarchical",
+    Alpha => "alpha",
+});
+
 impl Strategy {
-    pub const ALL: [Strategy; 7] = [
-        Strategy::Dynamic,
-        Strategy::UniformFaces,
-        Strategy::Alpha,
-        Strategy::Latlong,
-        Strategy::Hierarchical,
-        Strategy::Brdf,
-        Strategy::Cosine,
-    ];
-
-    pub fn name(self) -> &'static str {
-        match self {
-            Strategy::Dynamic => "dynamic",
-            Strategy::UniformFaces => "uniform-faces",
-            Strategy::Brdf => "brdf",
-            Strategy::Cosine => "cosine",
-            Strategy::Latlong => "latlong",
-            Strategy::Hierarchical => "hierarchical",
-            Strategy::Alpha => "alpha",
-        }
-    }
-
-    /// The strategy codes of glsl/shade_env.comp.
+    /// The strategy codes of glsl/shade_env.comp: the declaration order (a unit test checks
+    /// the GLSL's defines).
     pub fn code(self) -> u32 {
-        match self {
-            Strategy::Dynamic => 0,
-            Strategy::UniformFaces => 1,
-            Strategy::Brdf => 2,
-            Strategy::Cosine => 3,
-            Strategy::Latlong => 4,
-            Strategy::Hierarchical => 5,
-            Strategy::Alpha => 6,
-        }
+        self as u32
     }
 
     /// Whether the strategy samples the cube map (and so needs its table).
@@ -147,6 +132,102 @@ impl Default for EnvSettings {
         }
     }
 }
+
+/// Environment-map direct light's settings (`irad methods env`).
+pub const SETTINGS: &[Setting<EnvSettings>] = &[
+    field_setting!(
+        "spp",
+        spp,
+        Kind::Count {
+            min: 1,
+            max: 1 << 16
+        },
+        Count,
+        "N_s: samples per pixel and frame, light and BRDF samples together.",
+    ),
+    field_setting!(
+        "frames",
+        frames,
+        crate::methods::settings::FRAMES,
+        Count,
+        "Frames, each with fresh light samples and subpixel positions.",
+    ),
+    common_settings!(seed),
+    Setting::new(
+        "strategy",
+        Kind::Choice(Strategy::NAMES),
+        "How the map's light is sampled: dynamic (Lu 14 ch. 3: per-pixel face shares, \
+         fractional counts, MIS with BRDF sampling), uniform-faces (the same with every face \
+         getting 1/6 of the light samples), brdf or cosine (no light samples), latlong (one \
+         table over the whole map, as pbrt and Mitsuba; MIS with BRDF), hierarchical (a \
+         luminance mip pyramid descended 2x2 per level, as Falcor and Mitsuba 3; MIS with \
+         BRDF), alpha (dynamic's samplers split per pixel by Lu 14 ch. 5's estimated alpha; \
+         writes OUT.alpha.{exr,png}: red light samples, green BRDF samples).",
+        |s| Some(Value::Name(s.strategy.name())),
+        |s, v| {
+            s.strategy = Strategy::from_name(v.name()).expect("a checked name");
+            Ok(())
+        },
+    ),
+    field_setting!(
+        "face_resolution",
+        face_resolution,
+        Kind::Count { min: 1, max: 4096 },
+        Count,
+        "Texels along a side of each face of the cube map that drives the light samples.",
+    ),
+    field_setting!(
+        "light_only",
+        light_only,
+        Kind::Switch,
+        Switch,
+        "With strategy dynamic or uniform-faces: take every sample from the cube map (Lu Eq. \
+         3.5, the thesis's Fig. 3.6 setting) instead of half from the BRDF (Eq. 3.7).",
+    ),
+    field_setting!(
+        "integer_counts",
+        integer_counts,
+        Kind::Switch,
+        Switch,
+        "With strategy dynamic or uniform-faces: round(M_f) light samples per face, each of \
+         weight 1, instead of the beta weights (the thesis's integer counts, Fig. 3.9).",
+    ),
+    Setting::<EnvSettings>::new(
+        "alpha_samples",
+        Kind::Count {
+            min: 0,
+            max: 1 << 16,
+        },
+        "With strategy alpha: M, the samples per pixel and frame, half light and half BRDF, \
+         that estimate the per-pixel split alpha (Lu 14 Eq. 5.4-5.5); the other spp minus M \
+         use it.",
+        |s| s.alpha_samples.map(Value::Count),
+        |s, v| {
+            s.alpha_samples = Some(v.count());
+            Ok(())
+        },
+    )
+    .unset("half of spp"),
+    field_setting!(
+        "shadows",
+        shadows,
+        Kind::Switch,
+        Switch,
+        "Shadow rays; false counts every sample as visible, as in the thesis's timings: for \
+         timing comparisons only, the image is wrong wherever light is occluded.",
+    ),
+    field_setting!(
+        "shared_samples",
+        shared_samples,
+        Kind::Switch,
+        Switch,
+        "Every pixel takes the frame's one set of light samples per face (Lu's) instead of \
+         its own window of a 64 times longer sequence (the whole image's error then moves as \
+         one).",
+    ),
+    common_settings!(rebuild_tables),
+    common_settings!(pixel_centres),
+];
 
 #[derive(Debug, Error)]
 pub enum EnvError {

@@ -18,6 +18,9 @@ use crate::methods::compensation::{ClampCompensation, ClampSettings, VplSource};
 use crate::methods::direct::GBufferAndDirectLight;
 use crate::methods::gbuffer::{GBuffer, PixelSampling};
 use crate::methods::progressive;
+use crate::methods::settings::{
+    common_settings, field_setting, named_choices, Kind, Setting, Value,
+};
 use crate::methods::RenderOutput;
 use crate::sampling::pcg;
 use crate::scene::gpu::GpuScene;
@@ -36,6 +39,11 @@ pub enum DirectLight {
     /// Keller's original: each path's light vertex is a VPL too.
     Vpl,
 }
+
+named_choices!(DirectLight {
+    NextEvent => "nee",
+    Vpl => "vpl",
+});
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct IrSettings {
@@ -77,6 +85,62 @@ impl Default for IrSettings {
         }
     }
 }
+
+/// Instant radiosity's settings (`irad methods ir`).
+pub const SETTINGS: &[Setting<IrSettings>] = &[
+    field_setting!(
+        "vpls",
+        paths,
+        Kind::Count {
+            min: 1,
+            max: 1 << 20
+        },
+        Count,
+        "Paths started on the lights per frame (Keller's N; about N / (1 - mean albedo) VPLs).",
+    ),
+    field_setting!(
+        "frames",
+        frames,
+        crate::methods::settings::FRAMES,
+        Count,
+        "Frames, each with fresh VPLs and fresh subpixel positions.",
+    ),
+    common_settings!(seed),
+    Setting::new(
+        "absorption",
+        Kind::Choice(Absorption::NAMES),
+        "fractional: floor(rho^j N) paths reach vertex j (Keller's, for stills; where that \
+         reaches 0 the last paths go on by Russian roulette, so no path length is lost); \
+         roulette: Russian roulette at every vertex (for animation).",
+        |s| Some(Value::Name(s.absorption.name())),
+        |s, v| {
+            s.absorption = Absorption::from_name(v.name()).expect("a checked name");
+            Ok(())
+        },
+    ),
+    common_settings!(clamp),
+    common_settings!(compensate),
+    field_setting!(
+        "interleave",
+        interleave,
+        Kind::Count { min: 1, max: 16 },
+        Count,
+        "Interleaved sampling over k x k pixel blocks (1 disables it).",
+    ),
+    Setting::new(
+        "direct",
+        Kind::Choice(DirectLight::NAMES),
+        "Direct light by next-event estimation (nee, as the reference) or by the light \
+         vertices as VPLs (vpl, Keller's original).",
+        |s| Some(Value::Name(s.direct.name())),
+        |s, v| {
+            s.direct = DirectLight::from_name(v.name()).expect("a checked name");
+            Ok(())
+        },
+    ),
+    common_settings!(direct_spp),
+    common_settings!(pixel_centres),
+];
 
 #[derive(Debug, Error)]
 pub enum IrError {

@@ -14,6 +14,11 @@ pub enum Absorption {
     Roulette,
 }
 
+crate::methods::settings::named_choices!(Absorption {
+    Fractional => "fractional",
+    Roulette => "roulette",
+});
+
 /// Most vertices per path (light vertex included): a cap for rho close to 1, where
 /// floor(rho^j N) stays positive for very long.
 pub const MAX_VERTICES: usize = 128;

@@ -22,6 +22,9 @@ use crate::methods::direct::GBufferAndDirectLight;
 use crate::methods::gbuffer::{GBuffer, PixelSampling};
 use crate::methods::progressive;
 use crate::methods::rebuild::TableRebuild;
+use crate::methods::settings::{
+    common_settings, field_setting, named_choices, Kind, Setting, Value,
+};
 use crate::methods::RenderOutput;
 use crate::sampling::pcg;
 use crate::scene::gpu::GpuScene;
@@ -43,30 +46,19 @@ pub enum Strategy {
     BruteForce,
 }
 
+// In the order of glsl/include/luminaire.glsl's STRATEGY_* codes (`code`).
+named_choices!(Strategy {
+    Restricted => "restricted",
+    Uniform => "uniform",
+    Precomputed => "precomputed",
+    BruteForce => "brute-force",
+});
+
 impl Strategy {
-    pub const ALL: [Strategy; 4] = [
-        Strategy::Restricted,
-        Strategy::Uniform,
-        Strategy::Precomputed,
-        Strategy::BruteForce,
-    ];
-
-    pub fn name(self) -> &'static str {
-        match self {
-            Strategy::Restricted => "restricted",
-            Strategy::Uniform => "uniform",
-            Strategy::Precomputed => "precomputed",
-            Strategy::BruteForce => "brute-force",
-        }
-    }
-
+    /// The strategy codes of glsl/include/luminaire.glsl: the declaration order (a unit test
+    /// checks the GLSL's defines).
     fn code(self) -> u32 {
-        match self {
-            Strategy::Restricted => 0,
-            Strategy::Uniform => 1,
-            Strategy::Precomputed => 2,
-            Strategy::BruteForce => 3,
-        }
+        self as u32
     }
 }
 
@@ -116,6 +108,87 @@ impl Default for LightfieldSettings {
         }
     }
 }
+
+/// Light-field luminaires' settings (`irad methods lightfield`).
+pub const SETTINGS: &[Setting<LightfieldSettings>] = &[
+    field_setting!(
+        "spp",
+        spp,
+        Kind::Count {
+            min: 1,
+            max: 1 << 16
+        },
+        Count,
+        "K: samples per pixel, luminaire and frame, spread over the images (Lu Eq. 4.16).",
+    ),
+    field_setting!(
+        "frames",
+        frames,
+        crate::methods::settings::FRAMES,
+        Count,
+        "Frames, each with fresh samples and subpixel positions.",
+    ),
+    field_setting!(
+        "k_max",
+        k_max,
+        Kind::Count {
+            min: 1,
+            max: 1 << 16
+        },
+        Count,
+        "K_max: the most samples per pixel, frame and image (Lu's Fig. 4.11).",
+    ),
+    common_settings!(seed),
+    Setting::new(
+        "strategy",
+        Kind::Choice(Strategy::NAMES),
+        "How each image's samples are placed: restricted (Lu's windows, A_m from the \
+         summed-area table, K_m by A_m), uniform (uniform over the restricted window), \
+         precomputed (one CDF over each whole image), brute-force (uniform over the whole \
+         image plane: the reference).",
+        |s| Some(Value::Name(s.strategy.name())),
+        |s, v| {
+            s.strategy = Strategy::from_name(v.name()).expect("a checked name");
+            Ok(())
+        },
+    ),
+    Setting::new(
+        "search",
+        Kind::Choice(&["binary", "secant"]),
+        "How the CDFs are inverted: Lu's modified secant search, or binary search.",
+        |s| Some(Value::Name(if s.secant { "secant" } else { "binary" })),
+        |s, v| {
+            s.secant = v.name() == "secant";
+            Ok(())
+        },
+    ),
+    field_setting!(
+        "shared_samples",
+        shared_samples,
+        Kind::Switch,
+        Switch,
+        "Every pixel takes the same Halton prefixes (Lu Section 4.5.3) instead of its own \
+         rotation of them (biased per pixel pattern, not in the mean).",
+    ),
+    field_setting!(
+        "averaged_visibility",
+        averaged_visibility,
+        Kind::Switch,
+        Switch,
+        "One shadow ray per image toward its median point instead of one per sample (Lu \
+         Section 4.5.2's approximation; biased at shadow edges).",
+    ),
+    field_setting!(
+        "shadows",
+        shadows,
+        Kind::Switch,
+        Switch,
+        "Shadow rays; false counts every sample as visible, as in the thesis's timings: for \
+         timing comparisons only, the image is wrong wherever light is occluded.",
+    ),
+    common_settings!(rebuild_tables),
+    common_settings!(pixel_centres),
+];
 
 #[derive(Debug, Error)]
 pub enum LightfieldError {
