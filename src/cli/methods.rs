@@ -1,0 +1,72 @@
+//! `irad methods [NAME]`: the methods, or one method's settings with their defaults and
+//! ranges, from the settings tables every other way of setting a method reads.
+
+use anyhow::Result;
+
+use irad::methods::{Method, METHODS};
+
+use super::method_flags::flag;
+
+#[derive(clap::Args)]
+pub struct MethodsArgs {
+    /// A method: list its settings (default: list the methods).
+    name: Option<String>,
+}
+
+pub fn run(args: &MethodsArgs) -> Result<()> {
+    let Some(name) = &args.name else {
+        println!("methods (`irad methods NAME` lists one's settings):");
+        for (name, about) in METHODS {
+            println!("  {name:<12}{about}");
+        }
+        return Ok(());
+    };
+    let settings = Method::settings(name)?;
+    let about = METHODS
+        .iter()
+        .find(|(n, _)| n == name)
+        .map_or("", |(_, a)| a);
+    println!("{name}: {about}");
+    println!(
+        "settings: `irad render --method {name} --FLAG VALUE`, or `KEY = VALUE` in a suite's params"
+    );
+    for s in &settings {
+        let range = s.kind.range();
+        println!();
+        println!(
+            "  {} {}  (suite: {})  default {}{}",
+            flag(s.key),
+            s.kind.value_name(),
+            s.key,
+            s.default,
+            if range.is_empty() {
+                String::new()
+            } else {
+                format!(", {range}")
+            }
+        );
+        for line in wrap(s.help, 88) {
+            println!("      {line}");
+        }
+    }
+    Ok(())
+}
+
+/// `text` in lines of at most `width` characters, broken at spaces.
+fn wrap(text: &str, width: usize) -> Vec<String> {
+    let mut lines = Vec::new();
+    let mut line = String::new();
+    for word in text.split_whitespace() {
+        if !line.is_empty() && line.len() + 1 + word.len() > width {
+            lines.push(std::mem::take(&mut line));
+        }
+        if !line.is_empty() {
+            line.push(' ');
+        }
+        line.push_str(word);
+    }
+    if !line.is_empty() {
+        lines.push(line);
+    }
+    lines
+}

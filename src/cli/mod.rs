@@ -1,0 +1,148 @@
+//! The `irad` command line: one module per command; this one parses and dispatches.
+
+mod bench;
+mod info;
+mod luminaire;
+mod method_flags;
+mod methods;
+mod render;
+mod shaders;
+mod suite;
+
+use std::process::ExitCode;
+
+use anyhow::Result;
+use clap::{Parser, Subcommand};
+use indicatif::{ProgressBar, ProgressStyle};
+
+use irad::gpu::{Context, ContextOptions, DeviceInfo, DeviceSelector, Validation};
+
+/// irad: many-light and light-source importance sampling, as Vulkan compute kernels.
+///
+/// Environment: IRAD_VALIDATE=1 turns on the Khronos validation layer (as --validate does);
+/// IRAD_VULKAN_LIBRARY names a Vulkan loader to use instead of the system's libvulkan.so.1.
+#[derive(Parser)]
+#[command(name = "irad", version, about, long_about)]
+struct Cli {
+    /// Device to run on: an index or part of a name, as `irad info` lists them (also
+    /// IRAD_DEVICE). Default: the first discrete GPU, else integrated, else virtual, else CPU
+    /// (lavapipe).
+    #[arg(long, global = true, value_name = "INDEX|NAME")]
+    device: Option<DeviceSelector>,
+
+    /// Enable the Khronos validation layer and print its messages (also IRAD_VALIDATE=1).
+    #[arg(long, global = true)]
+    validate: bool,
+
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Render a scene and write <OUT>.exr (float32 linear RGB), <OUT>.png (tone-mapped sRGB)
+    /// and <OUT>.json (method, parameters, device, per-pass GPU times, metrics).
+    ///
+    /// With no scene, renders the Cornell box built into irad. The method's settings are
+    /// flags (`irad methods METHOD` lists them with their defaults); a flag the chosen method
+    /// does not take is an error.
+    Render(render::RenderArgs),
+    /// List the methods, or one method's settings with their defaults and ranges: the flags
+    /// of `irad render --method NAME` and the keys of a suite file's `params`.
+    Methods(methods::MethodsArgs),
+    /// List every Vulkan device with the limits irad depends on; the one irad picks is marked.
+    Info,
+    /// Check the GPU against the CPU: prefix sums of random rows against an f64 scan.
+    Selfcheck,
+    /// Rebuild spv/ from glsl/ with glslangValidator and check it with spirv-val
+    /// (run in a source checkout; the binary embeds spv/ as it was when built).
+    Shaders {
+        /// Only report which modules are stale, missing or orphaned; change nothing.
+        #[arg(long)]
+        check: bool,
+    },
+    /// Benchmarks that measure and print.
+    #[command(subcommand)]
+    Bench(bench::Bench),
+    /// Light-field luminaires (Lu 14 ch. 4; format in README "Light-field luminaires").
+    #[command(subcommand)]
+    Luminaire(luminaire::LuminaireCommand),
+}
+
+pub fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match run(cli) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn run(mut cli: Cli) -> Result<()> {
+    // IRAD_DEVICE stands for --device when the flag is not given (scripts/gpu-check.sh; the
+    // tests read it too).
+    if cli.device.is_none() {
+        if let Ok(value) = std::env::var("IRAD_DEVICE") {
+            if !value.trim().is_empty() {
+                cli.device = Some(
+                    value
+                        .parse()
+                        .map_err(|e| anyhow::anyhow!("IRAD_DEVICE={value}: {e}"))?,
+                );
+            }
+        }
+    }
+    let validation = if cli.validate {
+        Validation::On
+    } else {
+        Validation::from_env()
+    };
+    let options = ContextOptions {
+        device: cli.device.clone(),
+        validation,
+        force_staging: ContextOptions::force_staging_from_env(),
+    };
+    match cli.command {
+        Command::Info => info::info(cli.device.as_ref()),
+        Command::Render(args) => render::run(&options, args),
+        Command::Methods(args) => methods::run(&args),
+        Command::Selfcheck => info::selfcheck(&Context::new(&options)?),
+        Command::Shaders { check } => shaders::run(check),
+        Command::Luminaire(command) => luminaire::run(command),
+        Command::Bench(command) => bench::run(&options, command),
+    }
+}
+
+/// `WIDTHxHEIGHT`, each in 1..=16384.
+pub(crate) fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let bad = || format!("`{s}`: expected WIDTHxHEIGHT, each in 1..=16384");
+    let (w, h) = s.split_once('x').ok_or_else(bad)?;
+    let parse = |t: &str| {
+        t.trim()
+            .parse::<u32>()
+            .ok()
+            .filter(|v| (1..=16384).contains(v))
+    };
+    Ok((parse(w).ok_or_else(bad)?, parse(h).ok_or_else(bad)?))
+}
+
+pub(crate) fn progress(len: u64, what: &str) -> ProgressBar {
+    let bar = ProgressBar::new(len);
+    bar.set_style(
+        ProgressStyle::with_template(&format!(
+            "{what} [{{bar:30}}] {{pos}}/{{len}} ({{elapsed}} elapsed, {{eta}} left) {{msg}}"
+        ))
+        .expect("static template")
+        .progress_chars("=> "),
+    );
+    bar
+}
+
+pub(crate) fn device_line(d: &DeviceInfo) -> String {
+    format!(
+        "{} ({}, Vulkan {}.{}.{}, {})",
+        d.name, d.kind, d.api_version.0, d.api_version.1, d.api_version.2, d.driver
+    )
+}

@@ -1,0 +1,129 @@
+//! `irad render`: one scene, one method, its image, record and summary.
+
+use std::path::PathBuf;
+
+use anyhow::{bail, Result};
+use clap::builder::{PossibleValue, PossibleValuesParser};
+
+use irad::gpu::{Context, ContextOptions};
+use irad::render::{self, RenderJob};
+use irad::scene;
+
+use super::method_flags::MethodFlags;
+use super::{device_line, progress};
+
+#[derive(clap::Args)]
+pub struct RenderArgs {
+    /// Scene TOML file (DESIGN.md "Scene files"); default: the embedded Cornell box.
+    scene: Option<PathBuf>,
+    /// Rendering method (`irad methods` lists them and their settings).
+    #[arg(long, default_value = "reference", value_parser = method_names())]
+    method: String,
+    /// Output stem: writes OUT.exr, OUT.png and OUT.json [default: out/<scene name>].
+    #[arg(short, long, value_name = "OUT")]
+    out: Option<PathBuf>,
+    /// Exposure of the PNG in stops (the EXR is never tone mapped).
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    exposure: f32,
+    /// Reference EXR of the same scene and size: adds relMSE, RMSE, Lab error, bias and
+    /// outliers against it to the JSON and the summary.
+    #[arg(long, value_name = "EXR")]
+    reference: Option<PathBuf>,
+    #[command(flatten)]
+    settings: MethodFlags,
+}
+
+/// `--method`'s values, each with what it is.
+fn method_names() -> PossibleValuesParser {
+    PossibleValuesParser::new(
+        irad::methods::METHODS
+            .iter()
+            .map(|(name, about)| PossibleValue::new(*name).help(*about)),
+    )
+}
+
+impl RenderArgs {
+    /// `--method` with its settings' flags.
+    pub fn method(&self) -> Result<irad::methods::Method> {
+        self.settings.method(&self.method)
+    }
+}
+
+/// Renders, writes and prints the summary.
+pub fn run(options: &ContextOptions, args: RenderArgs) -> Result<()> {
+    let method = args.method()?;
+    let scene = match &args.scene {
+        Some(path) => {
+            // `--compensate false`: a switch's value goes after `=`, so clap took it as SCENE.
+            let text = path.to_string_lossy();
+            if !path.exists() && ["true", "false"].contains(&text.as_ref()) {
+                bail!(
+                    "scene `{text}` not found: a switch takes its value after `=` (`--shadows=false`)"
+                );
+            }
+            scene::load(path)?
+        }
+        None => scene::default_scene(),
+    };
+    for w in &scene.warnings {
+        eprintln!("warning: {w}");
+    }
+    let ctx = Context::new(options)?;
+    let out = args
+        .out
+        .unwrap_or_else(|| PathBuf::from("out").join(&scene.name));
+    let job = RenderJob {
+        scene: &scene,
+        method,
+        out,
+        exposure: args.exposure,
+        reference: args.reference,
+    };
+    let cam = &scene.camera;
+    println!(
+        "rendering {} ({}x{}, {} triangles) with {} on {}",
+        render::scene_label(&scene),
+        cam.width,
+        cam.height,
+        scene.triangles.len(),
+        job.method.name(),
+        device_line(ctx.info())
+    );
+    let bar = progress(job.method_samples(), "render");
+    let report = render::render(&ctx, &job, |done, _| bar.set_position(done as u64))?;
+    bar.finish_and_clear();
+    let r = &report.record;
+    println!("per-pass GPU time:\n{}", report.passes);
+    if let Some(gpu_ms) = r.gpu_ms_total {
+        let paths = r.samples as f64 * cam.width as f64 * cam.height as f64;
+        println!(
+            "{} samples per pixel in {:.3} s GPU ({:.3} s wall): {:.2} M samples/s",
+            r.samples,
+            gpu_ms / 1e3,
+            r.wall_ms / 1e3,
+            paths / gpu_ms / 1e3
+        );
+    }
+    if let Some(m) = &r.metrics {
+        println!(
+            "against the reference: relMSE {:.4e}, RMSE {:.4e}, Lab error {:.3}, bias {:.3}%, outliers {:.4}%, NaN/Inf {}",
+            m.rel_mse,
+            m.rmse,
+            m.lab_error,
+            100.0 * m.bias,
+            100.0 * m.outliers,
+            m.nan_inf
+        );
+    }
+    for w in &r.warnings {
+        eprintln!("warning: {w}");
+    }
+    let (exr, png, json) = &report.paths;
+    println!(
+        "wrote {}, {} and {}",
+        exr.display(),
+        png.display(),
+        json.display()
+    );
+    Ok(())
+}
