@@ -9,6 +9,4 @@ pub mod methods;
 pub mod render;
 pub mod sampling;
 pub mod scene;
-pub mod selfcheck;
-pub mod shaders;
 pub mod trace;

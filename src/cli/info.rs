@@ -2,8 +2,8 @@
 
 use anyhow::{bail, Result};
 
+use super::selfcheck;
 use irad::gpu::{self, Context, ContextOptions, DeviceSelector};
-use irad::selfcheck;
 
 use super::device_line;
 

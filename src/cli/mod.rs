@@ -6,6 +6,8 @@ mod luminaire;
 mod method_flags;
 mod methods;
 mod render;
+mod selfcheck;
+mod shader_tree;
 mod shaders;
 mod suite;
 

@@ -2,7 +2,7 @@
 
 use anyhow::{bail, Result};
 
-use irad::shaders::ShaderTree;
+use super::shader_tree::ShaderTree;
 
 /// Rebuilds spv/ from glsl/, or with `check` only reports what is stale.
 pub fn run(check: bool) -> Result<()> {

@@ -154,8 +154,7 @@ pub fn run(options: &ContextOptions, args: SuiteArgs) -> Result<()> {
     let stop_bar = overall.clone();
     ctrlc::set_handler(move || {
         if STOP.swap(true, std::sync::atomic::Ordering::SeqCst) {
-            let _writing = suite::output::WRITING.lock();
-            std::process::exit(130);
+            suite::output::exit_after_writing(130);
         }
         stop_bar
             .println("interrupted: stopping after the run under way (Ctrl-C again to quit now)");

@@ -247,6 +247,39 @@ impl Method {
 mod tests {
     use super::*;
 
+    /// Each strategy's name, written `STRATEGY_` + upper case with `-` as `_`, is defined in
+    /// its kernel as the strategy's code (`as u32`): the Rust names and the GLSL codes are
+    /// one list.
+    #[test]
+    fn strategy_codes_are_the_kernels_defines() {
+        fn check(file: &str, codes: &[(&str, u32)]) {
+            let path = format!("{}/glsl/{file}", env!("CARGO_MANIFEST_DIR"));
+            let text = std::fs::read_to_string(&path).unwrap();
+            for (name, code) in codes {
+                let define = format!(
+                    "#define STRATEGY_{} {code}u",
+                    name.to_uppercase().replace('-', "_")
+                );
+                assert!(text.contains(&define), "{path}: no `{define}`");
+            }
+        }
+        let env: Vec<_> = envmap::Strategy::ALL
+            .iter()
+            .map(|s| (s.name(), s.code()))
+            .collect();
+        check("shade_env.comp", &env);
+        let lf: Vec<_> = lightfield::Strategy::ALL
+            .iter()
+            .map(|&s| (s.name(), s as u32))
+            .collect();
+        check("include/luminaire.glsl", &lf);
+        let b: Vec<_> = bundles::Strategy::ALL
+            .iter()
+            .map(|&s| (s.name(), s as u32))
+            .collect();
+        check("shade_bundle_paths.comp", &b);
+    }
+
     fn table(text: &str) -> toml::Table {
         toml::from_str(text).unwrap()
     }

@@ -80,9 +80,15 @@ pub fn chart(results: &SuiteResults, scene: &str) -> Chart {
     }
 }
 
-/// Held while the outputs are written: a second Ctrl-C takes it before exiting, so the
-/// files on disk always agree with each other.
-pub static WRITING: std::sync::Mutex<()> = std::sync::Mutex::new(());
+/// Held while the outputs are written, so an exit never leaves them disagreeing.
+static WRITING: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
+/// Exits the process with `code` once no output is being written (a second Ctrl-C: the files
+/// on disk then always agree with each other).
+pub fn exit_after_writing(code: i32) -> ! {
+    let _writing = WRITING.lock().unwrap_or_else(|e| e.into_inner());
+    std::process::exit(code)
+}
 
 /// Writes results.json, results.csv, one chart per scene and report.md.
 pub fn write(out: &Path, results: &SuiteResults) -> Result<()> {

@@ -3,8 +3,8 @@
 
 use anyhow::Result;
 
-use crate::gpu::{prefix_sum::PrefixSum, Buffer, Commands, Context};
-use crate::sampling::scan::{cdf_like_values, inclusive_scan_rows, max_relative_error};
+use irad::gpu::{prefix_sum::PrefixSum, Buffer, Commands, Context};
+use irad::sampling::scan::{cdf_like_values, inclusive_scan_rows, max_relative_error};
 
 /// Largest relative error per element accepted (issue 2).
 pub const SCAN_TOLERANCE: f64 = 1e-5;

@@ -141,6 +141,7 @@ pub fn validate(module: &Path) -> Result<()> {
 }
 
 /// Whether a tool answers `--version` (glslangValidator, spirv-val).
+#[allow(dead_code)] // tests/shaders.rs compiles this file in and asks
 pub fn tool_available(tool: &str) -> bool {
     Command::new(tool)
         .arg("--version")
