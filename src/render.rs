@@ -96,6 +96,10 @@ pub fn render(
             output.nonfinite_estimates
         ));
     }
+    // The scene's warnings were logged when it loaded; the render's own are logged here.
+    for w in &warnings[job.scene.warnings.len()..] {
+        log::warn!("{w}");
+    }
     let metrics: Option<Metrics> = reference
         .as_ref()
         .map(|r| image::compare(&output.image, r))

@@ -2,6 +2,7 @@
 
 mod bench;
 mod info;
+mod logger;
 mod luminaire;
 mod method_flags;
 mod methods;
@@ -72,6 +73,7 @@ enum Command {
 }
 
 pub fn main() -> ExitCode {
+    logger::install();
     let cli = Cli::parse();
     match run(cli) {
         Ok(()) => ExitCode::SUCCESS,

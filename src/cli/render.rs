@@ -65,9 +65,6 @@ pub fn run(options: &ContextOptions, args: RenderArgs) -> Result<()> {
         }
         None => scene::default_scene(),
     };
-    for w in &scene.warnings {
-        eprintln!("warning: {w}");
-    }
     let ctx = Context::new(options)?;
     let out = args
         .out
@@ -114,9 +111,6 @@ pub fn run(options: &ContextOptions, args: RenderArgs) -> Result<()> {
             100.0 * m.outliers,
             m.nan_inf
         );
-    }
-    for w in &r.warnings {
-        eprintln!("warning: {w}");
     }
     let (exr, png, json) = &report.paths;
     println!(

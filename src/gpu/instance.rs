@@ -1,8 +1,7 @@
 //! The Vulkan loader, the instance and, when asked for, the Khronos validation layer with a
-//! debug messenger whose messages are printed and kept in a [`ValidationLog`].
+//! debug messenger whose messages go to the `log` facade (target "vulkan") and are kept in a [`ValidationLog`].
 
 use std::ffi::{c_void, CStr};
-use std::io::Write;
 use std::sync::{Arc, Mutex};
 
 use ash::{ext::debug_utils, vk};
@@ -239,8 +238,12 @@ unsafe extern "system" fn on_validation_message(
             .unwrap_or_default()
     };
     let line = format!("[vulkan {severity:?} {kind:?}] {text}");
-    // Never panic across the FFI boundary, even with stderr closed.
-    let _ = writeln!(std::io::stderr(), "{line}");
+    // Through the log facade (target "vulkan"), so a library user routes it; the binary's
+    // logger prints the line as it is, and never panics (nor may anything across FFI).
+    match severity {
+        vk::DebugUtilsMessageSeverityFlagsEXT::ERROR => log::error!(target: "vulkan", "{line}"),
+        _ => log::warn!(target: "vulkan", "{line}"),
+    }
     if !user_data.is_null() {
         unsafe { &*(user_data as *const ValidationLog) }.push(line);
     }

@@ -32,6 +32,7 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
     let mut scene = build(&display, &text, &Files::Disk(base))?;
     scene.name = scene_name(path);
     scene.source = Some(path.to_path_buf());
+    log_warnings(&scene);
     Ok(scene)
 }
 
@@ -40,7 +41,15 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
 pub fn load_str(toml_text: &str, base_dir: &Path, name: &str) -> Result<Scene, SceneError> {
     let mut scene = build(name, toml_text, &Files::Disk(base_dir))?;
     scene.name = name.to_string();
+    log_warnings(&scene);
     Ok(scene)
+}
+
+/// A loaded scene's warnings, each through the `log` facade (they stay in `Scene::warnings`).
+fn log_warnings(scene: &Scene) {
+    for w in &scene.warnings {
+        log::warn!("{w}");
+    }
 }
 
 const CORNELL_TOML: &str = include_str!("../../scenes/cornell-box/scene.toml");
