@@ -150,9 +150,16 @@ impl Method {
         }
     }
 
-    /// The method's settings by the keys of its table (the seed included), sorted, unset
-    /// ones left out, so a record's parameters can be fed back to `from_params`.
+    /// The method's settings by the keys of its table, sorted, unset ones and the seed (a
+    /// record's own field) left out, so a record's parameters can be fed back to
+    /// `from_params`.
     pub fn parameters(&self) -> BTreeMap<String, serde_json::Value> {
+        let mut p = self.parameters_with_seed();
+        p.remove("seed");
+        p
+    }
+
+    fn parameters_with_seed(&self) -> BTreeMap<String, serde_json::Value> {
         match self {
             Method::Reference(s) => settings::values(reference::SETTINGS, s),
             Method::Ir(s) => settings::values(ir::SETTINGS, s),
