@@ -6,9 +6,13 @@
 //!
 //! Exact (the same function of the scene as irad's, DESIGN.md "Conventions"):
 //! - camera: `perspective`, `fov_axis` y, `to_world` `lookat` with irad's position, target and
-//!   up, `hdrfilm` with a `box` filter (pixel averages). Mitsuba's camera space has +x to the
-//!   left, and its film maps camera -x to image x, so `lookat` (left = up x dir) gives irad's
-//!   image with no flip: image right is dir x up, irad's `right` (checked in the tests).
+//!   up, `hdrfilm` with a `box` filter (pixel averages). Mitsuba's `lookat` puts camera +x
+//!   to the left (left = up x dir) and its film puts camera -x at the image's right, so the
+//!   image's right is dir x up, irad's `right`: no flip, no mirror (tests/export.rs recomputes
+//!   Mitsuba's rays).
+//! - meshes: irad's triangles, counter-clockwise, with irad's per-corner shading normals
+//!   (which irad's BSDFs use; the geometric normal where the OBJ has no `vn`), every triangle
+//!   its own three vertices.
 //! - Lambert: `twosided` `diffuse`, reflectance Kd (f = Kd / pi on both sides, as irad).
 //! - emission: an `area` emitter with radiance Ke on the material's shape (one-sided, on the
 //!   normal's side; counter-clockwise corners keep irad's side), besides the shape's BSDF.
