@@ -36,6 +36,7 @@
 
 pub mod bench;
 pub mod bvh;
+pub mod export;
 pub mod gpu;
 pub mod image;
 pub mod methods;
