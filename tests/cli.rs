@@ -498,3 +498,83 @@ fn a_long_render_shows_its_time_left() {
 fn common_under_ci() -> bool {
     std::env::var("CI").is_ok_and(|v| !v.is_empty() && v != "false" && v != "0")
 }
+
+/// Issue 23: `irad render --help` groups the method flags by method, a flag the chosen method
+/// does not take is one line naming the flag and the method, `irad methods NAME` lists a
+/// method's settings with their defaults, and `irad export mitsuba` writes a scene or refuses
+/// luminaires by name.
+#[test]
+fn method_flags_methods_and_export() {
+    let o = irad(&["render", "--help"], &[]);
+    let help = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success());
+    for heading in [
+        "Settings of several methods:",
+        "Settings of --method reference:",
+        "Settings of --method bir:",
+        "Settings of --method lightfield:",
+    ] {
+        assert!(help.contains(heading), "`{heading}` missing:\n{help}");
+    }
+    let o = irad(
+        &[
+            "render",
+            "--method",
+            "reference",
+            "--vpls",
+            "64",
+            "--clamp",
+            "5",
+        ],
+        &[],
+    );
+    assert_clean_error(&o, &["--vpls does not apply to --method reference"]);
+    let o = irad(&["render", "--method", "env", "--spp", "100000"], &[]);
+    assert_clean_error(&o, &["--spp 100000: must be in 1..=65536"]);
+    let o = irad(&["render", "--method", "bir", "--vpls", "1"], &[]);
+    assert_clean_error(&o, &["--vpls 1: must be in 2..=1048576"]);
+
+    let o = irad(&["methods", "env"], &[]);
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        out.contains("--spp N  (suite: spp)  default 60, 1..=65536"),
+        "{out}"
+    );
+    assert!(out.contains("--strategy dynamic|uniform-faces"), "{out}");
+    assert_clean_error(
+        &irad(&["methods", "bidir"], &[]),
+        &["unknown method `bidir`"],
+    );
+
+    let dir = temp_dir("export");
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/spot-light/scene.toml");
+    let o = irad(
+        &["export", "mitsuba", scene, "-o", dir.to_str().unwrap()],
+        &[],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        out.contains("approximation: ") && out.contains("spot"),
+        "{out}"
+    );
+    let xml = std::fs::read_to_string(dir.join("scene.xml")).unwrap();
+    assert!(xml.contains("<scene version=\"3.0.0\">"), "{xml}");
+    let headlights = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/scenes/car-headlights/scene.toml"
+    );
+    let o = irad(
+        &[
+            "export",
+            "mitsuba",
+            headlights,
+            "-o",
+            dir.join("no").to_str().unwrap(),
+        ],
+        &[],
+    );
+    assert_clean_error(&o, &["Mitsuba has no light-field luminaires"]);
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -1,6 +1,7 @@
 //! The `irad` command line: one module per command; this one parses and dispatches.
 
 mod bench;
+mod export;
 mod info;
 mod logger;
 mod luminaire;
@@ -70,6 +71,9 @@ enum Command {
     /// Light-field luminaires (Lu 14 ch. 4; format in README "Light-field luminaires").
     #[command(subcommand)]
     Luminaire(luminaire::LuminaireCommand),
+    /// Write a scene for another renderer, to cross-check irad's images there.
+    #[command(subcommand)]
+    Export(export::ExportCommand),
 }
 
 pub fn main() -> ExitCode {
@@ -115,6 +119,7 @@ fn run(mut cli: Cli) -> Result<()> {
         Command::Selfcheck => info::selfcheck(&Context::new(&options)?),
         Command::Shaders { check } => shaders::run(check),
         Command::Luminaire(command) => luminaire::run(command),
+        Command::Export(command) => export::run(command),
         Command::Bench(command) => bench::run(&options, command),
     }
 }
