@@ -577,11 +577,11 @@ mod tests {
         let (_, rows) = text.split_once('\n').unwrap();
         assert_eq!(
             rows,
-            "3,cornell-box/12.5/0.031,cornell-box,embedded:cornell-box,reference,pt,time 20ms,20,7,\
-             ok,false,true,true,1,1,0,0,1,0,1,12.5,,0.031,0,0,0,0,0,0.002,-0.01,0,1,9,0.00001,\
+            "3,cornell-box/12.5/0.031,cornell-box,embedded:cornell-box,reference,pt,time 20ms,\
+             20,7,ok,false,true,true,1,1,0,0,1,0,1,12.5,,0.031,0,0,0,0,0,0.002,-0.01,0,1,9,0.00001,\
              \"gpu, \"\"fast\"\"\",,,\"two\nlines\",,bir,64,,3.25,0.75\n\
-             4,veach/1/0.5,veach,,reference,pt,,,,declined,true,false,false,1,1,0,0,1,0,1,,,,,,,,,,,\
-             0,1,9,,cpu,,,,16,,,,,\n"
+             4,veach/1/0.5,veach,,reference,pt,,,,declined,true,false,false,1,1,0,0,1,0,1,,,,,,,,,,\
+             ,0,1,9,,cpu,,,,16,,,,,\n"
         );
     }
 }
