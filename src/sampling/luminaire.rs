@@ -1,5 +1,5 @@
 //! Sampling the two-plane light-field luminaire of Lu 14 Chapter 4 (issue 9; the model is
-//! src/scene/luminaire.rs) in f64: the CPU mirror of what method `lightfield` will do on the
+//! src/scene/luminaire/) in f64: the CPU mirror of what method `lightfield` will do on the
 //! GPU, and its tests.
 //!
 //! In the luminaire's frame the filter plane U is z = 0 and the image plane S is z = delta;

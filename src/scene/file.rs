@@ -14,7 +14,7 @@ pub struct SceneFile {
     #[serde(default)]
     pub light: Vec<LightFile>,
     pub environment: Option<EnvironmentFile>,
-    /// Light-field luminaires (scene/luminaire.rs), placed in the scene.
+    /// Light-field luminaires (scene/luminaire/), placed in the scene.
     #[serde(default)]
     pub luminaire: Vec<LuminairePlacementFile>,
     pub failure: Option<FailureFile>,

@@ -203,8 +203,10 @@ impl SuiteResults {
         text
     }
 
-    /// The CSV: fixed columns, then `param:<name>` for every parameter any run has, then
-    /// `pass_ms:<name>` for every pass, in name order. Empty cells for undefined figures.
+    /// The CSV: the fixed `COLUMNS`, then `param:<name>` for every parameter any run has,
+    /// `pass_ms:<name>` for every pass and `stat:<name>` for every stat, each in name order.
+    /// Empty cells for undefined figures. The header and every row are written from one list
+    /// of columns.
     pub fn csv(&self) -> String {
         let params: BTreeSet<&str> = self
             .runs
@@ -221,120 +223,108 @@ impl SuiteResults {
             .iter()
             .flat_map(|r| r.stats.keys().map(String::as_str))
             .collect();
-        let mut header: Vec<String> = FIXED_COLUMNS.iter().map(|s| s.to_string()).collect();
-        header.extend(params.iter().map(|p| format!("param:{p}")));
-        header.extend(passes.iter().map(|p| format!("pass_ms:{p}")));
-        header.extend(stats.iter().map(|p| format!("stat:{p}")));
+        let mut columns: Vec<(String, Cell)> = COLUMNS
+            .iter()
+            .map(|&(name, cell)| (name.to_string(), Box::new(cell) as Cell))
+            .collect();
+        for p in params {
+            let cell = move |r: &RunRecord| match r.parameters.get(p) {
+                Some(serde_json::Value::String(s)) => s.clone(),
+                Some(v) => v.to_string(),
+                None => String::new(),
+            };
+            columns.push((format!("param:{p}"), Box::new(cell)));
+        }
+        for p in passes {
+            let cell = move |r: &RunRecord| figure(r.pass_gpu_ms.get(p).copied().flatten());
+            columns.push((format!("pass_ms:{p}"), Box::new(cell)));
+        }
+        for p in stats {
+            let cell = move |r: &RunRecord| figure(r.stats.get(p).copied());
+            columns.push((format!("stat:{p}"), Box::new(cell)));
+        }
+        let header: Vec<String> = columns.iter().map(|(name, _)| name.clone()).collect();
         let mut out = csv_row(&header);
         for r in &self.runs {
-            let m = r.metrics;
-            let f = |v: Option<f64>| {
-                v.filter(|x| x.is_finite())
-                    .map(|x| x.to_string())
-                    .unwrap_or_default()
-            };
-            let mut row = vec![
-                r.index.to_string(),
-                r.id.clone(),
-                r.scene.clone(),
-                r.scene_path.clone(),
-                r.method.clone(),
-                r.label.clone(),
-                r.budget.clone(),
-                f(r.time_ms),
-                r.calibrated_count
-                    .map(|c| c.to_string())
-                    .unwrap_or_default(),
-                r.status.as_str().to_string(),
-                r.expected_failure.to_string(),
-                r.home.to_string(),
-                r.pareto.to_string(),
-                r.resolution[0].to_string(),
-                r.resolution[1].to_string(),
-                r.seed.to_string(),
-                r.warmup.to_string(),
-                r.repeats.to_string(),
-                r.flicker_frames.to_string(),
-                r.scored.to_string(),
-                f(r.gpu_ms),
-                f(r.wall_ms),
-                f(m.map(|m| m.rel_mse)),
-                f(m.map(|m| m.rmse)),
-                f(m.map(|m| m.lab_error)),
-                f(m.map(|m| m.bias)),
-                f(m.map(|m| m.outliers)),
-                m.map(|m| m.nan_inf.to_string()).unwrap_or_default(),
-                f(r.flicker),
-                f(r.image_mean_offset),
-                r.nonfinite_estimates.to_string(),
-                r.reference_spp.to_string(),
-                r.reference_seed.to_string(),
-                f(r.reference_rel_mse),
-                r.device.clone(),
-                r.driver.clone(),
-                r.scene_hash.clone(),
-                r.note.clone(),
-            ];
-            for p in &params {
-                row.push(match r.parameters.get(*p) {
-                    Some(serde_json::Value::String(s)) => s.clone(),
-                    Some(v) => v.to_string(),
-                    None => String::new(),
-                });
-            }
-            for p in &passes {
-                row.push(f(r.pass_gpu_ms.get(*p).copied().flatten()));
-            }
-            for p in &stats {
-                row.push(f(r.stats.get(*p).copied()));
-            }
+            let row: Vec<String> = columns.iter().map(|(_, cell)| cell(r)).collect();
             out += &csv_row(&row);
         }
         out
     }
 }
 
-/// The CSV's first columns, in order.
-pub const FIXED_COLUMNS: &[&str] = &[
-    "index",
-    "id",
-    "scene",
-    "scene_path",
-    "method",
-    "label",
-    "budget",
-    "time_ms",
-    "calibrated_count",
-    "status",
-    "expected_failure",
-    "home",
-    "pareto",
-    "width",
-    "height",
-    "seed",
-    "warmup",
-    "repeats",
-    "flicker_frames",
-    "scored",
-    "gpu_ms",
-    "wall_ms",
-    "rel_mse",
-    "rmse",
-    "lab_error",
-    "bias",
-    "outliers",
-    "nan_inf",
-    "flicker",
-    "image_mean_offset",
-    "nonfinite_estimates",
-    "reference_spp",
-    "reference_seed",
-    "reference_rel_mse",
-    "device",
-    "driver",
-    "scene_hash",
-    "note",
+/// How a CSV column writes a run's cell.
+type Cell<'a> = Box<dyn Fn(&RunRecord) -> String + 'a>;
+
+/// A figure's cell: empty when undefined (None, NaN or infinite).
+fn figure(v: Option<f64>) -> String {
+    v.filter(|x| x.is_finite())
+        .map(|x| x.to_string())
+        .unwrap_or_default()
+}
+
+/// A fixed CSV column: its header, and how a run's cell is written.
+type Column = (&'static str, fn(&RunRecord) -> String);
+
+/// The CSV's fixed columns, in order. The header and every row come from this one table, so a
+/// column cannot be added to one and not the other.
+const COLUMNS: &[Column] = &[
+    ("index", |r| r.index.to_string()),
+    ("id", |r| r.id.clone()),
+    ("scene", |r| r.scene.clone()),
+    ("scene_path", |r| r.scene_path.clone()),
+    ("method", |r| r.method.clone()),
+    ("label", |r| r.label.clone()),
+    ("budget", |r| r.budget.clone()),
+    ("time_ms", |r| figure(r.time_ms)),
+    ("calibrated_count", |r| {
+        r.calibrated_count
+            .map(|c| c.to_string())
+            .unwrap_or_default()
+    }),
+    ("status", |r| r.status.as_str().to_string()),
+    ("expected_failure", |r| r.expected_failure.to_string()),
+    ("home", |r| r.home.to_string()),
+    ("pareto", |r| r.pareto.to_string()),
+    ("width", |r| r.resolution[0].to_string()),
+    ("height", |r| r.resolution[1].to_string()),
+    ("seed", |r| r.seed.to_string()),
+    ("warmup", |r| r.warmup.to_string()),
+    ("repeats", |r| r.repeats.to_string()),
+    ("flicker_frames", |r| r.flicker_frames.to_string()),
+    ("scored", |r| r.scored.to_string()),
+    ("gpu_ms", |r| figure(r.gpu_ms)),
+    ("wall_ms", |r| figure(r.wall_ms)),
+    ("rel_mse", |r| figure(r.metrics.map(|m| m.rel_mse))),
+    ("rmse", |r| figure(r.metrics.map(|m| m.rmse))),
+    ("lab_error", |r| figure(r.metrics.map(|m| m.lab_error))),
+    ("bias", |r| figure(r.metrics.map(|m| m.bias))),
+    ("outliers", |r| figure(r.metrics.map(|m| m.outliers))),
+    ("nan_inf", |r| {
+        r.metrics.map(|m| m.nan_inf.to_string()).unwrap_or_default()
+    }),
+    ("flicker", |r| figure(r.flicker)),
+    ("image_mean_offset", |r| figure(r.image_mean_offset)),
+    ("nonfinite_estimates", |r| r.nonfinite_estimates.to_string()),
+    ("reference_spp", |r| r.reference_spp.to_string()),
+    ("reference_seed", |r| r.reference_seed.to_string()),
+    ("reference_rel_mse", |r| figure(r.reference_rel_mse)),
+    ("device", |r| r.device.clone()),
+    ("driver", |r| r.driver.clone()),
+    ("scene_hash", |r| r.scene_hash.clone()),
+    ("note", |r| r.note.clone()),
 ];
+
+/// The CSV's first columns, in order (the names of `COLUMNS`).
+pub const FIXED_COLUMNS: &[&str] = &{
+    let mut names = [""; COLUMNS.len()];
+    let mut i = 0;
+    while i < COLUMNS.len() {
+        names[i] = COLUMNS[i].0;
+        i += 1;
+    }
+    names
+};
 
 /// One RFC 4180 row: fields with a comma, quote or line break are quoted, quotes doubled.
 fn csv_row(fields: &[String]) -> String {
@@ -506,5 +496,92 @@ mod tests {
         let text = csv_row(&fields) + &csv_row(&fields);
         assert_eq!(parse_csv(&text).unwrap(), vec![fields.clone(), fields]);
         assert!(parse_csv("\"open").is_err());
+    }
+
+    /// Two runs that between them fill every kind of cell: figures and empty ones, a
+    /// parameter, a pass and a stat only one has, text that needs quoting.
+    fn csv_sample() -> SuiteResults {
+        let mut a = run("cornell-box", "gpu, \"fast\"", 12.5, 0.031);
+        a.index = 3;
+        a.scene_path = "embedded:cornell-box".into();
+        a.budget = "time 20ms".into();
+        a.time_ms = Some(20.0);
+        a.calibrated_count = Some(7);
+        a.parameters.insert("vpls".into(), serde_json::json!(64));
+        a.parameters
+            .insert("strategy".into(), serde_json::json!("bir"));
+        a.pass_gpu_ms.insert("trace".into(), Some(3.25));
+        a.pass_gpu_ms.insert("shade".into(), None);
+        a.wall_ms = Some(f64::NAN);
+        a.flicker = Some(0.002);
+        a.image_mean_offset = Some(-0.01);
+        a.reference_rel_mse = Some(1e-5);
+        a.image = Some("images/a.png".into());
+        a.note = "two\nlines".into();
+        a.pareto = true;
+        a.home = true;
+        a.stats.insert("kept".into(), 0.75);
+        let mut b = run("veach", "cpu", 1.0, 0.5);
+        b.status = Status::Declined;
+        b.expected_failure = true;
+        b.metrics = None;
+        b.gpu_ms = None;
+        b.parameters.insert("spp".into(), serde_json::json!(16));
+        let mut results = SuiteResults {
+            suite: "s".into(),
+            suite_file: String::new(),
+            suite_hash: String::new(),
+            description: String::new(),
+            shard: None,
+            runs_in_suite: 2,
+            runs_planned: 2,
+            complete: true,
+            device: "gpu".into(),
+            driver: String::new(),
+            irad_version: String::new(),
+            references: BTreeMap::new(),
+            runs: vec![a, b],
+        };
+        results.runs[1].index = 4;
+        results
+    }
+
+    /// The header is the one written before the columns became one table, and every row has
+    /// as many fields as it.
+    #[test]
+    fn csv_header_and_rows_come_from_one_column_list() {
+        let text = csv_sample().csv();
+        let (header, _) = text.split_once('\n').unwrap();
+        assert_eq!(
+            header,
+            "index,id,scene,scene_path,method,label,budget,time_ms,calibrated_count,status,\
+             expected_failure,home,pareto,width,height,seed,warmup,repeats,flicker_frames,scored,\
+             gpu_ms,wall_ms,rel_mse,rmse,lab_error,bias,outliers,nan_inf,flicker,\
+             image_mean_offset,nonfinite_estimates,reference_spp,reference_seed,\
+             reference_rel_mse,device,driver,scene_hash,note,param:spp,param:strategy,\
+             param:vpls,pass_ms:shade,pass_ms:trace,stat:kept"
+        );
+        assert!(header.starts_with(&FIXED_COLUMNS.join(",")));
+        let rows = parse_csv(&text).unwrap();
+        assert_eq!(rows.len(), 3);
+        for row in &rows {
+            assert_eq!(row.len(), rows[0].len());
+        }
+        assert_eq!(rows[0].len(), COLUMNS.len() + 6);
+    }
+
+    /// The rows are the bytes the CSV writer gave before the columns became one table.
+    #[test]
+    fn csv_rows_are_unchanged() {
+        let text = csv_sample().csv();
+        let (_, rows) = text.split_once('\n').unwrap();
+        assert_eq!(
+            rows,
+            "3,cornell-box/12.5/0.031,cornell-box,embedded:cornell-box,reference,pt,time 20ms,\
+             20,7,ok,false,true,true,1,1,0,0,1,0,1,12.5,,0.031,0,0,0,0,0,0.002,-0.01,0,1,9,0.00001,\
+             \"gpu, \"\"fast\"\"\",,,\"two\nlines\",,bir,64,,3.25,0.75\n\
+             4,veach/1/0.5,veach,,reference,pt,,,,declined,true,false,false,1,1,0,0,1,0,1,,,,,,,,,,\
+             ,0,1,9,,cpu,,,,16,,,,,\n"
+        );
     }
 }

@@ -23,6 +23,10 @@
 //! `atlas` may be a glob in the file name (`"beam_*.exr"`): a sequence of atlases of one size,
 //! in name order, frame f of a render showing atlas f mod n (a luminaire whose images change,
 //! as a levelling headlight's do).
+//!
+//! `emitters` generates luminaires from analytic emitters (`irad luminaire generate`).
+
+pub mod emitters;
 
 use std::path::{Path, PathBuf};
 
@@ -32,6 +36,8 @@ use serde::Deserialize;
 use super::environment::{expand_glob, is_glob, split_glob};
 use super::SceneError;
 use crate::image::{exr, Image};
+
+pub use emitters::Emitter;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Basis {
@@ -491,147 +497,6 @@ impl PlacedLuminaire {
             z,
         })
     }
-}
-
-/// The analytic emitters `irad luminaire generate` turns into luminaires.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Emitter {
-    /// A uniform Lambertian disk of `radius` and `radiance` in the filter plane: on its axis
-    /// at height h the scalar irradiance is 2 pi L (1 - h / sqrt(h^2 + r^2)).
-    Disk { radius: f64, radiance: f64 },
-    /// A headlight: a disk of `radius` with a reflector's rings of brightness, emitting a
-    /// lobe about +z tilted `tilt` degrees down (-y), exponent `sharpness`, cut off above the
-    /// horizontal (a low beam's cut-off line), warm white.
-    Headlight {
-        radius: f64,
-        radiance: f64,
-        sharpness: f64,
-        tilt: f64,
-    },
-    /// A headlight with a faceted reflector and a cut-off (a bike light's, say): the disk of
-    /// `radius` is cut into square facets of side `facet`, and each throws a narrow Gaussian
-    /// beam (standard deviation `beam` degrees) in its own direction, chosen by a hash of the
-    /// facet, uniformly within +-`spread` degrees horizontally and 0 to `spread` degrees
-    /// down, with a brightness from 0.5 to 1. Nothing leaves above the horizontal (the
-    /// cut-off line). The whole pattern is lowered by `tilt` degrees. The beam pattern is the
-    /// sum of the facets' beams, as with real reflectors, so each basis function's image is a
-    /// spray of spots over the image plane, and a point sees few of them: the case Lu's
-    /// restriction is made for.
-    Reflector {
-        radius: f64,
-        radiance: f64,
-        facet: f64,
-        beam: f64,
-        spread: f64,
-        tilt: f64,
-    },
-}
-
-impl Emitter {
-    /// The emitter lowered by `degrees` more (a levelling headlight's motion); None for the
-    /// disk, which has no direction to tilt.
-    pub fn tilted(self, degrees: f64) -> Option<Emitter> {
-        match self {
-            Emitter::Disk { .. } => None,
-            Emitter::Headlight {
-                radius,
-                radiance,
-                sharpness,
-                tilt,
-            } => Some(Emitter::Headlight {
-                radius,
-                radiance,
-                sharpness,
-                tilt: tilt + degrees,
-            }),
-            Emitter::Reflector {
-                radius,
-                radiance,
-                facet,
-                beam,
-                spread,
-                tilt,
-            } => Some(Emitter::Reflector {
-                radius,
-                radiance,
-                facet,
-                beam,
-                spread,
-                tilt: tilt + degrees,
-            }),
-        }
-    }
-
-    /// L(u -> s) for a luminaire whose image plane is `delta` above the filter plane.
-    pub fn radiance(&self, u: (f64, f64), s: (f64, f64), delta: f64) -> Vec3 {
-        match *self {
-            Emitter::Disk { radius, radiance } => {
-                if u.0 * u.0 + u.1 * u.1 <= radius * radius {
-                    Vec3::splat(radiance as f32)
-                } else {
-                    Vec3::ZERO
-                }
-            }
-            Emitter::Headlight {
-                radius,
-                radiance,
-                sharpness,
-                tilt,
-            } => {
-                let r2 = (u.0 * u.0 + u.1 * u.1) / (radius * radius);
-                if r2 > 1.0 {
-                    return Vec3::ZERO;
-                }
-                // The reflector's rings.
-                let rings = 0.6 + 0.4 * (r2.sqrt() * 5.0 * std::f64::consts::PI).cos().powi(2);
-                let d = glam::DVec3::new(s.0 - u.0, s.1 - u.1, delta).normalize();
-                if d.y > 0.02 {
-                    return Vec3::ZERO;
-                }
-                let t = tilt.to_radians();
-                let axis = glam::DVec3::new(0.0, -t.sin(), t.cos());
-                let lobe = d.dot(axis).max(0.0).powf(sharpness);
-                Vec3::new(1.0, 0.93, 0.8) * (radiance * rings * lobe) as f32
-            }
-            Emitter::Reflector {
-                radius,
-                radiance,
-                facet,
-                beam,
-                spread,
-                tilt,
-            } => {
-                if u.0 * u.0 + u.1 * u.1 > radius * radius {
-                    return Vec3::ZERO;
-                }
-                let (fx, fy) = ((u.0 / facet).floor(), (u.1 / facet).floor());
-                let (ax, ay, brightness) = facet_aim(fx as i64, fy as i64, spread);
-                let (dx, dy) = (s.0 - u.0, s.1 - u.1);
-                let (tx, ty) = (
-                    dx.atan2(delta).to_degrees(),
-                    dy.atan2(delta).to_degrees() + tilt,
-                );
-                if ty > 0.0 {
-                    return Vec3::ZERO;
-                }
-                let (ex, ey) = ((tx - ax) / beam, (ty - ay) / beam);
-                let lobe = (-0.5 * (ex * ex + ey * ey)).exp();
-                Vec3::new(1.0, 0.95, 0.85) * (radiance * brightness * lobe) as f32
-            }
-        }
-    }
-}
-
-/// A reflector facet's aim (horizontal and vertical degrees, + right and up) and brightness,
-/// from a hash of its grid cell.
-fn facet_aim(i: i64, j: i64, spread: f64) -> (f64, f64, f64) {
-    let h = crate::sampling::pcg::hash(&[i as u32, j as u32, 0x6661]);
-    let unit = |k: u32| crate::sampling::pcg::hash(&[h, k]) as f64 / 4294967296.0;
-    (
-        spread * (2.0 * unit(0) - 1.0),
-        -spread * unit(1),
-        0.5 + 0.5 * unit(2),
-    )
 }
 
 #[cfg(test)]
