@@ -1,29 +1,54 @@
-//! The binary's `log` backend: the library's warnings printed on stderr as `warning: ...`
-//! (errors as `error: ...`), the Vulkan validation layer's lines as they are.
+//! The binary's `log` backend: irad's warnings printed on stderr as `warning: ...` (errors
+//! as `error: ...`), the Vulkan validation layer's lines as they are; other crates' records
+//! (naga's notes on SPIR-V decorations it skips, obvhs) are left out, as before the facade. A
+//! progress bar on screen is cleared for the line and drawn again after it.
 
 use std::io::Write;
+use std::sync::Mutex;
 
+use indicatif::{MultiProgress, ProgressBar};
 use log::{Level, LevelFilter, Log, Metadata, Record};
+
+/// The bars on screen, which a printed line must not cut through.
+pub enum Bars {
+    One(ProgressBar),
+    Several(MultiProgress),
+}
+
+static ON_SCREEN: Mutex<Option<Bars>> = Mutex::new(None);
+
+/// Sets the bars lines are printed around (None: none on screen).
+pub fn on_screen(bars: Option<Bars>) {
+    *ON_SCREEN.lock().unwrap_or_else(|e| e.into_inner()) = bars;
+}
 
 struct Stderr;
 
 impl Log for Stderr {
     fn enabled(&self, metadata: &Metadata) -> bool {
-        metadata.level() <= Level::Warn
+        let target = metadata.target();
+        metadata.level() <= Level::Warn && (target.starts_with("irad") || target == "vulkan")
     }
 
     fn log(&self, record: &Record) {
         if !self.enabled(record.metadata()) {
             return;
         }
+        let line = match (record.target(), record.level()) {
+            ("vulkan", _) => format!("{}", record.args()),
+            (_, Level::Error) => format!("error: {}", record.args()),
+            _ => format!("warning: {}", record.args()),
+        };
         // Writes never panic: a closed stderr (or a validation message from a driver thread)
         // loses the line, nothing else.
-        let mut err = std::io::stderr().lock();
-        let _ = match (record.target(), record.level()) {
-            ("vulkan", _) => writeln!(err, "{}", record.args()),
-            (_, Level::Error) => writeln!(err, "error: {}", record.args()),
-            _ => writeln!(err, "warning: {}", record.args()),
+        let print = || {
+            let _ = writeln!(std::io::stderr().lock(), "{line}");
         };
+        match &*ON_SCREEN.lock().unwrap_or_else(|e| e.into_inner()) {
+            Some(Bars::One(bar)) if !bar.is_finished() => bar.suspend(print),
+            Some(Bars::Several(bars)) => bars.suspend(print),
+            _ => print(),
+        }
     }
 
     fn flush(&self) {}

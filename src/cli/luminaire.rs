@@ -79,7 +79,6 @@ enum BasisArg {
     QuadraticBspline,
 }
 
-
 fn generate_luminaire(args: &GenerateArgs) -> Result<()> {
     use irad::scene::luminaire::emitters::{available_memory, EmitterKind, GenerateOptions};
     use irad::scene::luminaire::Basis;

@@ -179,6 +179,24 @@ impl FromArgMatches for MethodFlags {
     }
 }
 
+/// A tip for a switch given its value after a space (`--shadows false`), which clap takes as
+/// the scene: the value goes after `=`.
+pub fn switch_tip(args: &[String]) -> Option<String> {
+    let switches: Vec<String> = keys()
+        .into_iter()
+        .filter(|(_, takers)| takers.iter().all(|(_, d)| d.kind == Kind::Switch))
+        .map(|(key, _)| flag(key))
+        .collect();
+    args.windows(2).find_map(|w| {
+        (switches.contains(&w[0]) && ["true", "false"].contains(&w[1].as_str())).then(|| {
+            format!(
+                "tip: a switch takes its value after `=`: `{}={}`",
+                w[0], w[1]
+            )
+        })
+    })
+}
+
 impl MethodFlags {
     /// `method` with the flags given over its defaults; a flag it does not take, a value out of
     /// its range or a setting that does not apply is an error naming the flag and the method.

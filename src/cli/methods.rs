@@ -3,6 +3,7 @@
 
 use anyhow::Result;
 
+use irad::methods::settings::Kind;
 use irad::methods::{Method, METHODS};
 
 use super::method_flags::flag;
@@ -28,15 +29,19 @@ pub fn run(args: &MethodsArgs) -> Result<()> {
         .map_or("", |(_, a)| a);
     println!("{name}: {about}");
     println!(
-        "settings: `irad render --method {name} --FLAG VALUE`, or `KEY = VALUE` in a suite's params"
+        "settings: `irad render --method {name} --FLAG VALUE` (a switch: `--FLAG` or \
+         `--FLAG=false`), or `KEY = VALUE` in a suite's params"
     );
     for s in &settings {
         let range = s.kind.range();
         println!();
+        let value = match s.kind {
+            Kind::Switch => "[=true|false]".to_string(),
+            kind => format!(" {}", kind.value_name()),
+        };
         println!(
-            "  {} {}  (suite: {})  default {}{}",
+            "  {}{value}  (suite: {})  default {}{}",
             flag(s.key),
-            s.kind.value_name(),
             s.key,
             s.default,
             if range.is_empty() {

@@ -78,7 +78,18 @@ enum Command {
 
 pub fn main() -> ExitCode {
     logger::install();
-    let cli = Cli::parse();
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => {
+            let args: Vec<String> = std::env::args().collect();
+            if let (true, Some(tip)) = (e.use_stderr(), method_flags::switch_tip(&args)) {
+                let _ = e.print();
+                eprintln!("{tip}");
+                return ExitCode::from(2);
+            }
+            e.exit()
+        }
+    };
     match run(cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
@@ -137,8 +148,10 @@ pub(crate) fn parse_size(s: &str) -> Result<(u32, u32), String> {
     Ok((parse(w).ok_or_else(bad)?, parse(h).ok_or_else(bad)?))
 }
 
+/// A progress bar for `what`, which log lines are printed around until the next bar.
 pub(crate) fn progress(len: u64, what: &str) -> ProgressBar {
     let bar = ProgressBar::new(len);
+    logger::on_screen(Some(logger::Bars::One(bar.clone())));
     bar.set_style(
         ProgressStyle::with_template(&format!(
             "{what} [{{bar:30}}] {{pos}}/{{len}} ({{elapsed}} elapsed, {{eta}} left) {{msg}}"

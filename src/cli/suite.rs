@@ -136,6 +136,7 @@ pub fn run(options: &ContextOptions, args: SuiteArgs) -> Result<()> {
         device_line(ctx.info())
     );
     let bars = indicatif::MultiProgress::new();
+    super::logger::on_screen(Some(super::logger::Bars::Several(bars.clone())));
     let overall = bars.add(ProgressBar::new(planned as u64));
     overall.set_style(
         ProgressStyle::with_template("suite [{bar:30}] {pos}/{len} runs, {elapsed} elapsed{msg}")
@@ -235,6 +236,7 @@ pub fn run(options: &ContextOptions, args: SuiteArgs) -> Result<()> {
         })?;
     overall.finish_and_clear();
     current.finish_and_clear();
+    super::logger::on_screen(None);
     let errors = results
         .runs
         .iter()
