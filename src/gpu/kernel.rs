@@ -41,7 +41,7 @@ fn embedded(name: &str) -> GpuResult<&'static [u8]> {
 }
 
 impl Kernel {
-    /// The kernel built from the embedded spv/<name>.spv.
+    /// The kernel built from the embedded `spv/<name>.spv`.
     pub fn new(ctx: &Context, name: &str) -> GpuResult<Self> {
         Self::specialized(ctx, name, &[])
     }
@@ -54,7 +54,7 @@ impl Kernel {
         Self::from_spirv(ctx, name, bytes, constants)
     }
 
-    /// Checks that spv/<name>.spv is embedded and its layout reflects, building nothing.
+    /// Checks that `spv/<name>.spv` is embedded and its layout reflects, building nothing.
     pub fn check_embedded(name: &str) -> GpuResult<()> {
         let bytes = embedded(name)?;
         reflect(name, bytes).map(|_| ())

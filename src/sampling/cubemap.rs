@@ -314,7 +314,7 @@ pub fn sample_face(weights: &[f64], r: u32, face: usize, u1: f64, u2: f64, u3: f
     face_direction(face, -1.0 + s * (i + u2), -1.0 + s * (j + u3))
 }
 
-/// The pdf of the mixture that draws face f with probability mu[f] and then samples
+/// The pdf of the mixture that draws face f with probability `mu[f]` and then samples
 /// pdf_L(. | f): sum over g of mu_g pdf_L(d | g) = mu_f pdf_L(d | f), f the face of d (the
 /// denominator of Lu Eq. 3.2, only d's own face having density at d).
 pub fn mixture_pdf(weights: &[f64], r: u32, mu: &[f64; 6], d: DVec3) -> f64 {

@@ -1,8 +1,8 @@
 //! Discrete distributions with integer CDFs, built on the CPU in f64 and searched on the GPU
 //! by `select_light` (lights.glsl) and `env_sample` (envmap.glsl); `sample` mirrors that search.
 //!
-//! A 31-bit random integer r picks the first entry with r < upper[i]. The probability that is
-//! *realised* is therefore (upper[i] - upper[i-1]) / 2^31, exactly, and that (not the f64
+//! A 31-bit random integer r picks the first entry with `r < upper[i]`. The probability that is
+//! *realised* is therefore `(upper[i] - upper[i-1]) / 2^31`, exactly, and that (not the f64
 //! weight ratio) is what `probabilities` holds and what every pdf divides by, on both the
 //! light-sampling and the BSDF-sampling side of MIS: a float CDF searched with 24-bit random
 //! numbers realises probabilities that differ from the weights for small entries, which biases
@@ -18,7 +18,7 @@ pub const SCALE: f64 = (1u64 << 31) as f64;
 
 #[derive(Clone, Debug)]
 pub struct Distribution1D {
-    /// Realised probabilities, (upper[i] - upper[i-1]) / 2^31.
+    /// Realised probabilities, `(upper[i] - upper[i-1]) / 2^31`.
     pub probabilities: Vec<f64>,
     /// Exclusive upper bounds of each entry's range of 31-bit integers; the last is 2^31.
     pub upper: Vec<u32>,

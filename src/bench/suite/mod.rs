@@ -390,7 +390,7 @@ fn run_one(
     Ok(record)
 }
 
-/// The default output folder of a suite: out/bench/<name>, or out/bench/<name>-shard-i-of-n.
+/// The default output folder of a suite: `out/bench/<name>`, or `out/bench/<name>-shard-i-of-n`.
 pub fn default_out(suite: &Suite, shard: Shard) -> PathBuf {
     let name = if shard == Shard::WHOLE {
         suite.name.clone()

@@ -1,4 +1,4 @@
-//! The suite's output folder: results.json, results.csv, charts/<scene>.svg, report.md and
+//! The suite's output folder: results.json, results.csv, `charts/<scene>.svg`, report.md and
 //! images/ (thumbnails and error maps, written by the runner). Every file is written under a
 //! temporary name and renamed, so a reader (or a Ctrl-C) never sees half a file.
 

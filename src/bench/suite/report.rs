@@ -1,4 +1,4 @@
-//! report.md: what ran on what, then per scene its expected failure (the scene's [failure]
+//! report.md: what ran on what, then per scene its expected failure (the scene's `[failure]`
 //! table), its chart, a table of every run with the Pareto-optimal ones marked, and the
 //! thumbnails beside their error maps.
 

@@ -63,7 +63,7 @@ pub struct RunRecord {
     pub status: Status,
     /// Why a run was declined or failed.
     pub note: String,
-    /// The scene's [failure] table names this method.
+    /// The scene's `[failure]` table names this method.
     pub expected_failure: bool,
     /// The suite names this run's label among the scene's `home` methods (the ones it
     /// showcases).
@@ -145,7 +145,7 @@ pub struct ReferenceSummary {
     pub gpu_ms: Option<f64>,
     /// The reference's own relMSE, estimated from its two halves (references.rs).
     pub rel_mse: Option<f64>,
-    /// The scene's [failure] table: methods expected to fail, why, and the paper figure.
+    /// The scene's `[failure]` table: methods expected to fail, why, and the paper figure.
     pub expected_to_fail: Vec<String>,
     pub why: String,
     pub source: String,
