@@ -46,8 +46,16 @@ pub const METHODS: &[(&str, &str)] = &[
     ),
 ];
 
-/// Every method irad has, by name.
-pub const METHOD_NAMES: &[&str] = &["reference", "ir", "bir", "bundles", "env", "lightfield"];
+/// Every method irad has, by name (`METHODS`' names).
+pub const METHOD_NAMES: &[&str] = &{
+    let mut names = [""; METHODS.len()];
+    let mut i = 0;
+    while i < METHODS.len() {
+        names[i] = METHODS[i].0;
+        i += 1;
+    }
+    names
+};
 
 #[derive(Clone, Debug, PartialEq)]
 pub enum Method {

@@ -397,7 +397,8 @@ macro_rules! field_setting {
 }
 pub(crate) use field_setting;
 
-/// The `seed` and `pixel_centres` settings every method has (fields `seed` and `pixels`).
+/// Settings several methods share, on fields of the same name (`pixel_centres`: `pixels`;
+/// `clamp` and `compensate`: `clamp`); `frames` takes the method's help.
 macro_rules! common_settings {
     (seed) => {
         $crate::methods::settings::field_setting!(
@@ -406,6 +407,25 @@ macro_rules! common_settings {
             $crate::methods::settings::SEED,
             Count,
             "Seed of every random and quasi-random number: same seed, same device, same bits.",
+        )
+    };
+    (frames, $help:expr) => {
+        $crate::methods::settings::field_setting!(
+            "frames",
+            frames,
+            $crate::methods::settings::FRAMES,
+            Count,
+            $help,
+        )
+    };
+    (shadows) => {
+        $crate::methods::settings::field_setting!(
+            "shadows",
+            shadows,
+            $crate::methods::settings::Kind::Switch,
+            Switch,
+            "Shadow rays; false counts every sample as visible, as in the thesis's timings: for \
+             timing comparisons only, the image is wrong wherever light is occluded.",
         )
     };
     (pixel_centres) => {

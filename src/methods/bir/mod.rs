@@ -143,12 +143,9 @@ pub const SETTINGS: &[Setting<BirSettings>] = &[
         Count,
         "VPLs per frame, standard and reverse together (the candidates, with resampling).",
     ),
-    field_setting!(
-        "frames",
+    common_settings!(
         frames,
-        crate::methods::settings::FRAMES,
-        Count,
-        "Frames, each with fresh VPLs and fresh subpixel positions.",
+        "Frames, each with fresh VPLs and fresh subpixel positions."
     ),
     common_settings!(seed),
     Setting::new(

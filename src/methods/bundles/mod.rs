@@ -162,12 +162,9 @@ pub const SETTINGS: &[Setting<BundlesSettings>] = &[
         Count,
         "Iterations per frame, each one VPL and one global ray bundle (the paper's 21).",
     ),
-    field_setting!(
-        "frames",
+    common_settings!(
         frames,
-        crate::methods::settings::FRAMES,
-        Count,
-        "Frames, each with fresh VPLs, bundles and subpixel positions.",
+        "Frames, each with fresh VPLs, bundles and subpixel positions."
     ),
     common_settings!(seed),
     Setting::new(

@@ -145,12 +145,9 @@ pub const SETTINGS: &[Setting<EnvSettings>] = &[
         Count,
         "N_s: samples per pixel and frame, light and BRDF samples together.",
     ),
-    field_setting!(
-        "frames",
+    common_settings!(
         frames,
-        crate::methods::settings::FRAMES,
-        Count,
-        "Frames, each with fresh light samples and subpixel positions.",
+        "Frames, each with fresh light samples and subpixel positions."
     ),
     common_settings!(seed),
     Setting::new(
@@ -208,14 +205,7 @@ pub const SETTINGS: &[Setting<EnvSettings>] = &[
         },
     )
     .unset("half of spp"),
-    field_setting!(
-        "shadows",
-        shadows,
-        Kind::Switch,
-        Switch,
-        "Shadow rays; false counts every sample as visible, as in the thesis's timings: for \
-         timing comparisons only, the image is wrong wherever light is occluded.",
-    ),
+    common_settings!(shadows),
     field_setting!(
         "shared_samples",
         shared_samples,

@@ -98,12 +98,9 @@ pub const SETTINGS: &[Setting<IrSettings>] = &[
         Count,
         "Paths started on the lights per frame (Keller's N; about N / (1 - mean albedo) VPLs).",
     ),
-    field_setting!(
-        "frames",
+    common_settings!(
         frames,
-        crate::methods::settings::FRAMES,
-        Count,
-        "Frames, each with fresh VPLs and fresh subpixel positions.",
+        "Frames, each with fresh VPLs and fresh subpixel positions."
     ),
     common_settings!(seed),
     Setting::new(

@@ -121,12 +121,9 @@ pub const SETTINGS: &[Setting<LightfieldSettings>] = &[
         Count,
         "K: samples per pixel, luminaire and frame, spread over the images (Lu Eq. 4.16).",
     ),
-    field_setting!(
-        "frames",
+    common_settings!(
         frames,
-        crate::methods::settings::FRAMES,
-        Count,
-        "Frames, each with fresh samples and subpixel positions.",
+        "Frames, each with fresh samples and subpixel positions."
     ),
     field_setting!(
         "k_max",
@@ -178,14 +175,7 @@ pub const SETTINGS: &[Setting<LightfieldSettings>] = &[
         "One shadow ray per image toward its median point instead of one per sample (Lu \
          Section 4.5.2's approximation; biased at shadow edges).",
     ),
-    field_setting!(
-        "shadows",
-        shadows,
-        Kind::Switch,
-        Switch,
-        "Shadow rays; false counts every sample as visible, as in the thesis's timings: for \
-         timing comparisons only, the image is wrong wherever light is occluded.",
-    ),
+    common_settings!(shadows),
     common_settings!(rebuild_tables),
     common_settings!(pixel_centres),
 ];
