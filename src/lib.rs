@@ -10,7 +10,9 @@
 //! use irad::{Context, ContextOptions, GpuScene, Method, ReferenceSettings, Renderers};
 //!
 //! # fn main() -> anyhow::Result<()> {
-//! let ctx = Context::new(&ContextOptions::default())?; // the first GPU, else lavapipe
+//! // The first GPU, else lavapipe; from_env reads IRAD_DEVICE, IRAD_VALIDATE and
+//! // IRAD_FORCE_STAGING (ContextOptions::default() ignores the environment).
+//! let ctx = Context::new(&ContextOptions::from_env()?)?;
 //! let mut scene = irad::scene::default_scene();
 //! (scene.camera.width, scene.camera.height) = (32, 24);
 //! let gpu_scene = GpuScene::upload(&ctx, &scene)?;

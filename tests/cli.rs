@@ -79,6 +79,54 @@ fn a_bad_device_is_one_line_naming_it_and_the_devices() {
         &irad(&["--device", "no-such-gpu", "selfcheck"], &[]),
         &["no-such-gpu", "irad info"],
     );
+    // The same index from IRAD_DEVICE is named as the variable the user set.
+    let o = irad(&["selfcheck"], &[("IRAD_DEVICE", "99")]);
+    assert_clean_error(&o, &["IRAD_DEVICE=99:", "0: "]);
+    assert!(!stderr(&o).contains("--device"), "{}", stderr(&o));
+}
+
+/// Environment switches are read by their value: `IRAD_FORCE_STAGING=false` leaves staging
+/// off (it forced it by being present), and a value that is neither on nor off is an error
+/// naming the variable.
+#[test]
+fn environment_switches_are_read_by_value() {
+    let staging = |value: &str| {
+        let o = irad(&["info"], &[("IRAD_FORCE_STAGING", value)]);
+        (
+            o.status.success(),
+            String::from_utf8_lossy(&o.stdout).contains("staging: forced"),
+        )
+    };
+    for off in ["false", "0", "no", ""] {
+        assert_eq!(staging(off), (true, false), "IRAD_FORCE_STAGING={off:?}");
+    }
+    for on in ["1", "true", "yes"] {
+        assert_eq!(staging(on), (true, true), "IRAD_FORCE_STAGING={on:?}");
+    }
+    for (name, args) in [
+        ("IRAD_FORCE_STAGING", &["info"][..]),
+        ("IRAD_VALIDATE", &["methods"][..]),
+    ] {
+        assert_clean_error(
+            &irad(args, &[(name, "junk")]),
+            &[&format!("{name}=junk:"), "true", "false"],
+        );
+    }
+    // IRAD_VALIDATE=false leaves validation off: with no layer to be found (VK_LAYER_PATH),
+    // validation on is an error, so a selfcheck that passes shows it off.
+    let o = irad(
+        &["selfcheck"],
+        &[
+            ("IRAD_VALIDATE", "false"),
+            ("VK_LAYER_PATH", "/nonexistent"),
+        ],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = irad(
+        &["selfcheck"],
+        &[("IRAD_VALIDATE", "1"), ("VK_LAYER_PATH", "/nonexistent")],
+    );
+    assert_clean_error(&o, &["validation layer"]);
 }
 
 #[test]

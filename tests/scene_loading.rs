@@ -295,6 +295,28 @@ fn zero_resolution() {
     s.error(&["scene.toml: camera.resolution = [16, -3]"]);
 }
 
+/// An array of the wrong length is refused with its key and line, not cut to its first items
+/// (`position = [0, 1, 3, 9]` loaded as [0, 1, 3], `resolution = [16, 16, 3]` as 16x16).
+#[test]
+fn arrays_of_the_wrong_length_are_refused() {
+    let sky = "[environment]\nsky = \"moving-sun\"\nsize = [16, 8]\n";
+    let spot = "[[light]]\nkind = \"spot\"\nposition = [0, 1, 0]\nintensity = [1, 1, 1]\n\
+                direction = [0, -1, 0]\ncone_angle = 30\n";
+    for (from, to, key) in [
+        ("position = [0, 1, 3]", "position = [0, 1, 3, 9]", "position"),
+        ("resolution = [16, 16]", "resolution = [16, 16, 3]", "resolution"),
+        ("resolution = [16, 16]", "resolution = [16]", "resolution"),
+        ("intensity = [1, 1, 1]", "intensity = [1, 1, 1, 1]", "intensity"),
+        ("direction = [0, -1, 0]", "direction = [0, -1]", "direction"),
+        ("size = [16, 8]", "size = [16, 8, 2]", "size"),
+    ] {
+        let toml = format!("{CAMERA}{MESH}{spot}{sky}");
+        assert!(toml.contains(from), "{from}");
+        let s = scratch("array-length", &toml.replacen(from, to, 1), OBJ, MTL);
+        s.error(&["scene.toml", "invalid length", key]);
+    }
+}
+
 #[test]
 fn bad_fov() {
     for fov in ["0", "180", "-5", "nan"] {

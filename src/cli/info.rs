@@ -61,7 +61,7 @@ pub fn info(selector: Option<&DeviceSelector>) -> Result<()> {
             mib(d.device_local_heap)
         );
     }
-    if ContextOptions::force_staging_from_env() {
+    if ContextOptions::force_staging_from_env()? {
         println!(
             "staging: forced (IRAD_FORCE_STAGING): every buffer device-local only, written and \
              read through staging buffers, as on a discrete GPU"

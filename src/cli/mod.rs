@@ -23,8 +23,11 @@ use irad::gpu::{Context, ContextOptions, DeviceInfo, DeviceSelector, Validation}
 
 /// irad: many-light and light-source importance sampling, as Vulkan compute kernels.
 ///
-/// Environment: IRAD_VALIDATE=1 turns on the Khronos validation layer (as --validate does);
-/// IRAD_VULKAN_LIBRARY names a Vulkan loader to use instead of the system's libvulkan.so.1.
+/// Environment: IRAD_DEVICE stands for --device when the flag is not given; IRAD_VALIDATE=1
+/// turns on the Khronos validation layer (as --validate does); IRAD_FORCE_STAGING=1 puts
+/// every buffer behind staging copies, as on a discrete GPU. A switch takes 1, true or yes
+/// (on) or 0, false, no or empty (off); any other value is an error. IRAD_VULKAN_LIBRARY
+/// names a Vulkan loader to use instead of the system's libvulkan.so.1.
 #[derive(Parser)]
 #[command(name = "irad", version, about, long_about)]
 struct Cli {
@@ -102,27 +105,15 @@ pub fn main() -> ExitCode {
 fn run(mut cli: Cli) -> Result<()> {
     // IRAD_DEVICE stands for --device when the flag is not given (scripts/gpu-check.sh; the
     // tests read it too).
-    if cli.device.is_none() {
-        if let Ok(value) = std::env::var("IRAD_DEVICE") {
-            if !value.trim().is_empty() {
-                cli.device = Some(
-                    value
-                        .parse()
-                        .map_err(|e| anyhow::anyhow!("IRAD_DEVICE={value}: {e}"))?,
-                );
-            }
-        }
+    // Every variable is checked, whether or not its flag is given: a bad value is an error.
+    let mut options = ContextOptions::from_env()?;
+    if cli.device.is_some() {
+        options.device = cli.device.clone();
     }
-    let validation = if cli.validate {
-        Validation::On
-    } else {
-        Validation::from_env()
-    };
-    let options = ContextOptions {
-        device: cli.device.clone(),
-        validation,
-        force_staging: ContextOptions::force_staging_from_env(),
-    };
+    cli.device = options.device.clone();
+    if cli.validate {
+        options.validation = Validation::On;
+    }
     match cli.command {
         Command::Info => info::info(cli.device.as_ref()),
         Command::Render(args) => render::run(&options, args),

@@ -21,19 +21,30 @@ pub struct ContextOptions {
 }
 
 impl ContextOptions {
-    /// Whether IRAD_FORCE_STAGING asks for forced staging (set, not empty, not 0).
-    pub fn force_staging_from_env() -> bool {
-        matches!(std::env::var("IRAD_FORCE_STAGING"), Ok(v) if !v.is_empty() && v != "0")
+    /// Whether IRAD_FORCE_STAGING asks for forced staging (1, true or yes; an error naming
+    /// the variable for a value that is neither on nor off).
+    pub fn force_staging_from_env() -> GpuResult<bool> {
+        super::env_switch::read("IRAD_FORCE_STAGING")
+    }
+
+    /// The options the environment asks for: IRAD_DEVICE, IRAD_VALIDATE and
+    /// IRAD_FORCE_STAGING, each checked (an error names a variable whose value is not one).
+    pub fn from_env() -> GpuResult<Self> {
+        Ok(ContextOptions {
+            device: DeviceSelector::from_env().map_err(GpuError::Environment)?,
+            validation: Validation::from_env()?,
+            force_staging: Self::force_staging_from_env()?,
+        })
     }
 }
 
 impl Default for ContextOptions {
-    /// The best device; validation as IRAD_VALIDATE says, staging as IRAD_FORCE_STAGING says.
+    /// The best device, no validation, no forced staging (`from_env` reads the environment).
     fn default() -> Self {
         ContextOptions {
             device: None,
-            validation: Validation::from_env(),
-            force_staging: Self::force_staging_from_env(),
+            validation: Validation::Off,
+            force_staging: false,
         }
     }
 }

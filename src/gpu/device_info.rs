@@ -199,13 +199,62 @@ fn describe(
     })
 }
 
-/// `--device`: an index into `irad info`'s list, or a case-insensitive substring of a name.
+/// `--device` or IRAD_DEVICE: an index into `irad info`'s list, or a case-insensitive
+/// substring of a name, with where the user gave it (for messages).
 #[derive(Clone, Debug, PartialEq, Eq)]
-pub enum DeviceSelector {
+pub struct DeviceSelector {
+    pub by: DeviceBy,
+    /// Given as the `--device` flag or the IRAD_DEVICE variable.
+    pub origin: SelectorOrigin,
+}
+
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum DeviceBy {
     Index(usize),
     Name(String),
 }
 
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SelectorOrigin {
+    Flag,
+    Environment,
+}
+
+/// The variable that stands for `--device` when the flag is not given.
+pub const DEVICE_VARIABLE: &str = "IRAD_DEVICE";
+
+impl DeviceSelector {
+    /// IRAD_DEVICE's selector: None where it is unset or blank, an error naming the variable
+    /// where it is not a selector.
+    pub fn from_env() -> Result<Option<DeviceSelector>, String> {
+        match std::env::var(DEVICE_VARIABLE) {
+            Ok(v) if !v.trim().is_empty() => v
+                .parse::<DeviceSelector>()
+                .map(|s| {
+                    Some(DeviceSelector {
+                        origin: SelectorOrigin::Environment,
+                        ..s
+                    })
+                })
+                .map_err(|e| format!("{DEVICE_VARIABLE}={v}: {e}")),
+            Ok(_) | Err(std::env::VarError::NotPresent) => Ok(None),
+            Err(std::env::VarError::NotUnicode(v)) => Err(format!(
+                "{DEVICE_VARIABLE}={}: not valid UTF-8",
+                v.to_string_lossy()
+            )),
+        }
+    }
+
+    /// As the user wrote it: `--device 7` or `IRAD_DEVICE=7`.
+    pub fn shown(&self) -> String {
+        match self.origin {
+            SelectorOrigin::Flag => format!("--device {self}"),
+            SelectorOrigin::Environment => format!("{DEVICE_VARIABLE}={self}"),
+        }
+    }
+}
+
+/// Parses a `--device` value (origin `Flag`).
 impl std::str::FromStr for DeviceSelector {
     type Err = String;
     fn from_str(s: &str) -> Result<Self, String> {
@@ -216,18 +265,22 @@ impl std::str::FromStr for DeviceSelector {
                     .into(),
             );
         }
-        Ok(match s.parse::<usize>() {
-            Ok(i) => DeviceSelector::Index(i),
-            Err(_) => DeviceSelector::Name(s.to_string()),
+        let by = match s.parse::<usize>() {
+            Ok(i) => DeviceBy::Index(i),
+            Err(_) => DeviceBy::Name(s.to_string()),
+        };
+        Ok(DeviceSelector {
+            by,
+            origin: SelectorOrigin::Flag,
         })
     }
 }
 
 impl fmt::Display for DeviceSelector {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            DeviceSelector::Index(i) => write!(f, "{i}"),
-            DeviceSelector::Name(n) => write!(f, "{n}"),
+        match &self.by {
+            DeviceBy::Index(i) => write!(f, "{i}"),
+            DeviceBy::Name(n) => write!(f, "{n}"),
         }
     }
 }
@@ -246,7 +299,7 @@ pub fn choose(devices: &[DeviceInfo], selector: Option<&DeviceSelector>) -> GpuR
             .join(", ")
     };
     let bad = |value: &DeviceSelector, reason: &str| GpuError::BadDeviceSelector {
-        value: value.to_string(),
+        value: value.shown(),
         reason: reason.to_string(),
         available: available(),
     };
@@ -257,7 +310,12 @@ pub fn choose(devices: &[DeviceInfo], selector: Option<&DeviceSelector>) -> GpuR
             .min_by_key(|d| (d.kind, d.index))
             .map(|d| d.index)
             .ok_or(GpuError::NoDevice),
-        Some(sel @ DeviceSelector::Index(i)) => match devices.get(*i) {
+        Some(
+            sel @ DeviceSelector {
+                by: DeviceBy::Index(i),
+                ..
+            },
+        ) => match devices.get(*i) {
             None => Err(bad(sel, "no device has that index")),
             Some(d) if !usable(d) => Err(bad(
                 sel,
@@ -265,7 +323,12 @@ pub fn choose(devices: &[DeviceInfo], selector: Option<&DeviceSelector>) -> GpuR
             )),
             Some(d) => Ok(d.index),
         },
-        Some(sel @ DeviceSelector::Name(name)) => {
+        Some(
+            sel @ DeviceSelector {
+                by: DeviceBy::Name(name),
+                ..
+            },
+        ) => {
             let needle = name.to_lowercase();
             let matches: Vec<&DeviceInfo> = devices
                 .iter()
@@ -344,5 +407,15 @@ mod tests {
             "{err}"
         );
         assert!("  ".parse::<DeviceSelector>().is_err());
+        // A selector from IRAD_DEVICE is named as the variable, not as the flag.
+        let from_env = DeviceSelector {
+            origin: SelectorOrigin::Environment,
+            ..("99".parse().unwrap())
+        };
+        let err = choose(&d, Some(&from_env)).unwrap_err().to_string();
+        assert!(
+            err.contains("IRAD_DEVICE=99:") && !err.contains("--device"),
+            "{err}"
+        );
     }
 }

@@ -20,7 +20,15 @@ pub enum GpuError {
     )]
     ValidationLayerMissing,
 
-    #[error("--device {value}: {reason}; the devices are: {available} (see `irad info`)")]
+    #[error("{name}={value}: expected 1, true or yes (on) or 0, false, no or empty (off)")]
+    EnvSwitch { name: String, value: String },
+
+    /// An environment variable's value that is not what it takes (the message names it).
+    #[error("{0}")]
+    Environment(String),
+
+    /// `value` as the user gave it: `--device 7` or `IRAD_DEVICE=7`.
+    #[error("{value}: {reason}; the devices are: {available} (see `irad info`)")]
     BadDeviceSelector {
         value: String,
         reason: String,

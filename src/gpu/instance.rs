@@ -34,12 +34,14 @@ pub enum Validation {
 }
 
 impl Validation {
-    /// `IRAD_VALIDATE=1` (or any value but `0` and empty) turns validation on.
-    pub fn from_env() -> Self {
-        match std::env::var("IRAD_VALIDATE") {
-            Ok(v) if !v.is_empty() && v != "0" => Validation::On,
-            _ => Validation::Off,
-        }
+    /// `IRAD_VALIDATE=1` (or true, yes) turns validation on; unset, empty, 0, false or no
+    /// leave it off; any other value is an error naming the variable.
+    pub fn from_env() -> GpuResult<Self> {
+        Ok(if super::env_switch::read("IRAD_VALIDATE")? {
+            Validation::On
+        } else {
+            Validation::Off
+        })
     }
 }
 

@@ -3,6 +3,7 @@
 use glam::Vec3;
 
 use super::file::{fmt3, CameraFile};
+use super::obj::MAX_COORDINATE;
 use super::{Camera, SceneError};
 
 /// Largest width or height accepted: anything larger is a typo, not a frame.
@@ -22,6 +23,20 @@ pub fn build(file: &str, c: &CameraFile) -> Result<Camera, SceneError> {
     ] {
         if !v.iter().all(|x| x.is_finite()) {
             return Err(invalid(field, fmt3(v), "must be finite"));
+        }
+    }
+    // Beyond the vertices' limit the view direction's f32 arithmetic overflows (at 1e30,
+    // look_at - position squared is infinite and the direction came out zero).
+    for (field, v) in [("position", c.position), ("look_at", c.look_at)] {
+        if v.iter().any(|x| x.abs() > MAX_COORDINATE) {
+            return Err(invalid(
+                field,
+                fmt3(v),
+                &format!(
+                    "a coordinate's magnitude is over {MAX_COORDINATE:e}, the most irad's f32 \
+                     rays handle (scale the scene down)"
+                ),
+            ));
         }
     }
     if !(c.fov_y > 0.0 && c.fov_y < 180.0) {
@@ -113,6 +128,37 @@ mod tests {
         let c = build("s.toml", &camera()).unwrap();
         assert_eq!((c.width, c.height, c.fov_y), (256, 128, 40.0));
         assert_eq!(c.up, Vec3::Y);
+    }
+
+    #[test]
+    fn a_camera_beyond_the_coordinate_limit_is_named_as_such() {
+        // At 1e30 the view direction's arithmetic overflows: this was reported as "look_at
+        // equals camera.position".
+        let m = message(CameraFile {
+            position: [0.0, 0.0, 1e30],
+            ..camera()
+        });
+        assert!(
+            m.contains("camera.position = [0, 0, 1000000000000000000000000000000]")
+                && m.contains("magnitude is over 1e8"),
+            "{m}"
+        );
+        let m = message(CameraFile {
+            look_at: [-2e8, 0.0, 0.0],
+            ..camera()
+        });
+        assert!(
+            m.contains("camera.look_at") && m.contains("over 1e8"),
+            "{m}"
+        );
+        assert!(build(
+            "s.toml",
+            &CameraFile {
+                position: [0.0, 1.0, 1e8],
+                ..camera()
+            }
+        )
+        .is_ok());
     }
 
     #[test]

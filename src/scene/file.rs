@@ -3,6 +3,7 @@
 
 use serde::Deserialize;
 
+use super::toml_arrays::{exact, exact_opt};
 use super::SceneError;
 
 #[derive(Debug, Deserialize)]
@@ -23,12 +24,15 @@ pub struct SceneFile {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct CameraFile {
+    #[serde(deserialize_with = "exact")]
     pub position: [f32; 3],
+    #[serde(deserialize_with = "exact")]
     pub look_at: [f32; 3],
-    #[serde(default = "default_up")]
+    #[serde(default = "default_up", deserialize_with = "exact")]
     pub up: [f32; 3],
     pub fov_y: f32,
     /// Signed so that zero and negative sizes get the loader's message, not serde's.
+    #[serde(deserialize_with = "exact")]
     pub resolution: [i64; 2],
 }
 
@@ -46,8 +50,11 @@ pub struct MeshFile {
 #[serde(deny_unknown_fields)]
 pub struct LightFile {
     pub kind: String,
+    #[serde(deserialize_with = "exact")]
     pub position: [f32; 3],
+    #[serde(deserialize_with = "exact")]
     pub intensity: [f32; 3],
+    #[serde(default, deserialize_with = "exact_opt")]
     pub direction: Option<[f32; 3]>,
     pub cone_angle: Option<f32>,
     pub falloff_angle: Option<f32>,
@@ -59,11 +66,14 @@ pub struct LuminairePlacementFile {
     /// The luminaire's TOML, relative to the scene file.
     pub path: String,
     /// Where the luminaire's filter-plane origin sits.
+    #[serde(deserialize_with = "exact")]
     pub position: [f32; 3],
     /// A point the luminaire's +z (its emission axis) points at.
+    #[serde(deserialize_with = "exact")]
     pub look_at: [f32; 3],
     /// The world direction the luminaire's +y leans toward (default +Y; -Z when aimed
     /// straight up or down).
+    #[serde(default, deserialize_with = "exact_opt")]
     pub up: Option<[f32; 3]>,
 }
 
@@ -76,6 +86,7 @@ pub struct EnvironmentFile {
     /// A built-in procedural sky instead of `exr`: "moving-sun" (src/scene/sky.rs).
     pub sky: Option<String>,
     /// sky: texels across and down (signed so that bad sizes get the loader's message).
+    #[serde(default, deserialize_with = "exact_opt")]
     pub size: Option<[i64; 2]>,
     /// sky: frames in one revolution of the sun (one map per frame).
     pub frames: Option<i64>,
@@ -84,6 +95,7 @@ pub struct EnvironmentFile {
     /// sky: the sun disk's angular radius, degrees.
     pub sun_radius: Option<f32>,
     /// sky: the sun disk's radiance.
+    #[serde(default, deserialize_with = "exact_opt")]
     pub sun_radiance: Option<[f32; 3]>,
     #[serde(default = "default_scale")]
     pub scale: f32,

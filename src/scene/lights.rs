@@ -3,6 +3,7 @@
 use glam::Vec3;
 
 use super::file::{fmt3, LightFile};
+use super::obj::MAX_COORDINATE;
 use super::{Light, SceneError};
 
 /// Builds `light[index]`.
@@ -15,6 +16,16 @@ pub fn build(file: &str, index: usize, l: &LightFile) -> Result<Light, SceneErro
     };
     if !l.position.iter().all(|x| x.is_finite()) {
         return Err(invalid("position", fmt3(l.position), "must be finite"));
+    }
+    if l.position.iter().any(|x| x.abs() > MAX_COORDINATE) {
+        return Err(invalid(
+            "position",
+            fmt3(l.position),
+            &format!(
+                "a coordinate's magnitude is over {MAX_COORDINATE:e}, the most irad's f32 rays \
+                 handle (scale the scene down)"
+            ),
+        ));
     }
     if !l.intensity.iter().all(|x| x.is_finite() && *x >= 0.0) {
         return Err(invalid(

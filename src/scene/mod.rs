@@ -137,6 +137,7 @@ pub mod luminaire;
 mod mtl;
 mod obj;
 pub mod sky;
+pub(crate) mod toml_arrays;
 
 pub use error::SceneError;
 pub use load::{default_scene, load, load_str, DEGENERATE_AREA};

@@ -21,18 +21,13 @@ pub fn with_gpu(test: impl FnOnce(&Context)) {
     }
     // IRAD_DEVICE picks the device as --device does (scripts/gpu-check.sh); IRAD_FORCE_STAGING
     // puts every buffer behind staging copies (scripts/test.sh runs the GPU tests so once more).
-    let device = std::env::var("IRAD_DEVICE")
-        .ok()
-        .filter(|v| !v.trim().is_empty())
-        .map(|v| v.parse().unwrap_or_else(|e| panic!("IRAD_DEVICE={v}: {e}")));
     let options = ContextOptions {
-        device,
         validation: if validate {
             Validation::On
         } else {
             Validation::Off
         },
-        force_staging: ContextOptions::force_staging_from_env(),
+        ..ContextOptions::from_env().unwrap_or_else(|e| panic!("{e}"))
     };
     let ctx = Context::new(&options).unwrap_or_else(|e| panic!("no GPU context: {e}"));
     let log = ctx.validation_log();

@@ -12,6 +12,7 @@ use thiserror::Error;
 
 use crate::methods::{Method, ParamError, METHOD_NAMES};
 use crate::scene::hash::Fnv1a64;
+use crate::scene::toml_arrays::exact_opt;
 use crate::scene::{self, Scene, SceneError};
 
 /// The largest time budget a suite may ask for: a day.
@@ -83,6 +84,7 @@ fn four() -> i64 {
 #[serde(deny_unknown_fields)]
 struct SceneEntry {
     path: String,
+    #[serde(default, deserialize_with = "exact_opt")]
     resolution: Option<[i64; 2]>,
     reference_spp: Option<i64>,
     /// The reference's max_depth for this scene (1: direct light, for a method that

@@ -34,6 +34,7 @@ use glam::Vec3;
 use serde::Deserialize;
 
 use super::environment::{expand_glob, is_glob, split_glob};
+use super::toml_arrays::exact;
 use super::SceneError;
 use crate::image::{exr, Image};
 
@@ -140,10 +141,13 @@ pub struct Luminaire {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct LuminaireFile {
+    #[serde(deserialize_with = "exact")]
     grid: [i64; 2],
+    #[serde(deserialize_with = "exact")]
     pitch: [f64; 2],
     basis: String,
     delta: f64,
+    #[serde(deserialize_with = "exact")]
     image_size: [f64; 2],
     atlas: String,
 }
