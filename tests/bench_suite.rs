@@ -640,6 +640,15 @@ fn bad_suite_files_name_file_field_and_value() {
         "path = \"embedded:cornell-box\"\nresolution = [0, 16]",
     );
     assert!(e.contains("scene[0].resolution = [0, 16]"), "{e}");
+    // An array too long is refused, not cut to its first two numbers.
+    let e = with(
+        "path = \"embedded:cornell-box\"",
+        "path = \"embedded:cornell-box\"\nresolution = [16, 16, 3]",
+    );
+    assert!(
+        e.contains("invalid length 3") && e.contains("resolution"),
+        "{e}"
+    );
     let e = with("spp = 32", "spp = 32\nseed = 2");
     assert!(
         e.contains("reference.seed = 2: the reference of scene[0] would share"),

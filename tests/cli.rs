@@ -409,6 +409,23 @@ fn file_and_seed_errors_say_it_once_and_name_the_path() {
     );
     assert_clean_error(&o, &["68719476736 texels an atlas", "GiB", "4 GiB"]);
     assert!(!std::path::Path::new("/tmp/irad-never-written/images.exr").exists());
+    // The flag's own limit is the library's: 16384 passed the flag, then failed with another.
+    let o = irad(
+        &[
+            "luminaire",
+            "generate",
+            "--resolution",
+            "16384x16384",
+            "-o",
+            "/tmp/irad-never-written",
+        ],
+        &[],
+    );
+    let err = stderr(&o);
+    assert!(
+        !o.status.success() && err.contains("'--resolution") && err.contains("1..=4096"),
+        "{err}"
+    );
 
     for seed in ["-1", "4294967296", "x"] {
         let o = irad(&["render", "--seed", seed, "--spp", "1"], &[]);

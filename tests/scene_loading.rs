@@ -293,6 +293,11 @@ fn zero_resolution() {
     let toml = good_toml().replace("resolution = [16, 16]", "resolution = [16, -3]");
     let s = scratch("negative-res", &toml, OBJ, MTL);
     s.error(&["scene.toml: camera.resolution = [16, -3]"]);
+    // One limit for scene files, suite files and WxH flags (scenes took 65536, suites 16384).
+    let toml = good_toml().replace("resolution = [16, 16]", "resolution = [16385, 16]");
+    let s = scratch("wide-res", &toml, OBJ, MTL);
+    s.error(&["camera.resolution = [16385, 16]", "1..=16384"]);
+    assert_eq!(scene::MAX_RESOLUTION, 16384);
 }
 
 /// An array of the wrong length is refused with its key and line, not cut to its first items
@@ -303,10 +308,22 @@ fn arrays_of_the_wrong_length_are_refused() {
     let spot = "[[light]]\nkind = \"spot\"\nposition = [0, 1, 0]\nintensity = [1, 1, 1]\n\
                 direction = [0, -1, 0]\ncone_angle = 30\n";
     for (from, to, key) in [
-        ("position = [0, 1, 3]", "position = [0, 1, 3, 9]", "position"),
-        ("resolution = [16, 16]", "resolution = [16, 16, 3]", "resolution"),
+        (
+            "position = [0, 1, 3]",
+            "position = [0, 1, 3, 9]",
+            "position",
+        ),
+        (
+            "resolution = [16, 16]",
+            "resolution = [16, 16, 3]",
+            "resolution",
+        ),
         ("resolution = [16, 16]", "resolution = [16]", "resolution"),
-        ("intensity = [1, 1, 1]", "intensity = [1, 1, 1, 1]", "intensity"),
+        (
+            "intensity = [1, 1, 1]",
+            "intensity = [1, 1, 1, 1]",
+            "intensity",
+        ),
         ("direction = [0, -1, 0]", "direction = [0, -1]", "direction"),
         ("size = [16, 8]", "size = [16, 8, 2]", "size"),
     ] {

@@ -5,7 +5,8 @@ use std::path::PathBuf;
 use anyhow::{Context as _, Result};
 use clap::Subcommand;
 
-use super::{parse_size, progress};
+use super::{parse_size_up_to, progress};
+use irad::scene::luminaire::emitters::{MAX_GRID, MAX_IMAGE_RESOLUTION};
 
 #[derive(Subcommand)]
 pub enum LuminaireCommand {
@@ -24,10 +25,10 @@ pub struct GenerateArgs {
     #[arg(long, value_enum, default_value_t = EmitterArg::Headlight)]
     emitter: EmitterArg,
     /// Basis functions on the filter plane, WxH (the thesis's car headlight: 11x9).
-    #[arg(long, value_parser = parse_size, default_value = "11x9")]
+    #[arg(long, value_parser = |s: &str| parse_size_up_to(s, MAX_GRID), default_value = "11x9")]
     grid: (u32, u32),
     /// Texels per image, WxH (the thesis: 256x256).
-    #[arg(long, value_parser = parse_size, default_value = "64x64")]
+    #[arg(long, value_parser = |s: &str| parse_size_up_to(s, MAX_IMAGE_RESOLUTION), default_value = "64x64")]
     resolution: (u32, u32),
     #[arg(long, value_enum, default_value_t = BasisArg::QuadraticBspline)]
     basis: BasisArg,

@@ -126,15 +126,21 @@ fn run(mut cli: Cli) -> Result<()> {
     }
 }
 
-/// `WIDTHxHEIGHT`, each in 1..=16384.
+/// An image size, `WIDTHxHEIGHT`, each in 1..=`irad::scene::MAX_RESOLUTION` (as in scene
+/// and suite files).
 pub(crate) fn parse_size(s: &str) -> Result<(u32, u32), String> {
-    let bad = || format!("`{s}`: expected WIDTHxHEIGHT, each in 1..=16384");
+    parse_size_up_to(s, irad::scene::MAX_RESOLUTION)
+}
+
+/// `WIDTHxHEIGHT`, each in 1..=max.
+pub(crate) fn parse_size_up_to(s: &str, max: u32) -> Result<(u32, u32), String> {
+    let bad = || format!("`{s}`: expected WIDTHxHEIGHT, each in 1..={max}");
     let (w, h) = s.split_once('x').ok_or_else(bad)?;
     let parse = |t: &str| {
         t.trim()
             .parse::<u32>()
             .ok()
-            .filter(|v| (1..=16384).contains(v))
+            .filter(|v| (1..=max).contains(v))
     };
     Ok((parse(w).ok_or_else(bad)?, parse(h).ok_or_else(bad)?))
 }

@@ -6,8 +6,10 @@ use super::file::{fmt3, CameraFile};
 use super::obj::MAX_COORDINATE;
 use super::{Camera, SceneError};
 
-/// Largest width or height accepted: anything larger is a typo, not a frame.
-pub const MAX_RESOLUTION: i64 = 65536;
+/// Largest width or height of an image, the same for scene files, suite files and every
+/// `WxH` flag: Vulkan's guaranteed maxImageDimension2D on desktop GPUs, and a frame larger
+/// than that is a typo. Whether a size fits the device's buffers is checked before rendering.
+pub const MAX_RESOLUTION: u32 = 16384;
 
 pub fn build(file: &str, c: &CameraFile) -> Result<Camera, SceneError> {
     let invalid = |field: &str, value: String, problem: &str| SceneError::Invalid {
@@ -47,7 +49,8 @@ pub fn build(file: &str, c: &CameraFile) -> Result<Camera, SceneError> {
         ));
     }
     let [w, h] = c.resolution;
-    if !(1..=MAX_RESOLUTION).contains(&w) || !(1..=MAX_RESOLUTION).contains(&h) {
+    let range = 1..=i64::from(MAX_RESOLUTION);
+    if !range.contains(&w) || !range.contains(&h) {
         return Err(invalid(
             "resolution",
             format!("[{w}, {h}]"),

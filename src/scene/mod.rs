@@ -139,5 +139,6 @@ mod obj;
 pub mod sky;
 pub(crate) mod toml_arrays;
 
+pub use camera::MAX_RESOLUTION;
 pub use error::SceneError;
 pub use load::{default_scene, load, load_str, DEGENERATE_AREA};

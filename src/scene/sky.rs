@@ -64,11 +64,12 @@ impl MovingSun {
         }
         let d = MovingSun::default();
         let [w, h] = env.size.unwrap_or([d.width as i64, d.height as i64]);
-        if !(1..=16384).contains(&w) || !(1..=16384).contains(&h) {
+        let range = 1..=i64::from(super::camera::MAX_RESOLUTION);
+        if !range.contains(&w) || !range.contains(&h) {
             return Err(invalid(
                 "size",
                 format!("[{w}, {h}]"),
-                "each must be in 1..=16384",
+                &format!("each must be in 1..={}", super::camera::MAX_RESOLUTION),
             ));
         }
         let frames = env.frames.unwrap_or(d.frames as i64);

@@ -13,6 +13,7 @@ use thiserror::Error;
 use crate::methods::{Method, ParamError, METHOD_NAMES};
 use crate::scene::hash::Fnv1a64;
 use crate::scene::toml_arrays::exact_opt;
+use crate::scene::MAX_RESOLUTION;
 use crate::scene::{self, Scene, SceneError};
 
 /// The largest time budget a suite may ask for: a day.
@@ -240,20 +241,26 @@ impl Suite {
                 "flicker needs 2 or more frames (0 turns it off)",
             ));
         }
+        // The scene files' limit on a width or height.
+        let sizes = 1..=i64::from(MAX_RESOLUTION);
         if let Some(w) = f.width {
-            if !(1..=16384).contains(&w) {
-                return Err(field("width", w.to_string(), "must be in 1..=16384"));
+            if !sizes.contains(&w) {
+                return Err(field(
+                    "width",
+                    w.to_string(),
+                    &format!("must be in 1..={MAX_RESOLUTION}"),
+                ));
             }
         }
         let check_resolution = |name: &str, r: Option<[i64; 2]>| match r {
             None => Ok(None),
-            Some([w, h]) if (1..=16384).contains(&w) && (1..=16384).contains(&h) => {
+            Some([w, h]) if sizes.contains(&w) && sizes.contains(&h) => {
                 Ok(Some((w as u32, h as u32)))
             }
             Some([w, h]) => Err(field(
                 name,
                 format!("[{w}, {h}]"),
-                "width and height must be in 1..=16384",
+                &format!("width and height must be in 1..={MAX_RESOLUTION}"),
             )),
         };
 

@@ -24,6 +24,11 @@ pub enum EmitterKind {
 
 /// Frames a sequence has at most (`--frames`).
 pub const MAX_FRAMES: u32 = 256;
+/// Basis functions along a side of the filter plane's grid at most (`--grid`).
+pub const MAX_GRID: u32 = 64;
+/// Texels along a side of an image at most (`--resolution`); the CLI refuses more when it
+/// parses the flag, with the same limit.
+pub const MAX_IMAGE_RESOLUTION: u32 = 4096;
 
 /// What `irad luminaire generate` builds: its flags, less the output folder.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -172,7 +177,11 @@ impl GenerateOptions {
         if grid.0 == 0 || grid.1 == 0 || resolution.0 == 0 || resolution.1 == 0 {
             return Err(GenerateError::Empty { grid, resolution });
         }
-        if !(grid.0 <= 64 && grid.1 <= 64 && resolution.0 <= 4096 && resolution.1 <= 4096) {
+        if !(grid.0 <= MAX_GRID
+            && grid.1 <= MAX_GRID
+            && resolution.0 <= MAX_IMAGE_RESOLUTION
+            && resolution.1 <= MAX_IMAGE_RESOLUTION)
+        {
             return Err(GenerateError::TooLarge);
         }
         // Sizes up front (issue 22 item 1d): the renderer holds each atlas as one storage buffer of
