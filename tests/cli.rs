@@ -472,18 +472,14 @@ fn forced_staging_is_reported_and_changes_no_pixel() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
-/// Sizes that can never run are refused before any rendering, naming the device limit (issue
-/// 22 item 1e).
+/// Sizes that cannot run on the device are refused before any rendering in the user's words:
+/// the setting, scene field or file at fault and the largest value that fits, never an
+/// internal buffer's name (they were refused as `CubeWeights`, `GBuffer`, `BundleHits`, `Vpls`).
 #[test]
 fn sizes_over_the_device_limits_are_refused_before_rendering() {
-    let glossy = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/scenes/failure/glossy-cornell/scene.toml"
-    );
-    // BundleHits at 65536 iterations on 256x256 pixels is 11 GB, over any device's range (a
-    // u32; 3.4 GB at spot-light's 160x120 would fit a discrete GPU's); ir's
-    // 1048576 VPLs (the most --vpls takes) need 156716096 bytes, over lavapipe's 128 MiB but
-    // within a discrete GPU's range, where that case would render and is left out.
+    let scenes = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes");
+    let glossy = format!("{scenes}/failure/glossy-cornell/scene.toml");
+    let env = format!("{scenes}/glossy-env/scene.toml");
     let range = irad::gpu::list_devices()
         .ok()
         .and_then(|d| {
@@ -491,34 +487,114 @@ fn sizes_over_the_device_limits_are_refused_before_rendering() {
             d.into_iter().find(|x| x.index == i)
         })
         .map_or(u64::MAX, |d| d.max_storage_buffer_range);
-    let bundles = [
+    let dir = temp_dir("device-limits");
+    // 16384^2 pixels at 64 bytes (the G-buffer) is 16 GiB, over any device's range.
+    let big = dir.join("big.toml");
+    std::fs::write(
+        &big,
+        format!(
+            "[camera]\nposition = [0, 1, 3.4]\nlook_at = [0, 1, 0]\nfov_y = 40\n\
+             resolution = [16384, 16384]\n[[mesh]]\nobj = \"{scenes}/cornell-box/cornell-box.obj\"\n"
+        ),
+    )
+    .unwrap();
+    let big = big.to_str().unwrap().to_string();
+    let out = dir.join("never").to_str().unwrap().to_string();
+    // The largest face resolution: 6 R^2 f32s within the range.
+    let faces = irad::methods::device_fit::largest_fitting(4096, range, |r| 24 * r * r);
+    let faces_text = faces.to_string();
+    let bundles: Vec<&str> = vec![
         "render",
-        glossy,
+        &glossy,
         "--method",
         "bundles",
         "--iterations",
         "65536",
     ];
-    let ir = ["render", "--method", "ir", "--vpls", "1048576"];
-    let mut cases: Vec<(&[&str], &str)> = vec![(&bundles, "BundleHits")];
-    if range < 156_716_096 {
-        cases.push((&ir, "Vpls"));
+    let cube: Vec<&str> = vec![
+        "render",
+        &env,
+        "--method",
+        "env",
+        "--face-resolution",
+        "4096",
+    ];
+    let pixels: Vec<&str> = vec!["render", &big];
+    let ir: Vec<&str> = vec!["render", "--method", "ir", "--vpls", "1048576"];
+    // BundleHits at 65536 iterations on 256x256 pixels is 11 GB, over any device's range;
+    // ir's 1048576 VPLs need 156716096 bytes, over lavapipe's 128 MiB but within a discrete
+    // GPU's; the cube at 4096 needs 402653184 bytes, the same.
+    let mut cases: Vec<(Vec<&str>, Vec<&str>)> = vec![
+        (
+            bundles,
+            vec![
+                "iterations = 65536 (--iterations)",
+                "the largest that fits is",
+            ],
+        ),
+        (
+            pixels,
+            vec![
+                "big.toml: camera.resolution = [16384, 16384]",
+                "at most",
+                "pixels",
+            ],
+        ),
+    ];
+    if range < 402_653_184 {
+        cases.push((
+            cube,
+            vec![
+                "face_resolution = 4096 (--face-resolution)",
+                "the largest that fits is",
+            ],
+        ));
     }
-    for (args, buffer) in cases {
+    if range < 156_716_096 {
+        cases.push((
+            ir,
+            vec!["vpls = 1048576 (--vpls)", "the largest that fits is"],
+        ));
+    }
+    for (mut args, needles) in cases {
+        args.extend(["-o", &out]);
         let start = std::time::Instant::now();
-        let o = irad(args, &[]);
-        let err = stderr(&o);
-        assert!(!o.status.success() && !err.contains("panicked"), "{err}");
-        assert!(
-            err.contains(buffer) && err.contains("maxStorageBufferRange"),
-            "{err}"
-        );
+        let o = irad(&args, &[]);
+        let mut needles = needles;
+        needles.push("maxStorageBufferRange");
+        assert_clean_error(&o, &needles);
+        for internal in ["CubeWeights", "GBuffer", "BundleHits", "Vpls`", "buffer `"] {
+            assert!(!stderr(&o).contains(internal), "{}", stderr(&o));
+        }
         assert!(
             start.elapsed().as_secs() < 20,
             "{args:?} took {:?}",
             start.elapsed()
         );
+        assert!(!dir.join("never.exr").exists());
     }
+    // The largest face resolution the message gives renders.
+    if range < 402_653_184 {
+        let o = irad(
+            &[
+                "render",
+                &env,
+                "--method",
+                "env",
+                "--face-resolution",
+                &faces_text,
+                "--spp",
+                "2",
+                "--frames",
+                "1",
+                "-o",
+                &out,
+            ],
+            &[],
+        );
+        assert!(o.status.success(), "{}", stderr(&o));
+    }
+    std::fs::remove_dir_all(&dir).ok();
 }
 
 /// A long render shows a progress bar with its time left (issue 22 item 1i: `--spp 2000000000`

@@ -23,6 +23,11 @@ pub enum GpuError {
     #[error("{name}={value}: expected 1, true or yes (on) or 0, false, no or empty (off)")]
     EnvSwitch { name: String, value: String },
 
+    /// A size the user chose that this device cannot hold, said in the user's words
+    /// (methods/device_fit.rs).
+    #[error("{0}")]
+    DoesNotFit(String),
+
     /// An environment variable's value that is not what it takes (the message names it).
     #[error("{0}")]
     Environment(String),

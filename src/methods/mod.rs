@@ -6,6 +6,7 @@ pub mod bir;
 pub mod bsdf_draws;
 pub mod bundles;
 pub mod compensation;
+pub mod device_fit;
 pub mod direct;
 pub mod direct_alpha;
 pub mod envmap;

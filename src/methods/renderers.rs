@@ -12,7 +12,7 @@ use crate::methods::envmap::{Env, EnvError};
 use crate::methods::ir::{InstantRadiosity, IrError};
 use crate::methods::lightfield::{Lightfield, LightfieldError};
 use crate::methods::reference::Reference;
-use crate::methods::{Method, RenderOutput};
+use crate::methods::{device_fit, Method, RenderOutput};
 use crate::scene::gpu::GpuScene;
 use crate::scene::Scene;
 
@@ -49,6 +49,8 @@ impl Renderers {
         if let Some(why) = method.declines(scene) {
             return Err(RunError::Declined(why));
         }
+        device_fit::check_method(method, scene, ctx.info().max_storage_buffer_range)
+            .map_err(|e| RunError::Gpu(GpuError::DoesNotFit(e)))?;
         match method {
             Method::Reference(settings) => {
                 let r = get_or_try_init(&self.reference, || Reference::new(ctx))?;

@@ -10,7 +10,7 @@ use bytemuck::{Pod, Zeroable};
 use glam::{Vec3, Vec4};
 
 use crate::bvh::{Bvh, GpuBvh};
-use crate::gpu::{bind, Binding, Buffer, Commands, Context, GpuBuffer, GpuResult};
+use crate::gpu::{bind, Binding, Buffer, Commands, Context, GpuBuffer, GpuError, GpuResult};
 use crate::sampling::distribution::Distribution1D;
 use crate::sampling::environment::{luminance, sampling_weights, texel_solid_angle};
 
@@ -235,6 +235,8 @@ fn light_power(light: &Light) -> f64 {
 
 impl GpuScene {
     pub fn upload(ctx: &Context, scene: &Scene) -> GpuResult<GpuScene> {
+        crate::methods::device_fit::check_scene(scene, ctx.info().max_storage_buffer_range)
+            .map_err(GpuError::DoesNotFit)?;
         let positions: Vec<[Vec3; 3]> = scene.triangles.iter().map(|t| t.positions).collect();
         let bvh = Bvh::build(&positions);
         let (centre, radius) = bounds(scene);
