@@ -639,7 +639,9 @@ fn a_setting_beside_a_strategy_it_does_not_apply_to_is_refused() {
     let o = irad(&["methods", "env"], &[]);
     let out = String::from_utf8_lossy(&o.stdout);
     assert!(
-        out.contains("Only with strategy = \"alpha\", at most spp (refused beside other values)."),
+        out.contains(
+            "Only with strategy = \"alpha\" and at most spp (refused beside other values)."
+        ),
         "{out}"
     );
 }

@@ -421,7 +421,7 @@ impl Need {
     }
 }
 
-/// A setting's needs in words, for help: `with strategy = "alpha", at most spp`.
+/// A setting's needs in words, for help: `with strategy = "alpha" and at most spp`.
 pub fn describe_needs(needs: &[Need]) -> String {
     needs
         .iter()
@@ -430,7 +430,7 @@ pub fn describe_needs(needs: &[Need]) -> String {
             _ => format!("with {}", n.describe()),
         })
         .collect::<Vec<_>>()
-        .join(", ")
+        .join(" and ")
 }
 
 /// `a`, `a or b`, `a, b or c`.
