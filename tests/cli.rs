@@ -719,3 +719,70 @@ fn method_flags_methods_and_export() {
     assert_clean_error(&o, &["Mitsuba has no light-field luminaires"]);
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// A switch given its value after a space takes the value as the scene: the error names the
+/// switch and how to write it, whatever the value (`off`, not only true or false).
+#[test]
+fn a_switch_followed_by_its_value_gets_a_tip_naming_the_switch() {
+    let o = irad(
+        &["render", "--method", "bundles", "--two-bounce", "off"],
+        &[],
+    );
+    assert_clean_error(
+        &o,
+        &["scene `off` not found: --two-bounce is a switch and takes its value after `=` (`--two-bounce=false`)"],
+    );
+    let o = irad(&["render", "--method", "env", "--shadows", "yes"], &[]);
+    assert_clean_error(&o, &["--shadows is a switch", "(`--shadows=true`)"]);
+}
+
+/// Values that start with `-` reach irad's checks, which name the flag, the value and what it
+/// takes, instead of clap's "unexpected argument '-i'".
+#[test]
+fn hyphen_values_are_refused_by_flag_and_value() {
+    let o = irad(&["render", "--method", "ir", "--clamp", "-inf"], &[]);
+    assert_clean_error(
+        &o,
+        &["--clamp -inf: expected \"auto\" or a finite number >= 0 (--method ir)"],
+    );
+    let o = irad(
+        &["bench", "suite", "--quick", "--list", "--shard", "-1/2"],
+        &[],
+    );
+    let err = stderr(&o);
+    assert!(!o.status.success(), "{err}");
+    assert!(!err.contains("unexpected argument"), "{err}");
+    assert!(
+        err.contains("'-1/2' for '--shard <I/N>'") && err.contains("expected I/N with 0 <= I < N"),
+        "{err}"
+    );
+}
+
+/// A setting that does not apply beside the others given is one line naming the flag, its
+/// value, what it applies with and what was given.
+#[test]
+fn a_setting_beside_a_strategy_it_does_not_apply_to_is_refused() {
+    let o = irad(
+        &[
+            "render",
+            "--method",
+            "env",
+            "--light-only",
+            "--strategy",
+            "latlong",
+        ],
+        &[],
+    );
+    assert_clean_error(
+        &o,
+        &["--light-only true: applies with strategy = \"dynamic\" or \"uniform-faces\", not \"latlong\" (--method env)"],
+    );
+    let o = irad(&["methods", "env"], &[]);
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        out.contains(
+            "Only with strategy = \"alpha\" and at most spp (refused beside other values)."
+        ),
+        "{out}"
+    );
+}

@@ -149,8 +149,10 @@ impl Args for MethodFlags {
                     .num_args(0..=1)
                     .require_equals(true)
                     .default_missing_value("true"),
-                // `--seed -1` reaches the table's range check, not clap's tip to write `-- -1`.
-                Kind::Count { .. } | Kind::Number | Kind::Clamp => arg.allow_negative_numbers(true),
+                // `--seed -1` and `--clamp -inf` reach the table's checks, which name the flag,
+                // the value and what it takes, not clap's "unexpected argument '-i'" or its tip
+                // to write `-- -1`.
+                Kind::Count { .. } | Kind::Number | Kind::Clamp => arg.allow_hyphen_values(true),
                 Kind::Choice(_) => arg,
             };
             cmd = cmd.arg(arg);
@@ -179,19 +181,44 @@ impl FromArgMatches for MethodFlags {
     }
 }
 
-/// A tip for a switch given its value after a space (`--shadows false`), which clap takes as
-/// the scene: the value goes after `=`.
-pub fn switch_tip(args: &[String]) -> Option<String> {
+/// The switch flag (`--shadows`) that `value` follows in `args`, where `value` looks like a
+/// switch's value given after a space (`--two-bounce off`), which clap takes as the scene: not
+/// a flag, not an existing file, not a `.toml` path.
+pub fn switch_before(args: &[String], value: &str) -> Option<String> {
+    let looks_like_a_value = !value.starts_with('-')
+        && !value.ends_with(".toml")
+        && !std::path::Path::new(value).exists();
+    if !looks_like_a_value {
+        return None;
+    }
     let switches: Vec<String> = keys()
         .into_iter()
         .filter(|(_, takers)| takers.iter().all(|(_, d)| d.kind == Kind::Switch))
         .map(|(key, _)| flag(key))
         .collect();
-    args.windows(2).find_map(|w| {
-        (switches.contains(&w[0]) && ["true", "false"].contains(&w[1].as_str())).then(|| {
+    args.windows(2)
+        .find(|w| w[1] == value && switches.contains(&w[0]))
+        .map(|w| w[0].clone())
+}
+
+/// `--flag=VALUE` for a switch given `value` after a space: true or false where `value` reads
+/// as one (on, no, 0, ...), else both.
+pub fn switch_written(flag: &str, value: &str) -> String {
+    match value.to_ascii_lowercase().as_str() {
+        "true" | "on" | "yes" | "y" | "1" => format!("`{flag}=true`"),
+        "false" | "off" | "no" | "n" | "0" => format!("`{flag}=false`"),
+        _ => format!("`{flag}=true` or `{flag}=false`"),
+    }
+}
+
+/// A tip for a switch given its value after a space (`--shadows false`), which clap takes as
+/// the scene: the value goes after `=`.
+pub fn switch_tip(args: &[String]) -> Option<String> {
+    args.iter().find_map(|value| {
+        switch_before(args, value).map(|flag| {
             format!(
-                "tip: a switch takes its value after `=`: `{}={}`",
-                w[0], w[1]
+                "tip: {flag} is a switch and takes its value after `=`: {}",
+                switch_written(&flag, value)
             )
         })
     })

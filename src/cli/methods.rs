@@ -3,7 +3,7 @@
 
 use anyhow::Result;
 
-use irad::methods::settings::Kind;
+use irad::methods::settings::{describe_needs, Kind};
 use irad::methods::{Method, METHODS};
 
 use super::method_flags::flag;
@@ -52,6 +52,15 @@ pub fn run(args: &MethodsArgs) -> Result<()> {
         );
         for line in wrap(s.help, 88) {
             println!("      {line}");
+        }
+        if !s.needs.is_empty() {
+            let only = format!(
+                "Only {} (refused beside other values).",
+                describe_needs(s.needs)
+            );
+            for line in wrap(&only, 88) {
+                println!("      {line}");
+            }
         }
     }
     Ok(())

@@ -9,7 +9,7 @@ use irad::gpu::{Context, ContextOptions};
 use irad::render::{self, RenderJob};
 use irad::scene;
 
-use super::method_flags::MethodFlags;
+use super::method_flags::{self, MethodFlags};
 use super::{device_line, progress};
 
 #[derive(clap::Args)]
@@ -54,11 +54,13 @@ pub fn run(options: &ContextOptions, args: RenderArgs) -> Result<()> {
     let method = args.method()?;
     let scene = match &args.scene {
         Some(path) => {
-            // `--compensate false`: a switch's value goes after `=`, so clap took it as SCENE.
+            // `--two-bounce off`: a switch's value goes after `=`, so clap took it as SCENE.
             let text = path.to_string_lossy();
-            if !path.exists() && ["true", "false"].contains(&text.as_ref()) {
+            let args: Vec<String> = std::env::args().collect();
+            if let Some(flag) = method_flags::switch_before(&args, &text) {
                 bail!(
-                    "scene `{text}` not found: a switch takes its value after `=` (`--shadows=false`)"
+                    "scene `{text}` not found: {flag} is a switch and takes its value after `=` ({})",
+                    method_flags::switch_written(&flag, &text)
                 );
             }
             scene::load(path)?

@@ -28,7 +28,9 @@ pub struct SuiteArgs {
     cache: PathBuf,
     /// Run only part I of N (0-based) of the suite: run k belongs to part k mod N. Merge
     /// the parts with `irad bench merge`.
-    #[arg(long, value_name = "I/N")]
+    // Hyphen values reach Shard's parser, whose error names the value and the form it takes
+    // (`-1/2`), instead of clap's "unexpected argument '-1'".
+    #[arg(long, value_name = "I/N", allow_hyphen_values = true)]
     shard: Option<irad::bench::suite::Shard>,
     /// Check the suite and list its runs (of this shard) without rendering anything.
     #[arg(long)]

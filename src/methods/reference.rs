@@ -15,7 +15,7 @@ use super::envmap;
 use super::gbuffer::{GBuffer, PixelSampling, WriteGBuffer};
 use super::paths::{PathStarts, TracePaths};
 use super::progressive;
-use super::settings::{common_settings, field_setting, Kind, Setting, Value};
+use super::settings::{common_settings, field_setting, Kind, Need, Setting, Value};
 use super::RenderOutput;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -79,6 +79,8 @@ pub const SETTINGS: &[Setting<ReferenceSettings>] = &[
         },
         Count,
         "First bounce at which Russian roulette may end a path.",
+        // alpha_frames shades the direct light without paths.
+        needs: &[Need::Unset("alpha_frames")],
     ),
     Setting::<ReferenceSettings>::new(
         "alpha_frames",
@@ -91,15 +93,11 @@ pub const SETTINGS: &[Setting<ReferenceSettings>] = &[
          balance heuristic); later frames take 2 alpha BSDF and 2 (1 - alpha) light samples. \
          Writes OUT.alpha.{exr,png} (red: light, green: BSDF).",
         |s| s.alpha_frames.map(Value::Count),
-        |s, v| {
-            if s.max_depth != 1 {
-                return Err("splits the direct light only: needs max_depth = 1".into());
-            }
-            s.alpha_frames = Some(v.count());
-            Ok(())
-        },
+        |s, v| s.alpha_frames = Some(v.count()),
     )
-    .unset("off (the power heuristic's one light and one BSDF sample)"),
+    .unset("off (the power heuristic's one light and one BSDF sample)")
+    // It splits the direct light only.
+    .needs(&[Need::OneOf("max_depth", &["1"])]),
     common_settings!(pixel_centres),
 ];
 

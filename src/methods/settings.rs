@@ -6,6 +6,12 @@
 //! and `irad methods` all read these tables, so a name, a default, a range or a help text
 //! cannot differ between them.
 //!
+//! A row may apply only beside certain values of the others (`needs`: light_only only with
+//! strategy dynamic or uniform-faces). `build` checks that in one place, after every given
+//! value is set, for every given key, so a setting given where the method would ignore it is
+//! refused by name on the CLI and in suites alike, whatever the table's order; records leave
+//! such settings out.
+//!
 //! Why a table of rows and not serde or clap `Args` per method: a suite file is TOML and the
 //! CLI is flags, and the two need the same checks with errors that name the method, key and
 //! value; serde would give the TOML side (with its own error texts) and clap the CLI side,
@@ -56,10 +62,29 @@ pub struct Setting<S> {
     /// `unset` says what that means).
     pub get: fn(&S) -> Option<Value>,
     /// Sets the value (checked against `kind`) in `s`, which holds the defaults and the
-    /// settings before this one in the table; Err(problem) where it does not apply there.
-    pub set: fn(&mut S, Value) -> Result<(), String>,
+    /// settings before this one in the table (whether it applies is `needs`' business).
+    pub set: fn(&mut S, Value),
     /// What the default is where `get` of the default struct gives None.
     pub unset: &'static str,
+    /// Where the setting applies: every one of these holds, read on the settings once every
+    /// given value is set. Given where one does not hold, the setting is refused.
+    pub needs: &'static [Need],
+}
+
+/// A condition on the other settings under which a setting applies. Values are written as a
+/// flag takes them: names unquoted, `true`/`false`, numbers in digits.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Need {
+    /// The setting `key` has one of these values.
+    OneOf(&'static str, &'static [&'static str]),
+    /// The setting `key` does not have this value.
+    Not(&'static str, &'static str),
+    /// The setting `key` is unset (`get` gives None).
+    Unset(&'static str),
+    /// The setting itself is at most the count `key` (both counts).
+    AtMost(&'static str),
+    /// At least one of these holds.
+    Any(&'static [Need]),
 }
 
 impl<S> Setting<S> {
@@ -68,7 +93,7 @@ impl<S> Setting<S> {
         kind: Kind,
         help: &'static str,
         get: fn(&S) -> Option<Value>,
-        set: fn(&mut S, Value) -> Result<(), String>,
+        set: fn(&mut S, Value),
     ) -> Setting<S> {
         Setting {
             key,
@@ -77,6 +102,7 @@ impl<S> Setting<S> {
             get,
             set,
             unset: "",
+            needs: &[],
         }
     }
 
@@ -84,6 +110,17 @@ impl<S> Setting<S> {
     pub const fn unset(self, unset: &'static str) -> Setting<S> {
         Setting { unset, ..self }
     }
+
+    /// The same setting, applying only where all of `needs` hold.
+    pub const fn needs(self, needs: &'static [Need]) -> Setting<S> {
+        Setting { needs, ..self }
+    }
+}
+
+/// `setting`, applying only where all of `needs` hold: `Setting::needs` as a function, whose
+/// argument takes the table's element type, so the rows' closures need no type annotations.
+pub const fn with_needs<S>(needs: &'static [Need], setting: Setting<S>) -> Setting<S> {
+    setting.needs(needs)
 }
 
 /// A setting as `irad methods` and the CLI show it, without its accessors.
@@ -94,6 +131,8 @@ pub struct SettingDoc {
     pub help: &'static str,
     /// The default as text (a value, or the `unset` text).
     pub default: String,
+    /// Where it applies (`Setting::needs`).
+    pub needs: &'static [Need],
 }
 
 /// A parameter a method cannot take: `method: key = value: problem`.
@@ -202,10 +241,11 @@ impl Kind {
                 .ok_or_else(|| self.expected()),
             Kind::Clamp => match v {
                 toml::Value::String(s) if s == "auto" => Ok(Value::Clamp(VplClamp::Auto)),
-                toml::Value::String(_) => Err("expected \"auto\" or a number >= 0".into()),
-                _ => Kind::Number
+                toml::Value::Float(_) | toml::Value::Integer(_) => Kind::Number
                     .check_toml(v)
-                    .map(|x| Value::Clamp(VplClamp::Fixed(x.number()))),
+                    .map(|x| Value::Clamp(VplClamp::Fixed(x.number())))
+                    .map_err(|_| CLAMP_EXPECTED.into()),
+                _ => Err(CLAMP_EXPECTED.into()),
             },
         }
     }
@@ -234,10 +274,12 @@ impl Kind {
                 .map(|n| Value::Name(n))
                 .ok_or_else(|| self.expected()),
             Kind::Clamp if t == "auto" => Ok(Value::Clamp(VplClamp::Auto)),
-            Kind::Clamp => match t.parse::<f64>() {
-                Ok(x) => finite_non_negative(x).map(|b| Value::Clamp(VplClamp::Fixed(b))),
-                Err(_) => Err("expected \"auto\" or a number >= 0".into()),
-            },
+            Kind::Clamp => t
+                .parse::<f64>()
+                .ok()
+                .and_then(|x| finite_non_negative(x).ok())
+                .map(|b| Value::Clamp(VplClamp::Fixed(b)))
+                .ok_or_else(|| CLAMP_EXPECTED.into()),
         }
     }
 
@@ -273,33 +315,149 @@ impl Kind {
     }
 }
 
+/// What a clamp takes, for every value it refuses.
+const CLAMP_EXPECTED: &str = "expected \"auto\" or a finite number >= 0";
+
 fn finite_non_negative(x: f64) -> Result<f32, String> {
     if x.is_finite() && x >= 0.0 && x <= f32::MAX as f64 {
-        Ok(x as f32)
+        // -0 as 0, so that a need on "0" (a clamp of 0) sees it.
+        Ok(x as f32 + 0.0)
     } else {
         Err("must be a finite number >= 0".into())
     }
 }
 
-/// `S`'s defaults with `given` (key, value as written, checked value) set in table order.
-/// Keys not in the table must have been refused before.
+/// `S`'s defaults with `given` (key, value as written, checked value) set in table order, then
+/// each given setting's `needs` checked on the result. Keys not in the table must have been
+/// refused before.
 pub fn build<S: Default>(
     method: &str,
     table: &[Setting<S>],
     given: &[(&str, String, Value)],
 ) -> Result<S, ParamError> {
     let mut s = S::default();
+    let find = |key: &str| given.iter().find(|g| g.0 == key);
     for setting in table {
-        if let Some((key, shown, value)) = given.iter().find(|g| g.0 == setting.key) {
-            (setting.set)(&mut s, *value).map_err(|problem| ParamError::Value {
-                method: method.into(),
-                key: key.to_string(),
-                value: shown.clone(),
-                problem,
+        if let Some((_, _, value)) = find(setting.key) {
+            (setting.set)(&mut s, *value);
+        }
+    }
+    for setting in table {
+        if let Some((key, shown, _)) = find(setting.key) {
+            applies(table, setting, &s, |k| find(k).is_some()).map_err(|problem| {
+                ParamError::Value {
+                    method: method.into(),
+                    key: key.to_string(),
+                    value: shown.clone(),
+                    problem,
+                }
             })?;
         }
     }
     Ok(s)
+}
+
+/// Whether `row` applies in `s`: Err(problem) for the first of its needs that does not hold,
+/// naming what it needs and what the setting it reads is (`given(key)`: set explicitly, or
+/// "the default").
+fn applies<S>(
+    table: &[Setting<S>],
+    row: &Setting<S>,
+    s: &S,
+    given: impl Fn(&str) -> bool,
+) -> Result<(), String> {
+    let value_of = |key: &str| table.iter().find(|r| r.key == key).and_then(|r| (r.get)(s));
+    let is = |key: &str| match value_of(key) {
+        Some(v) if given(key) => shown(v),
+        Some(v) => format!("{} (the default)", shown(v)),
+        None => "unset".into(),
+    };
+    for need in row.needs {
+        if !need.holds((row.get)(s), &value_of) {
+            return Err(match need {
+                Need::OneOf(key, _) => format!("applies with {}, not {}", need.describe(), is(key)),
+                Need::AtMost(key) => format!("must be at most {key} = {}", is(key)),
+                Need::Unset(key) => format!("applies with {key} unset, not {}", is(key)),
+                Need::Not(..) | Need::Any(_) => format!("applies with {}", need.describe()),
+            });
+        }
+    }
+    Ok(())
+}
+
+impl Need {
+    /// Whether it holds for a setting of value `own`, the others' values by `value_of(key)`.
+    pub fn holds(self, own: Option<Value>, value_of: &dyn Fn(&str) -> Option<Value>) -> bool {
+        match self {
+            Need::OneOf(key, values) => {
+                value_of(key).is_some_and(|v| values.contains(&v.to_string().as_str()))
+            }
+            Need::Not(key, value) => value_of(key).is_some_and(|v| v.to_string() != value),
+            Need::Unset(key) => value_of(key).is_none(),
+            Need::AtMost(key) => match (own, value_of(key)) {
+                (Some(Value::Count(a)), Some(Value::Count(b))) => a <= b,
+                _ => true,
+            },
+            Need::Any(needs) => needs.iter().any(|n| n.holds(own, value_of)),
+        }
+    }
+
+    /// What it asks for, as a suite file writes values: `strategy = "dynamic" or "alpha"`,
+    /// `clamp other than 0`, `at most spp`.
+    pub fn describe(self) -> String {
+        match self {
+            Need::OneOf(key, values) => {
+                let values: Vec<String> = values.iter().map(|v| shown_text(v)).collect();
+                format!("{key} = {}", one_of(&values))
+            }
+            Need::Not(key, value) => format!("{key} other than {}", shown_text(value)),
+            Need::Unset(key) => format!("{key} unset"),
+            Need::AtMost(key) => format!("at most {key}"),
+            Need::Any(needs) => {
+                let each: Vec<String> = needs.iter().map(|n| n.describe()).collect();
+                each.join(" or ")
+            }
+        }
+    }
+}
+
+/// A setting's needs in words, for help: `with strategy = "alpha" and at most spp`.
+pub fn describe_needs(needs: &[Need]) -> String {
+    needs
+        .iter()
+        .map(|n| match n {
+            Need::AtMost(_) => n.describe(),
+            _ => format!("with {}", n.describe()),
+        })
+        .collect::<Vec<_>>()
+        .join(" and ")
+}
+
+/// `a`, `a or b`, `a, b or c`.
+fn one_of(items: &[String]) -> String {
+    match items {
+        [] => String::new(),
+        [one] => one.clone(),
+        [rest @ .., last] => format!("{} or {last}", rest.join(", ")),
+    }
+}
+
+/// A value as a suite file writes it: names quoted.
+fn shown(v: Value) -> String {
+    match v {
+        Value::Name(s) => format!("\"{s}\""),
+        Value::Clamp(VplClamp::Auto) => "\"auto\"".into(),
+        v => v.to_string(),
+    }
+}
+
+/// A need's value text as a suite file writes it: names quoted, switches and numbers not.
+fn shown_text(text: &str) -> String {
+    match text {
+        "true" | "false" => text.into(),
+        t if t.parse::<f64>().is_ok() => t.into(),
+        t => format!("\"{t}\""),
+    }
 }
 
 /// A suite file's parameter table read into `S`: unknown keys and bad values are errors
@@ -330,10 +488,12 @@ pub fn from_toml<S: Default>(
     build(method, table, &given)
 }
 
-/// `s`'s settings by key, sorted, unset ones left out.
+/// `s`'s settings by key, sorted, unset ones and ones that do not apply beside the others
+/// left out (so the map reads back through `build`).
 pub fn values<S>(table: &[Setting<S>], s: &S) -> BTreeMap<String, serde_json::Value> {
     table
         .iter()
+        .filter(|row| applies(table, row, s, |_| true).is_ok())
         .filter_map(|row| (row.get)(s).map(|v| (row.key.to_string(), v.to_json())))
         .collect()
 }
@@ -348,6 +508,7 @@ pub fn docs<S: Default>(table: &[Setting<S>]) -> Vec<SettingDoc> {
             kind: row.kind,
             help: row.help,
             default: (row.get)(&d).map_or_else(|| row.unset.to_string(), |v| v.to_string()),
+            needs: row.needs,
         })
         .collect()
 }
@@ -378,19 +539,23 @@ pub(crate) use named_choices;
 
 /// A setting that is the struct's field `$field` as it is: `Count` (u32), `Number` (f32) or
 /// `Switch` (bool), the `Value` variant of its `Kind`.
+/// `field_setting!(..., needs: &[...])`: the same, applying only where the needs hold.
 macro_rules! field_setting {
+    ($key:literal, $field:ident, $kind:expr, $variant:ident, $help:expr, needs: $needs:expr $(,)?) => {
+        $crate::methods::settings::with_needs(
+            $needs,
+            $crate::methods::settings::field_setting!($key, $field, $kind, $variant, $help),
+        )
+    };
     ($key:literal, $field:ident, $kind:expr, $variant:ident, $help:expr $(,)?) => {
         $crate::methods::settings::Setting::new(
             $key,
             $kind,
             $help,
             |s| Some($crate::methods::settings::Value::$variant(s.$field)),
-            |s, v| {
-                match v {
-                    $crate::methods::settings::Value::$variant(x) => s.$field = x,
-                    v => unreachable!("{v:?} checked against {}", $key),
-                }
-                Ok(())
+            |s, v| match v {
+                $crate::methods::settings::Value::$variant(x) => s.$field = x,
+                v => unreachable!("{v:?} checked against {}", $key),
             },
         )
     };
@@ -398,8 +563,15 @@ macro_rules! field_setting {
 pub(crate) use field_setting;
 
 /// Settings several methods share, on fields of the same name (`pixel_centres`: `pixels`;
-/// `clamp` and `compensate`: `clamp`); `frames` takes the method's help.
+/// `clamp` and `compensate`: `clamp`); `frames` takes the method's help;
+/// `common_settings!(name, needs: &[...])` applies only where the needs hold.
 macro_rules! common_settings {
+    ($name:ident, needs: $needs:expr) => {
+        $crate::methods::settings::with_needs(
+            $needs,
+            $crate::methods::settings::common_settings!($name),
+        )
+    };
     (seed) => {
         $crate::methods::settings::field_setting!(
             "seed",
@@ -441,7 +613,6 @@ macro_rules! common_settings {
             },
             |s, v| {
                 s.pixels = $crate::methods::gbuffer::PixelSampling::from_centres(v.switch());
-                Ok(())
             },
         )
     };
@@ -456,7 +627,6 @@ macro_rules! common_settings {
             |s, v| {
                 s.rebuild = $crate::methods::rebuild::TableRebuild::from_name(v.name())
                     .expect("a checked name");
-                Ok(())
             },
         )
     };
@@ -471,7 +641,6 @@ macro_rules! common_settings {
             |s| Some($crate::methods::settings::Value::Clamp(s.clamp.clamp)),
             |s, v| {
                 s.clamp.clamp = v.clamp();
-                Ok(())
             },
         )
     };
@@ -484,7 +653,6 @@ macro_rules! common_settings {
             |s| Some($crate::methods::settings::Value::Switch(s.clamp.compensate)),
             |s, v| {
                 s.clamp.compensate = v.switch();
-                Ok(())
             },
         )
     };

@@ -29,7 +29,7 @@ use crate::methods::ir::schedule::{mean_albedo, Absorption, Schedule};
 use crate::methods::ir::walk::{TraceVpls, Vpl, VplBuffers};
 use crate::methods::progressive;
 use crate::methods::settings::{
-    common_settings, field_setting, named_choices, Kind, Setting, Value,
+    common_settings, field_setting, named_choices, Kind, Need, Setting, Value,
 };
 use crate::methods::RenderOutput;
 use crate::sampling::pcg;
@@ -131,6 +131,9 @@ impl Default for BirSettings {
     }
 }
 
+/// The strategies with reverse VPLs, where their settings apply.
+const REVERSE: &[&str] = &["reverse", "both"];
+
 /// Bidirectional instant radiosity's settings (`irad methods bir`).
 pub const SETTINGS: &[Setting<BirSettings>] = &[
     field_setting!(
@@ -156,7 +159,6 @@ pub const SETTINGS: &[Setting<BirSettings>] = &[
         |s| Some(Value::Name(s.strategy.name())),
         |s, v| {
             s.strategy = Strategy::from_name(v.name()).expect("a checked name");
-            Ok(())
         },
     ),
     field_setting!(
@@ -168,6 +170,7 @@ pub const SETTINGS: &[Setting<BirSettings>] = &[
         },
         Count,
         "Camera points per frame the reverse VPLs start from (the M of Segovia's Eq. 7).",
+        needs: &[Need::OneOf("strategy", REVERSE)],
     ),
     field_setting!(
         "light_samples",
@@ -175,6 +178,7 @@ pub const SETTINGS: &[Setting<BirSettings>] = &[
         Kind::Count { min: 1, max: 1024 },
         Count,
         "Next-event samples per reverse VPL for its outgoing radiance.",
+        needs: &[Need::OneOf("strategy", REVERSE)],
     ),
     field_setting!(
         "connections",
@@ -186,6 +190,7 @@ pub const SETTINGS: &[Setting<BirSettings>] = &[
         Count,
         "Standard VPLs each bounce from a reverse VPL connects to for its radiance (drawn \
          uniformly, weighted; 0: every one).",
+        needs: &[Need::OneOf("strategy", REVERSE)],
     ),
     field_setting!(
         "depth",
@@ -194,6 +199,7 @@ pub const SETTINGS: &[Setting<BirSettings>] = &[
         Count,
         "Vertices the paths from a reverse VPL go on for (next-event estimation at each) \
          before they connect to the standard VPLs.",
+        needs: &[Need::OneOf("strategy", REVERSE)],
     ),
     field_setting!(
         "ratio",
@@ -214,6 +220,11 @@ pub const SETTINGS: &[Setting<BirSettings>] = &[
         "The resampling CDF's uniform floor, a fraction of the mean candidate power (1: half \
          the draws uniform over the candidates; 0: none, which darkens the image where powers \
          are underestimated: Segovia Fig. 3).",
+        // The resampling CDF's and the light CDF's floor.
+        needs: &[Need::Any(&[
+            Need::Not("ratio", "0"),
+            Need::OneOf("light_cdf", &["true"]),
+        ])],
     ),
     field_setting!(
         "power_samples",
@@ -221,6 +232,7 @@ pub const SETTINGS: &[Setting<BirSettings>] = &[
         Kind::Count { min: 1, max: 1024 },
         Count,
         "Camera points per candidate for its power estimate.",
+        needs: &[Need::Not("ratio", "0")],
     ),
     field_setting!(
         "batch",
@@ -246,11 +258,13 @@ pub const SETTINGS: &[Setting<BirSettings>] = &[
         adaptive,
         Kind::Switch,
         Switch,
-        "With strategy both: side weights that follow how often each side brought more camera \
+        "With strategy both and resampling (ratio > 0): side weights that follow how often each side brought more camera \
          power in earlier batches, or the paper's fixed 1/2 (false).",
+        // The side weights are the resampling's.
+        needs: &[Need::OneOf("strategy", &["both"]), Need::Not("ratio", "0")],
     ),
     common_settings!(clamp),
-    common_settings!(compensate),
+    common_settings!(compensate, needs: &[Need::Not("clamp", "0")]),
     common_settings!(direct_spp),
     common_settings!(pixel_centres),
 ];

@@ -26,7 +26,7 @@ use crate::methods::gbuffer::{GBuffer, PixelSampling};
 use crate::methods::progressive;
 use crate::methods::rebuild::TableRebuild;
 use crate::methods::settings::{
-    common_settings, field_setting, named_choices, Kind, Setting, Value,
+    common_settings, field_setting, named_choices, Kind, Need, Setting, Value,
 };
 use crate::methods::RenderOutput;
 use crate::sampling::environment::sampling_weights;
@@ -175,20 +175,18 @@ pub const SETTINGS: &[Setting<BundlesSettings>] = &[
         |s| Some(Value::Name(s.strategy.name())),
         |s, v| {
             s.strategy = Strategy::from_name(v.name()).expect("a checked name");
-            Ok(())
         },
     ),
-    Setting::new(
+    Setting::<BundlesSettings>::new(
         "heuristic",
         Kind::Choice(&["balance", "power"]),
         "The MIS weights of the one-bounce paths: the balance heuristic (the paper's) or the \
          power heuristic (exponent 2).",
         |s| Some(Value::Name(if s.beta == 1.0 { "balance" } else { "power" })),
-        |s, v| {
-            s.beta = if v.name() == "power" { 2.0 } else { 1.0 };
-            Ok(())
-        },
-    ),
+        |s, v| s.beta = if v.name() == "power" { 2.0 } else { 1.0 },
+    )
+    // The weights combine the two strategies of mis.
+    .needs(&[Need::OneOf("strategy", &["mis"])]),
     field_setting!(
         "two_bounce",
         two_bounce,
@@ -208,15 +206,10 @@ pub const SETTINGS: &[Setting<BundlesSettings>] = &[
             s.two_bounce
                 .then_some(Value::Clamp(s.two_bounce_clamp.clamp))
         },
-        |s, v| {
-            if !s.two_bounce {
-                return Err("applies with two_bounce = true".into());
-            }
-            s.two_bounce_clamp.clamp = v.clamp();
-            Ok(())
-        },
+        |s, v| s.two_bounce_clamp.clamp = v.clamp(),
     )
-    .unset("auto (with two_bounce)"),
+    .unset("auto (with two_bounce)")
+    .needs(&[Need::OneOf("two_bounce", &["true"])]),
     Setting::<BundlesSettings>::new(
         "compensate",
         Kind::Switch,
@@ -226,15 +219,13 @@ pub const SETTINGS: &[Setting<BundlesSettings>] = &[
             s.two_bounce
                 .then_some(Value::Switch(s.two_bounce_clamp.compensate))
         },
-        |s, v| {
-            if !s.two_bounce {
-                return Err("applies with two_bounce = true".into());
-            }
-            s.two_bounce_clamp.compensate = v.switch();
-            Ok(())
-        },
+        |s, v| s.two_bounce_clamp.compensate = v.switch(),
     )
-    .unset("true (with two_bounce)"),
+    .unset("true (with two_bounce)")
+    .needs(&[
+        Need::OneOf("two_bounce", &["true"]),
+        Need::Not("two_bounce_clamp", "0"),
+    ]),
     Setting::new(
         "glossy",
         Kind::Choice(&["none", "roughness", "clamp"]),
@@ -252,7 +243,6 @@ pub const SETTINGS: &[Setting<BundlesSettings>] = &[
                     m_prime: ROUGHNESS_M,
                 },
             };
-            Ok(())
         },
     ),
     Setting::<BundlesSettings>::new(
@@ -263,15 +253,14 @@ pub const SETTINGS: &[Setting<BundlesSettings>] = &[
             Suppression::Roughness { m_prime } => Some(Value::Number(m_prime)),
             _ => None,
         },
-        |s, v| match &mut s.suppression {
-            Suppression::Roughness { m_prime } => {
+        |s, v| {
+            if let Suppression::Roughness { m_prime } = &mut s.suppression {
                 *m_prime = v.number();
-                Ok(())
             }
-            _ => Err("applies with glossy = \"roughness\"".into()),
         },
     )
-    .unset("16 (with glossy roughness)"),
+    .unset("16 (with glossy roughness)")
+    .needs(&[Need::OneOf("glossy", &["roughness"])]),
     Setting::<BundlesSettings>::new(
         "contribution_clamp",
         Kind::Number,
@@ -280,15 +269,14 @@ pub const SETTINGS: &[Setting<BundlesSettings>] = &[
             Suppression::Contribution { max } => Some(Value::Number(max)),
             _ => None,
         },
-        |s, v| match &mut s.suppression {
-            Suppression::Contribution { max } => {
+        |s, v| {
+            if let Suppression::Contribution { max } = &mut s.suppression {
                 *max = v.number();
-                Ok(())
             }
-            _ => Err("applies with glossy = \"clamp\"".into()),
         },
     )
-    .unset("1 (with glossy clamp)"),
+    .unset("1 (with glossy clamp)")
+    .needs(&[Need::OneOf("glossy", &["clamp"])]),
     Setting::new(
         "lights",
         Kind::Choice(LightSelection::NAMES),
@@ -298,7 +286,6 @@ pub const SETTINGS: &[Setting<BundlesSettings>] = &[
         |s| Some(Value::Name(s.lights.name())),
         |s, v| {
             s.lights = LightSelection::from_name(v.name()).expect("a checked name");
-            Ok(())
         },
     ),
     Setting::new(
@@ -310,7 +297,6 @@ pub const SETTINGS: &[Setting<BundlesSettings>] = &[
         |s| Some(Value::Name(s.directions.name())),
         |s, v| {
             s.directions = DirectionDensity::from_name(v.name()).expect("a checked name");
-            Ok(())
         },
     ),
     Setting::<BundlesSettings>::new(
@@ -319,13 +305,12 @@ pub const SETTINGS: &[Setting<BundlesSettings>] = &[
         "With directions environment: Eq. 2's offset Lo (luminance) for the indirect light \
          the map does not show.",
         |s| s.env_offset.map(Value::Number),
-        |s, v| {
-            s.env_offset = Some(v.number());
-            Ok(())
-        },
+        |s, v| s.env_offset = Some(v.number()),
     )
-    .unset("0 when the map is the only light, else the map's mean luminance"),
-    common_settings!(rebuild_tables),
+    .unset("0 when the map is the only light, else the map's mean luminance")
+    .needs(&[Need::OneOf("directions", &["environment"])]),
+    // The only table is the environment direction density's.
+    common_settings!(rebuild_tables, needs: &[Need::OneOf("directions", &["environment"])]),
     common_settings!(direct_spp),
     common_settings!(pixel_centres),
 ];

@@ -19,7 +19,7 @@ use crate::methods::gbuffer::{GBuffer, PixelSampling};
 use crate::methods::progressive;
 use crate::methods::rebuild::TableRebuild;
 use crate::methods::settings::{
-    common_settings, field_setting, named_choices, Kind, Setting, Value,
+    common_settings, field_setting, named_choices, Kind, Need, Setting, Value,
 };
 use crate::methods::RenderOutput;
 use crate::sampling::pcg;
@@ -133,6 +133,12 @@ impl Default for EnvSettings {
     }
 }
 
+/// The strategies that sample the cube map (`Strategy::uses_cube`), where its settings apply.
+pub const CUBE_STRATEGIES: &[&str] = &["dynamic", "uniform-faces", "alpha"];
+/// The strategies that take a fixed share of light samples split by the face shares, where
+/// light_only and integer_counts apply.
+pub const FACE_SHARE_STRATEGIES: &[&str] = &["dynamic", "uniform-faces"];
+
 /// Environment-map direct light's settings (`irad methods env`).
 pub const SETTINGS: &[Setting<EnvSettings>] = &[
     field_setting!(
@@ -163,7 +169,6 @@ pub const SETTINGS: &[Setting<EnvSettings>] = &[
         |s| Some(Value::Name(s.strategy.name())),
         |s, v| {
             s.strategy = Strategy::from_name(v.name()).expect("a checked name");
-            Ok(())
         },
     ),
     field_setting!(
@@ -172,6 +177,7 @@ pub const SETTINGS: &[Setting<EnvSettings>] = &[
         Kind::Count { min: 1, max: 4096 },
         Count,
         "Texels along a side of each face of the cube map that drives the light samples.",
+        needs: &[Need::OneOf("strategy", CUBE_STRATEGIES)],
     ),
     field_setting!(
         "light_only",
@@ -180,6 +186,7 @@ pub const SETTINGS: &[Setting<EnvSettings>] = &[
         Switch,
         "With strategy dynamic or uniform-faces: take every sample from the cube map (Lu Eq. \
          3.5, the thesis's Fig. 3.6 setting) instead of half from the BRDF (Eq. 3.7).",
+        needs: &[Need::OneOf("strategy", FACE_SHARE_STRATEGIES)],
     ),
     field_setting!(
         "integer_counts",
@@ -188,6 +195,7 @@ pub const SETTINGS: &[Setting<EnvSettings>] = &[
         Switch,
         "With strategy dynamic or uniform-faces: round(M_f) light samples per face, each of \
          weight 1, instead of the beta weights (the thesis's integer counts, Fig. 3.9).",
+        needs: &[Need::OneOf("strategy", FACE_SHARE_STRATEGIES)],
     ),
     Setting::<EnvSettings>::new(
         "alpha_samples",
@@ -199,12 +207,11 @@ pub const SETTINGS: &[Setting<EnvSettings>] = &[
          that estimate the per-pixel split alpha (Lu 14 Eq. 5.4-5.5); the other spp minus M \
          use it.",
         |s| s.alpha_samples.map(Value::Count),
-        |s, v| {
-            s.alpha_samples = Some(v.count());
-            Ok(())
-        },
+        |s, v| s.alpha_samples = Some(v.count()),
     )
-    .unset("half of spp"),
+    .unset("half of spp")
+    // M of the spp samples.
+    .needs(&[Need::OneOf("strategy", &["alpha"]), Need::AtMost("spp")]),
     common_settings!(shadows),
     field_setting!(
         "shared_samples",
@@ -214,8 +221,13 @@ pub const SETTINGS: &[Setting<EnvSettings>] = &[
         "Every pixel takes the frame's one set of light samples per face (Lu's) instead of \
          its own window of a 64 times longer sequence (the whole image's error then moves as \
          one).",
+        needs: &[Need::OneOf("strategy", CUBE_STRATEGIES)],
     ),
-    common_settings!(rebuild_tables),
+    // brdf and cosine build no table.
+    common_settings!(rebuild_tables, needs: &[Need::OneOf(
+        "strategy",
+        &["dynamic", "uniform-faces", "latlong", "hierarchical", "alpha"],
+    )]),
     common_settings!(pixel_centres),
 ];
 

@@ -19,7 +19,7 @@ use crate::methods::direct::GBufferAndDirectLight;
 use crate::methods::gbuffer::{GBuffer, PixelSampling};
 use crate::methods::progressive;
 use crate::methods::settings::{
-    common_settings, field_setting, named_choices, Kind, Setting, Value,
+    common_settings, field_setting, named_choices, Kind, Need, Setting, Value,
 };
 use crate::methods::RenderOutput;
 use crate::sampling::pcg;
@@ -112,11 +112,10 @@ pub const SETTINGS: &[Setting<IrSettings>] = &[
         |s| Some(Value::Name(s.absorption.name())),
         |s, v| {
             s.absorption = Absorption::from_name(v.name()).expect("a checked name");
-            Ok(())
         },
     ),
     common_settings!(clamp),
-    common_settings!(compensate),
+    common_settings!(compensate, needs: &[Need::Not("clamp", "0")]),
     field_setting!(
         "interleave",
         interleave,
@@ -132,7 +131,6 @@ pub const SETTINGS: &[Setting<IrSettings>] = &[
         |s| Some(Value::Name(s.direct.name())),
         |s, v| {
             s.direct = DirectLight::from_name(v.name()).expect("a checked name");
-            Ok(())
         },
     ),
     common_settings!(direct_spp),

@@ -23,7 +23,7 @@ use crate::methods::gbuffer::{GBuffer, PixelSampling};
 use crate::methods::progressive;
 use crate::methods::rebuild::TableRebuild;
 use crate::methods::settings::{
-    common_settings, field_setting, named_choices, Kind, Setting, Value,
+    common_settings, field_setting, named_choices, Kind, Need, Setting, Value,
 };
 use crate::methods::RenderOutput;
 use crate::sampling::pcg;
@@ -134,6 +134,11 @@ pub const SETTINGS: &[Setting<LightfieldSettings>] = &[
         },
         Count,
         "K_max: the most samples per pixel, frame and image (Lu's Fig. 4.11).",
+        // The brute force takes K / M from each image.
+        needs: &[Need::OneOf(
+            "strategy",
+            &["restricted", "uniform", "precomputed"],
+        )],
     ),
     common_settings!(seed),
     Setting::new(
@@ -146,19 +151,17 @@ pub const SETTINGS: &[Setting<LightfieldSettings>] = &[
         |s| Some(Value::Name(s.strategy.name())),
         |s, v| {
             s.strategy = Strategy::from_name(v.name()).expect("a checked name");
-            Ok(())
         },
     ),
-    Setting::new(
+    Setting::<LightfieldSettings>::new(
         "search",
         Kind::Choice(&["binary", "secant"]),
         "How the CDFs are inverted: Lu's modified secant search, or binary search.",
         |s| Some(Value::Name(if s.secant { "secant" } else { "binary" })),
-        |s, v| {
-            s.secant = v.name() == "secant";
-            Ok(())
-        },
-    ),
+        |s, v| s.secant = v.name() == "secant",
+    )
+    // The strategies that invert a CDF.
+    .needs(&[Need::OneOf("strategy", &["restricted", "precomputed"])]),
     field_setting!(
         "shared_samples",
         shared_samples,
@@ -174,6 +177,7 @@ pub const SETTINGS: &[Setting<LightfieldSettings>] = &[
         Switch,
         "One shadow ray per image toward its median point instead of one per sample (Lu \
          Section 4.5.2's approximation; biased at shadow edges).",
+        needs: &[Need::OneOf("shadows", &["true"])],
     ),
     common_settings!(shadows),
     common_settings!(rebuild_tables),
