@@ -44,7 +44,7 @@ mod tests {
         for junk in ["junk", "2", "on", "off", "y", "-1"] {
             let e = parse("IRAD_X", junk).unwrap_err().to_string();
             assert!(
-                e.starts_with(&format!("IRAD_X={junk}:")) && e.contains("1, true, yes"),
+                e.starts_with(&format!("IRAD_X={junk}:")) && e.contains("1, true or yes"),
                 "{e}"
             );
         }
