@@ -269,6 +269,49 @@ budgets = [{ time_ms = 80 }]
     let _ = fs::remove_dir_all(&dir);
 }
 
+/// A time budget no count can meet (a microsecond) is recorded as missed, with the time the
+/// run took, in the JSON, the CSV and the report (a mark and a footnote).
+#[test]
+fn a_time_budget_that_cannot_be_met_is_marked_missed() {
+    let dir = temp_dir("missed");
+    let text = r#"
+name = "missed"
+width = 8
+warmup = 0
+repeats = 1
+flicker_frames = 0
+[reference]
+spp = 8
+[[scene]]
+path = "embedded:cornell-box"
+[[method]]
+method = "reference"
+label = "pt"
+budgets = [{ time_ms = 0.001 }, { spp = 1 }]
+"#;
+    let suite = Suite::parse("missed.toml", text, &scenes_dir()).unwrap();
+    let out = dir.join("out");
+    common::with_gpu(|ctx| {
+        let results = run_suite(ctx, &suite, &out, &dir.join("cache"), Shard::WHOLE);
+        let (timed, fixed) = (&results.runs[0], &results.runs[1]);
+        assert_eq!(timed.status, Status::Ok, "{}", timed.note);
+        assert_eq!(timed.calibrated_count, Some(1));
+        assert!(timed.budget_missed && timed.gpu_ms.unwrap() > 0.001);
+        assert!(!fixed.budget_missed);
+        let rows = csv_rows(&out.join("results.csv"));
+        assert_eq!(rows[0]["budget_missed"], "true");
+        assert_eq!(rows[1]["budget_missed"], "false");
+        let report = fs::read_to_string(out.join("report.md")).unwrap();
+        let gpu = format!("{:.2}{}", timed.gpu_ms.unwrap(), suite::report::MISSED_MARK);
+        assert!(report.contains(&gpu), "{report}");
+        assert!(
+            report.contains("† Time budget missed: pt time_ms=0.001 took"),
+            "{report}"
+        );
+    });
+    let _ = fs::remove_dir_all(&dir);
+}
+
 const TINY_SUITE: &str = r#"
 name = "tiny"
 width = 16

@@ -270,6 +270,7 @@ fn run_one(
         time_ms: spec.time_ms,
         calibrated_count: None,
         calibration: vec![],
+        budget_missed: false,
         parameters: spec.method.parameters(),
         status: Status::Ok,
         note: String::new(),
@@ -375,6 +376,9 @@ fn run_one(
     )?;
     let (w, h, data) = preview::error_map_rgb8(&m.image, reference, factor);
     image::png::write_rgb8(&options.out.join(&error_name), w, h, &data)?;
+    if let (Some(time_ms), Some(count)) = (spec.time_ms, record.calibrated_count) {
+        record.budget_missed = calibrate::missed(time_ms, count, m.gpu_ms.unwrap_or(m.wall_ms));
+    }
     record.gpu_ms = m.gpu_ms;
     record.pass_gpu_ms = m.pass_gpu_ms;
     record.wall_ms = Some(m.wall_ms);
