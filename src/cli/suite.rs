@@ -171,7 +171,28 @@ pub fn run(options: &ContextOptions, args: SuiteArgs) -> Result<()> {
     let plan = suite.shard(shard);
     let mut eta = suite::eta::Eta::default();
     let mut run_start: Option<std::time::Instant> = None;
+    // Runs recorded so far, kept ones included: what is left is the plan less these.
+    let mut recorded: Vec<usize> = Vec::new();
     let results = suite::run(&ctx, &suite, &options, |event| match event {
+        Event::StaleLock { holder } => {
+            bars.suspend(|| {
+                eprintln!(
+                    "note: {} was locked by {holder}, which is no longer running (interrupted?): taking it over",
+                    out.display()
+                )
+            });
+        }
+        Event::Resumed { kept, of } => {
+            overall.set_position(kept.len() as u64);
+            bars.suspend(|| {
+                println!(
+                    "resuming the interrupted run in {}: {} of {of} runs recorded there are kept (remove the folder to start over)",
+                    out.display(),
+                    kept.len()
+                )
+            });
+            recorded = kept;
+        }
         Event::Reference {
             scene,
             done,
@@ -205,13 +226,20 @@ pub fn run(options: &ContextOptions, args: SuiteArgs) -> Result<()> {
         }
         Event::Finished { run, record, .. } => {
             overall.set_position(run as u64);
+            recorded.push(record.index);
             // Only rendered runs teach the estimate, from their first render on (a
             // scene's reference comes before it).
-            if let (Status::Ok, Some(start)) = (record.status, run_start.take()) {
-                eta.finished(&suite, plan[run - 1], start.elapsed().as_secs_f64());
+            let spec = plan.iter().find(|s| s.index == record.index);
+            if let (Status::Ok, Some(start), Some(spec)) = (record.status, run_start.take(), spec) {
+                eta.finished(&suite, spec, start.elapsed().as_secs_f64());
             }
             run_start = None;
-            if let Some(left) = eta.left(&suite, &plan[run..]) {
+            let left: Vec<_> = plan
+                .iter()
+                .filter(|s| !recorded.contains(&s.index))
+                .copied()
+                .collect();
+            if let Some(left) = eta.left(&suite, &left) {
                 overall.set_message(format!(", about {} left", indicatif::HumanDuration(left)));
             }
             let line =
@@ -251,7 +279,7 @@ pub fn run(options: &ContextOptions, args: SuiteArgs) -> Result<()> {
     );
     if STOP.load(std::sync::atomic::Ordering::SeqCst) {
         eprintln!(
-            "interrupted: {} of {} runs recorded; the outputs hold them, marked incomplete",
+            "interrupted: {} of {} runs recorded; the outputs hold them, marked incomplete (the same command resumes)",
             results.runs.len(),
             results.runs_planned
         );
