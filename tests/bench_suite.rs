@@ -678,8 +678,6 @@ fn a_suite_folder_is_locked_while_written() {
             .unwrap_err()
             .to_string();
         assert!(e.contains(out.to_str().unwrap()) && e.contains(&pid), "{e}");
-        let e = merge::merge(&[dir.join("elsewhere")], &out, false);
-        assert!(e.is_err());
         assert!(!out.join("results.json").exists());
         drop(held);
         assert!(!out.join(irad::lock::LOCK_FILE).exists());
@@ -690,6 +688,19 @@ fn a_suite_folder_is_locked_while_written() {
         assert!(results.complete);
         assert_eq!(events, ["stale irad (pid 4000000 on gone)"]);
         assert!(!out.join(irad::lock::LOCK_FILE).exists());
+        // A merge into a locked folder is refused too, and writes nothing there.
+        let merged = dir.join("merged");
+        let held = suite::output::lock(&merged, &mut |_| panic!("no stale lock here")).unwrap();
+        let e = merge::merge(&[out.clone()], &merged, false)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains(merged.to_str().unwrap()) && e.contains(&pid),
+            "{e}"
+        );
+        assert!(!merged.join("results.json").exists());
+        drop(held);
+        merge::merge(&[out.clone()], &merged, false).unwrap();
     });
     let _ = fs::remove_dir_all(&dir);
 }
