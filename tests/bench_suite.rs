@@ -691,7 +691,7 @@ fn a_suite_folder_is_locked_while_written() {
         // A merge into a locked folder is refused too, and writes nothing there.
         let merged = dir.join("merged");
         let held = suite::output::lock(&merged, &mut |_| panic!("no stale lock here")).unwrap();
-        let e = merge::merge(&[out.clone()], &merged, false)
+        let e = merge::merge(std::slice::from_ref(&out), &merged, false)
             .unwrap_err()
             .to_string();
         assert!(
@@ -700,7 +700,7 @@ fn a_suite_folder_is_locked_while_written() {
         );
         assert!(!merged.join("results.json").exists());
         drop(held);
-        merge::merge(&[out.clone()], &merged, false).unwrap();
+        merge::merge(std::slice::from_ref(&out), &merged, false).unwrap();
     });
     let _ = fs::remove_dir_all(&dir);
 }
