@@ -41,6 +41,7 @@ pub mod bvh;
 pub mod export;
 pub mod gpu;
 pub mod image;
+pub mod lock;
 pub mod methods;
 pub mod render;
 pub mod sampling;

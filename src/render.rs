@@ -1,13 +1,14 @@
-//! One render from a loaded scene to files on disk (DESIGN.md "Outputs"): upload the scene,
-//! run the chosen method, write `<out>.exr`, `<out>.png` and `<out>.json`, and score the image
-//! against a reference when one is given. `irad render` is a thin shell over this.
+//! One render from a loaded scene to files on disk (DESIGN.md "Outputs"): check everything
+//! that can fail without the GPU, upload the scene, run the chosen method, score the image
+//! against a reference when one is given, and write `<out>.exr`, `<out>.png`, any maps and
+//! `<out>.json` as one set (`image::write_all`). `irad render` is a thin shell over this.
 
 use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context as _, Result};
 
 use crate::gpu::{Context, PassTotals};
-use crate::image::{self, exr, Image, Metrics, PassRecord, RenderRecord};
+use crate::image::{self, exr, Image, Metrics, OutputFiles, PassRecord, RenderRecord};
 use crate::methods::{Method, Renderers};
 use crate::scene::gpu::GpuScene;
 use crate::scene::Scene;
@@ -15,7 +16,8 @@ use crate::scene::Scene;
 pub struct RenderJob<'a> {
     pub scene: &'a Scene,
     pub method: Method,
-    /// Output stem: `<out>.exr`, `<out>.png`, `<out>.json`.
+    /// Output stem: `<out>.exr`, `<out>.png`, `<out>.json`; a folder gets `<out>/render.*`
+    /// (`image::sidecar::output_stem`).
     pub out: PathBuf,
     /// PNG exposure in stops.
     pub exposure: f32,
@@ -28,13 +30,40 @@ impl RenderJob<'_> {
     pub fn method_samples(&self) -> u64 {
         self.method.samples()
     }
+
+    /// Every check that can fail without the GPU, so that a bad value costs no render and
+    /// leaves the previous outputs as they were: the exposure is finite, the output folder is
+    /// created and writable with no folder in an output's place, and the reference reads, is
+    /// finite and has the render's size.
+    pub fn check(&self) -> Result<Checked> {
+        if !self.exposure.is_finite() {
+            bail!(
+                "--exposure must be a finite number of stops, got {}",
+                self.exposure
+            );
+        }
+        let files = image::sidecar::check_writable(&self.out)?;
+        let cam = &self.scene.camera;
+        let reference = self
+            .reference
+            .as_deref()
+            .map(|p| read_reference(p, cam.width, cam.height))
+            .transpose()?;
+        Ok(Checked { reference, files })
+    }
+}
+
+/// What `RenderJob::check` found: the reference image, read, and where the outputs go.
+pub struct Checked {
+    reference: Option<Image>,
+    pub files: OutputFiles,
 }
 
 pub struct RenderReport {
     pub image: Image,
     pub record: RenderRecord,
     pub passes: PassTotals,
-    pub paths: (PathBuf, PathBuf, PathBuf),
+    pub files: OutputFiles,
 }
 
 /// The scene's name in records: its path, or `embedded:<name>`.
@@ -55,6 +84,18 @@ fn read_reference(path: &Path, width: u32, height: u32) -> Result<Image> {
             reference.height
         );
     }
+    let bad = reference
+        .pixels
+        .iter()
+        .flatten()
+        .filter(|v| !v.is_finite())
+        .count();
+    if bad > 0 {
+        bail!(
+            "reference {} has {bad} NaN or infinite values; a reference must be finite",
+            path.display()
+        );
+    }
     Ok(reference)
 }
 
@@ -64,13 +105,20 @@ pub fn render(
     job: &RenderJob,
     progress: impl FnMut(u32, u32),
 ) -> Result<RenderReport> {
+    let checked = job.check()?;
+    render_checked(ctx, job, checked, progress)
+}
+
+/// `render` for a job already checked (`RenderJob::check`, which `irad render` calls before it
+/// opens the device).
+pub fn render_checked(
+    ctx: &Context,
+    job: &RenderJob,
+    checked: Checked,
+    progress: impl FnMut(u32, u32),
+) -> Result<RenderReport> {
     let cam = &job.scene.camera;
-    // Read the reference first: a bad path should not cost a whole render.
-    let reference = job
-        .reference
-        .as_deref()
-        .map(|p| read_reference(p, cam.width, cam.height))
-        .transpose()?;
+    let reference = checked.reference;
     let gpu_scene = GpuScene::upload(ctx, job.scene).context("uploading the scene")?;
     let mut warnings = job.scene.warnings.clone();
     let maps = gpu_scene.environment_frames() as u64;
@@ -105,6 +153,7 @@ pub fn render(
         .map(|r| image::compare(&output.image, r))
         .transpose()?;
     let info = ctx.info();
+    let names: Vec<&str> = output.maps.iter().map(|(n, _)| n.as_str()).collect();
     let record = RenderRecord {
         method: job.method.name().into(),
         parameters: job.method.parameters(),
@@ -131,16 +180,14 @@ pub fn render(
         metrics,
         warnings,
         stats: output.stats.iter().cloned().collect(),
+        files: OutputFiles::new(&job.out, &names).names(),
         irad_version: image::sidecar::IRAD_VERSION.into(),
     };
-    let paths = image::write_all(&job.out, &output.image, &record, job.exposure)?;
-    for (name, map) in &output.maps {
-        image::sidecar::write_map(&job.out, name, map)?;
-    }
+    let files = image::write_all(&job.out, &output.image, &record, job.exposure, &output.maps)?;
     Ok(RenderReport {
         image: output.image,
         record,
         passes: output.passes,
-        paths,
+        files,
     })
 }

@@ -5,7 +5,7 @@
 
 mod common;
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
 use std::fs;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -263,6 +263,49 @@ budgets = [{ time_ms = 80 }]
         assert!(report.contains("Equal time, 80 GPU ms"), "{report}");
         assert!(
             report.contains("| ⌂ | ir |") && report.contains("speed vs pt"),
+            "{report}"
+        );
+    });
+    let _ = fs::remove_dir_all(&dir);
+}
+
+/// A time budget no count can meet (a microsecond) is recorded as missed, with the time the
+/// run took, in the JSON, the CSV and the report (a mark and a footnote).
+#[test]
+fn a_time_budget_that_cannot_be_met_is_marked_missed() {
+    let dir = temp_dir("missed");
+    let text = r#"
+name = "missed"
+width = 8
+warmup = 0
+repeats = 1
+flicker_frames = 0
+[reference]
+spp = 8
+[[scene]]
+path = "embedded:cornell-box"
+[[method]]
+method = "reference"
+label = "pt"
+budgets = [{ time_ms = 0.001 }, { spp = 1 }]
+"#;
+    let suite = Suite::parse("missed.toml", text, &scenes_dir()).unwrap();
+    let out = dir.join("out");
+    common::with_gpu(|ctx| {
+        let results = run_suite(ctx, &suite, &out, &dir.join("cache"), Shard::WHOLE);
+        let (timed, fixed) = (&results.runs[0], &results.runs[1]);
+        assert_eq!(timed.status, Status::Ok, "{}", timed.note);
+        assert_eq!(timed.calibrated_count, Some(1));
+        assert!(timed.budget_missed && timed.gpu_ms.unwrap() > 0.001);
+        assert!(!fixed.budget_missed);
+        let rows = csv_rows(&out.join("results.csv"));
+        assert_eq!(rows[0]["budget_missed"], "true");
+        assert_eq!(rows[1]["budget_missed"], "false");
+        let report = fs::read_to_string(out.join("report.md")).unwrap();
+        let gpu = format!("{:.2}{}", timed.gpu_ms.unwrap(), suite::report::MISSED_MARK);
+        assert!(report.contains(&gpu), "{report}");
+        assert!(
+            report.contains("† Time budget missed: pt time_ms=0.001 took"),
             "{report}"
         );
     });
@@ -551,6 +594,225 @@ fn interrupted_suite_leaves_readable_results() {
     assert!(fs::read_to_string(out.join("report.md"))
         .unwrap()
         .contains("incomplete"));
+    // The same command again resumes: it says so, keeps the recorded runs as they were and
+    // renders the rest.
+    let o = irad(&[
+        "bench",
+        "suite",
+        suite_path.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--cache",
+        dir.join("cache").to_str().unwrap(),
+    ]);
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let kept = results.runs.len();
+    assert!(
+        text.contains(&format!("{kept} of 12 runs recorded there are kept")),
+        "{text}"
+    );
+    let finished = check_outputs(&out);
+    assert!(finished.complete && finished.runs.len() == 12);
+    // As recorded (the Pareto marks are recomputed over all runs).
+    let measured = |r: &suite::RunRecord| (r.id.clone(), r.metrics, r.gpu_ms, r.wall_ms);
+    assert!(finished.runs[..kept]
+        .iter()
+        .map(measured)
+        .eq(results.runs.iter().map(measured)));
+    let _ = fs::remove_dir_all(&dir);
+}
+
+/// Two runs that take milliseconds each.
+const SMALL_SUITE: &str = r#"
+name = "small"
+width = 8
+warmup = 0
+repeats = 1
+flicker_frames = 0
+[reference]
+spp = 8
+[[scene]]
+path = "embedded:cornell-box"
+[[method]]
+method = "reference"
+label = "pt"
+budgets = [{ spp = 1 }, { spp = 2 }]
+"#;
+
+fn run_suite_events(
+    ctx: &irad::gpu::Context,
+    suite: &Suite,
+    out: &Path,
+    cache: &Path,
+    shard: Shard,
+    events: &mut Vec<String>,
+) -> anyhow::Result<SuiteResults> {
+    let options = SuiteOptions {
+        out: out.to_path_buf(),
+        cache: cache.to_path_buf(),
+        shard,
+        stop: None,
+        references_only: false,
+    };
+    suite::run(ctx, suite, &options, |e| match e {
+        suite::Event::Resumed { kept, .. } => events.push(format!("resumed {kept:?}")),
+        suite::Event::StaleLock { holder } => events.push(format!("stale {holder}")),
+        _ => {}
+    })
+}
+
+/// A folder a suite (or a merge) writes is locked: a second writer is refused with the folder
+/// and the holder named; a lock left by a process that is gone is taken over with a note, and
+/// the lock file is gone once the suite is done.
+#[test]
+fn a_suite_folder_is_locked_while_written() {
+    let dir = temp_dir("lock");
+    let (out, cache) = (dir.join("out"), dir.join("cache"));
+    let suite = Suite::parse("small.toml", SMALL_SUITE, &scenes_dir()).unwrap();
+    let held = suite::output::lock(&out, &mut |_| panic!("no stale lock here")).unwrap();
+    let pid = format!("pid {}", std::process::id());
+    common::with_gpu(|ctx| {
+        let mut events = Vec::new();
+        let e = run_suite_events(ctx, &suite, &out, &cache, Shard::WHOLE, &mut events)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains(out.to_str().unwrap()) && e.contains(&pid), "{e}");
+        assert!(!out.join("results.json").exists());
+        drop(held);
+        assert!(!out.join(irad::lock::LOCK_FILE).exists());
+        // A lock file whose process is gone (no flock held on it).
+        fs::write(out.join(irad::lock::LOCK_FILE), "pid 4000000 on gone\n").unwrap();
+        let results =
+            run_suite_events(ctx, &suite, &out, &cache, Shard::WHOLE, &mut events).unwrap();
+        assert!(results.complete);
+        assert_eq!(events, ["stale irad (pid 4000000 on gone)"]);
+        assert!(!out.join(irad::lock::LOCK_FILE).exists());
+        // A merge into a locked folder is refused too, and writes nothing there.
+        let merged = dir.join("merged");
+        let held = suite::output::lock(&merged, &mut |_| panic!("no stale lock here")).unwrap();
+        let e = merge::merge(std::slice::from_ref(&out), &merged, false)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains(merged.to_str().unwrap()) && e.contains(&pid),
+            "{e}"
+        );
+        assert!(!merged.join("results.json").exists());
+        drop(held);
+        merge::merge(std::slice::from_ref(&out), &merged, false).unwrap();
+    });
+    let _ = fs::remove_dir_all(&dir);
+}
+
+/// Running an interrupted suite again into its folder keeps the runs it recorded (their
+/// records untouched, not rendered again) and renders the rest; a finished one is measured
+/// afresh; another suite's folder is refused and left as it was.
+#[test]
+fn an_interrupted_suite_resumes_with_its_runs_kept() {
+    let dir = temp_dir("resume");
+    let (out, cache) = (dir.join("out"), dir.join("cache"));
+    let suite = Suite::parse("small.toml", SMALL_SUITE, &scenes_dir()).unwrap();
+    common::with_gpu(|ctx| {
+        let mut events = Vec::new();
+        let whole = run_suite_events(ctx, &suite, &out, &cache, Shard::WHOLE, &mut events).unwrap();
+        assert_eq!(whole.runs.len(), 2);
+        // As an interruption after the first run leaves it, with a mark on the kept record.
+        let mut cut = whole.clone();
+        cut.runs.truncate(1);
+        cut.complete = false;
+        cut.runs[0].wall_ms = Some(123456.0);
+        fs::write(out.join("results.json"), cut.json()).unwrap();
+        let resumed =
+            run_suite_events(ctx, &suite, &out, &cache, Shard::WHOLE, &mut events).unwrap();
+        assert_eq!(events, ["resumed [0]"]);
+        assert!(resumed.complete);
+        assert_eq!(
+            resumed.runs[0].wall_ms,
+            Some(123456.0),
+            "run 0 rendered again"
+        );
+        assert_eq!(figures(&resumed), figures(&whole));
+        assert_eq!(check_outputs(&out), resumed);
+        // Finished: run again, measured afresh.
+        let again = run_suite_events(ctx, &suite, &out, &cache, Shard::WHOLE, &mut events).unwrap();
+        assert_ne!(again.runs[0].wall_ms, Some(123456.0));
+        assert_eq!(events.len(), 1);
+        // Another suite (other reference settings) into this folder: refused, folder kept.
+        let before = fs::read(out.join("results.json")).unwrap();
+        let other = Suite::parse(
+            "small.toml",
+            &SMALL_SUITE.replace("spp = 8", "spp = 9"),
+            &scenes_dir(),
+        )
+        .unwrap();
+        let e = run_suite_events(ctx, &other, &out, &cache, Shard::WHOLE, &mut events)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("holds the results of suite `small`") && e.contains(out.to_str().unwrap()),
+            "{e}"
+        );
+        assert_eq!(fs::read(out.join("results.json")).unwrap(), before);
+        check_outputs(&out);
+    });
+    let _ = fs::remove_dir_all(&dir);
+}
+
+/// `bench merge` checks every part before writing: a part without images/, or missing an
+/// image its results name, is refused and nothing is written (an earlier merge stays whole);
+/// a folder holding other files is not replaced.
+#[test]
+fn merge_refuses_a_broken_part_and_writes_nothing() {
+    let dir = temp_dir("merge-broken");
+    let cache = dir.join("cache");
+    let suite = Suite::parse("small.toml", SMALL_SUITE, &scenes_dir()).unwrap();
+    let parts: Vec<PathBuf> = (0..2).map(|i| dir.join(format!("part{i}"))).collect();
+    common::with_gpu(|ctx| {
+        for (i, part) in parts.iter().enumerate() {
+            run_suite(ctx, &suite, part, &cache, Shard { index: i, count: 2 });
+        }
+    });
+    let merged = dir.join("merged");
+    let listing = |d: &Path| -> BTreeSet<String> {
+        fs::read_dir(d)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect()
+    };
+    let with = |mut names: BTreeSet<String>, name: &str| {
+        names.insert(name.to_string());
+        names
+    };
+    let top = listing(&dir);
+    fs::rename(parts[1].join("images"), dir.join("aside")).unwrap();
+    let e = merge::merge(&parts, &merged, false)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("part1") && e.contains("images/"), "{e}");
+    assert_eq!(listing(&dir), with(top.clone(), "aside"));
+    // A whole merge, then one with an image missing: the first stays as it was.
+    fs::rename(dir.join("aside"), parts[1].join("images")).unwrap();
+    let whole = merge::merge(&parts, &merged, false).unwrap();
+    assert!(whole.complete);
+    let before = fs::read(merged.join("results.json")).unwrap();
+    let image = whole.runs[1].image.clone().unwrap();
+    fs::remove_file(parts[1].join(&image)).unwrap();
+    let e = merge::merge(&parts, &merged, false)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains(&image), "{e}");
+    assert_eq!(fs::read(merged.join("results.json")).unwrap(), before);
+    check_outputs(&merged);
+    assert_eq!(
+        listing(&dir),
+        with(top, "merged"),
+        "a temporary folder was left"
+    );
+    // Not a suite's folder: refused.
+    fs::copy(merged.join(&image), parts[1].join(&image)).unwrap();
+    let e = merge::merge(&parts, &dir, false).unwrap_err().to_string();
+    assert!(e.contains("not a suite output"), "{e}");
     let _ = fs::remove_dir_all(&dir);
 }
 

@@ -541,6 +541,7 @@ fn record() -> RenderRecord {
         stats: [("kept_reverse_fraction".to_string(), 0.25)]
             .into_iter()
             .collect(),
+        files: vec!["cornell.exr".into(), "cornell.png".into()],
         irad_version: sidecar::IRAD_VERSION.into(),
     }
 }
@@ -604,7 +605,8 @@ fn write_all_creates_folders_and_three_files() {
     let out = dir.join("nested/deeper/cornell");
     let img = image(2, 2, &[gray(0.5), gray(0.25), gray(2.0), gray(0.0)]);
     let rec = record();
-    let (exr_path, png_path, json_path) = sidecar::write_all(&out, &img, &rec, 0.0).unwrap();
+    let files = sidecar::write_all(&out, &img, &rec, 0.0, &[]).unwrap();
+    let (exr_path, png_path, json_path) = (files.exr, files.png, files.json);
     assert_eq!(exr_path, dir.join("nested/deeper/cornell.exr"));
     assert_eq!(exr::read(&exr_path).unwrap(), img);
     assert_eq!(decode_png(&png_path).2, tonemap::tonemap_rgb8(&img, 0.0));
@@ -614,6 +616,113 @@ fn write_all_creates_folders_and_three_files() {
         sidecar::output_paths(&PathBuf::from("x")).0,
         PathBuf::from("x.exr")
     );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Every file in `dir`, by name, with its bytes.
+fn files_in(dir: &std::path::Path) -> Vec<(String, Vec<u8>)> {
+    let mut files: Vec<(String, Vec<u8>)> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.is_file())
+        .map(|p| {
+            let name = p.file_name().unwrap().to_string_lossy().into_owned();
+            (name, std::fs::read(&p).unwrap())
+        })
+        .collect();
+    files.sort();
+    files
+}
+
+#[test]
+fn output_paths_of_a_folder_are_render_files_in_it() {
+    let dir = temp_dir("folder-paths");
+    let p = |s: &str| PathBuf::from(s);
+    assert_eq!(sidecar::output_paths(&p("out/")).0, p("out/render.exr"));
+    assert_eq!(sidecar::output_paths(&p(".")).1, p("./render.png"));
+    assert_eq!(sidecar::output_paths(&p("..")).2, p("../render.json"));
+    assert_eq!(sidecar::output_paths(&p("out/.")).0, p("out/./render.exr"));
+    // An existing folder, even named like an image.
+    std::fs::create_dir_all(dir.join("shots.exr")).unwrap();
+    assert_eq!(
+        sidecar::output_paths(&dir.join("shots.exr")).2,
+        dir.join("shots.exr/render.json")
+    );
+    assert_eq!(
+        sidecar::map_paths(&p("out/"), "alpha"),
+        (p("out/render.alpha.exr"), p("out/render.alpha.png"))
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A write that fails partway through the set (a map whose file cannot be created, after the
+/// EXR and PNG were written; a folder where the PNG goes) leaves the previous set byte for byte
+/// and no temporary file.
+#[test]
+fn a_failed_write_leaves_the_previous_set() {
+    let dir = temp_dir("unit");
+    let out = dir.join("cornell");
+    let old = image(1, 1, &[gray(0.5)]);
+    let alpha = image(1, 1, &[gray(1.0)]);
+    let maps = vec![("alpha".to_string(), alpha.clone())];
+    sidecar::write_all(&out, &old, &record(), 0.0, &maps).unwrap();
+    let before = files_in(&dir);
+    assert_eq!(before.len(), 5);
+    let new = image(1, 1, &[gray(2.0)]);
+    let bad_map = vec![("no/such".to_string(), alpha)];
+    let e = format!(
+        "{:#}",
+        sidecar::write_all(&out, &new, &record(), 0.0, &bad_map).unwrap_err()
+    );
+    assert!(e.contains("cornell.no/such.exr"), "{e}");
+    assert_eq!(files_in(&dir), before);
+
+    std::fs::remove_file(dir.join("cornell.png")).unwrap();
+    std::fs::create_dir(dir.join("cornell.png")).unwrap();
+    let before = files_in(&dir);
+    let e = format!(
+        "{:#}",
+        sidecar::write_all(&out, &new, &record(), 0.0, &[]).unwrap_err()
+    );
+    assert!(e.contains("cornell.png is a folder"), "{e}");
+    assert_eq!(files_in(&dir), before);
+    let e = sidecar::write_all(&out, &new, &record(), f32::NAN, &[]).unwrap_err();
+    assert!(e.to_string().contains("exposure"), "{e}");
+    assert_eq!(files_in(&dir), before);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Two writers racing to the same `-o`, many times: the EXR, PNG and JSON left are always one
+/// writer's (the EXR's value, the PNG's tone-mapped bytes and the JSON's seed agree).
+#[test]
+fn racing_writers_leave_one_writers_set() {
+    let dir = temp_dir("race");
+    let out = dir.join("shot");
+    for trial in 0..40 {
+        let barrier = std::sync::Barrier::new(2);
+        std::thread::scope(|s| {
+            for writer in 0..2u64 {
+                let (barrier, out) = (&barrier, &out);
+                s.spawn(move || {
+                    let v = 0.1 + 0.4 * writer as f32;
+                    let img = image(8, 8, &[gray(v); 64]);
+                    let rec = RenderRecord {
+                        seed: writer,
+                        ..record()
+                    };
+                    barrier.wait();
+                    sidecar::write_all(out, &img, &rec, 0.0, &[]).unwrap();
+                });
+            }
+        });
+        let exr = exr::read(&dir.join("shot.exr")).unwrap();
+        let writer = if exr.pixels[0][0] < 0.3 { 0 } else { 1 };
+        let png = decode_png(&dir.join("shot.png")).2;
+        assert_eq!(png, tonemap::tonemap_rgb8(&exr, 0.0), "trial {trial}");
+        let rec = RenderRecord::read(&dir.join("shot.json")).unwrap();
+        assert_eq!(rec.seed, writer, "trial {trial}");
+    }
+    assert_eq!(files_in(&dir).len(), 3, "temporary files left");
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

@@ -19,7 +19,10 @@ pub struct RenderArgs {
     /// Rendering method (`irad methods` lists them and their settings).
     #[arg(long, default_value = "reference", value_parser = method_names())]
     method: String,
-    /// Output stem: writes OUT.exr, OUT.png and OUT.json [default: out/<scene name>].
+    /// Output stem: writes OUT.exr, OUT.png and OUT.json [default: out/<scene name>]. A
+    /// folder (an existing one, or OUT ending in `/`, `.` or `..`) gets OUT/render.exr, .png and
+    /// .json. The files are checked writable before rendering and replace an earlier render's
+    /// together, the JSON last.
     #[arg(short, long, value_name = "OUT")]
     out: Option<PathBuf>,
     /// Exposure of the PNG in stops (the EXR is never tone mapped).
@@ -67,7 +70,6 @@ pub fn run(options: &ContextOptions, args: RenderArgs) -> Result<()> {
         }
         None => scene::default_scene(),
     };
-    let ctx = Context::new(options)?;
     let out = args
         .out
         .unwrap_or_else(|| PathBuf::from("out").join(&scene.name));
@@ -78,6 +80,9 @@ pub fn run(options: &ContextOptions, args: RenderArgs) -> Result<()> {
         exposure: args.exposure,
         reference: args.reference,
     };
+    // Before the device opens: a bad exposure, folder or reference costs nothing.
+    let checked = job.check()?;
+    let ctx = Context::new(options)?;
     let cam = &scene.camera;
     println!(
         "rendering {} ({}x{}, {} triangles) with {} on {}",
@@ -89,7 +94,8 @@ pub fn run(options: &ContextOptions, args: RenderArgs) -> Result<()> {
         device_line(ctx.info())
     );
     let bar = progress(job.method_samples(), "render");
-    let report = render::render(&ctx, &job, |done, _| bar.set_position(done as u64))?;
+    let report =
+        render::render_checked(&ctx, &job, checked, |done, _| bar.set_position(done as u64))?;
     bar.finish_and_clear();
     let r = &report.record;
     println!("per-pass GPU time:\n{}", report.passes);
@@ -114,12 +120,13 @@ pub fn run(options: &ContextOptions, args: RenderArgs) -> Result<()> {
             m.nan_inf
         );
     }
-    let (exr, png, json) = &report.paths;
-    println!(
-        "wrote {}, {} and {}",
-        exr.display(),
-        png.display(),
-        json.display()
-    );
+    let files: Vec<String> = report
+        .files
+        .all()
+        .iter()
+        .map(|p| p.display().to_string())
+        .collect();
+    let (json, images) = files.split_last().expect("a render writes files");
+    println!("wrote {} and {json}", images.join(", "));
     Ok(())
 }

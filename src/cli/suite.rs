@@ -173,69 +173,100 @@ pub fn run(options: &ContextOptions, args: SuiteArgs) -> Result<()> {
     let plan = suite.shard(shard);
     let mut eta = suite::eta::Eta::default();
     let mut run_start: Option<std::time::Instant> = None;
-    let results =
-        suite::run(&ctx, &suite, &options, |event| match event {
-            Event::Reference {
-                scene,
-                done,
-                total,
-                cached,
-            } => {
-                current.set_length(total as u64);
-                current.set_position(done as u64);
-                current.set_message(format!(
-                    "{scene}: reference{}",
-                    if cached { " (cached)" } else { "" }
-                ));
+    // Runs recorded so far, kept ones included: what is left is the plan less these.
+    let mut recorded: Vec<usize> = Vec::new();
+    let results = suite::run(&ctx, &suite, &options, |event| match event {
+        Event::StaleLock { holder } => {
+            bars.suspend(|| {
+                eprintln!(
+                    "note: {} was locked by {holder}, which is no longer running (interrupted?): taking it over",
+                    out.display()
+                )
+            });
+        }
+        Event::Resumed { kept, of } => {
+            overall.set_position(kept.len() as u64);
+            bars.suspend(|| {
+                println!(
+                    "resuming the interrupted run in {}: {} of {of} runs recorded there are kept (remove the folder to start over)",
+                    out.display(),
+                    kept.len()
+                )
+            });
+            recorded = kept;
+        }
+        Event::Reference {
+            scene,
+            done,
+            total,
+            cached,
+        } => {
+            current.set_length(total as u64);
+            current.set_position(done as u64);
+            current.set_message(format!(
+                "{scene}: reference{}",
+                if cached { " (cached)" } else { "" }
+            ));
+        }
+        Event::Render {
+            id,
+            render,
+            renders,
+            done,
+            total,
+            ..
+        } => {
+            if run_start.is_none() {
+                run_start = Some(std::time::Instant::now());
             }
-            Event::Render {
-                id,
-                render,
-                renders,
-                done,
-                total,
-                ..
-            } => {
-                if run_start.is_none() {
-                    run_start = Some(std::time::Instant::now());
-                }
-                current.set_length(total as u64);
-                current.set_position(done as u64);
-                current.set_message(match renders {
-                    0 => format!("{id}: calibration render {}", render + 1),
-                    _ => format!("{id}: render {}/{renders}", render + 1),
-                });
+            current.set_length(total as u64);
+            current.set_position(done as u64);
+            current.set_message(match renders {
+                0 => format!("{id}: calibration render {}", render + 1),
+                _ => format!("{id}: render {}/{renders}", render + 1),
+            });
+        }
+        Event::Finished { run, record, .. } => {
+            overall.set_position(run as u64);
+            recorded.push(record.index);
+            // Only rendered runs teach the estimate, from their first render on (a
+            // scene's reference comes before it).
+            let spec = plan.iter().find(|s| s.index == record.index);
+            if let (Status::Ok, Some(start), Some(spec)) = (record.status, run_start.take(), spec) {
+                eta.finished(&suite, spec, start.elapsed().as_secs_f64());
             }
-            Event::Finished { run, record, .. } => {
-                overall.set_position(run as u64);
-                // Only rendered runs teach the estimate, from their first render on (a
-                // scene's reference comes before it).
-                if let (Status::Ok, Some(start)) = (record.status, run_start.take()) {
-                    eta.finished(&suite, plan[run - 1], start.elapsed().as_secs_f64());
-                }
-                run_start = None;
-                if let Some(left) = eta.left(&suite, &plan[run..]) {
-                    overall.set_message(format!(", about {} left", indicatif::HumanDuration(left)));
-                }
-                let line =
-                    match record.status {
-                        Status::Ok => {
-                            let m = record.metrics.expect("ok runs are scored");
-                            format!(
-                        "{:<48} GPU {:>9} ms  relMSE {:.3e}  bias {:>6.2}%  outliers {:.3}%{}",
+            run_start = None;
+            let left: Vec<_> = plan
+                .iter()
+                .filter(|s| !recorded.contains(&s.index))
+                .copied()
+                .collect();
+            if let Some(left) = eta.left(&suite, &left) {
+                overall.set_message(format!(", about {} left", indicatif::HumanDuration(left)));
+            }
+            let line =
+                match record.status {
+                    Status::Ok => {
+                        let m = record.metrics.expect("ok runs are scored");
+                        format!(
+                        "{:<48} GPU {:>9} ms  relMSE {:.3e}  bias {:>6.2}%  outliers {:.3}%{}{}",
                         record.id,
                         record.gpu_ms.map(|t| format!("{t:.2}")).unwrap_or("-".into()),
                         m.rel_mse,
                         100.0 * m.bias,
                         100.0 * m.outliers,
-                        if record.pareto { "  *" } else { "" }
-                    )
+                        if record.pareto { "  *" } else { "" },
+                        match (record.budget_missed, record.time_ms) {
+                            (true, Some(t)) => format!("  time budget of {t} ms missed"),
+                            _ => String::new(),
                         }
-                        s => format!("{:<48} {}: {}", record.id, s.as_str(), record.note),
-                    };
-                bars.suspend(|| println!("{line}"));
-            }
-        })?;
+                    )
+                    }
+                    s => format!("{:<48} {}: {}", record.id, s.as_str(), record.note),
+                };
+            bars.suspend(|| println!("{line}"));
+        }
+    })?;
     overall.finish_and_clear();
     current.finish_and_clear();
     super::logger::on_screen(None);
@@ -250,7 +281,7 @@ pub fn run(options: &ContextOptions, args: SuiteArgs) -> Result<()> {
     );
     if STOP.load(std::sync::atomic::Ordering::SeqCst) {
         eprintln!(
-            "interrupted: {} of {} runs recorded; the outputs hold them, marked incomplete",
+            "interrupted: {} of {} runs recorded; the outputs hold them, marked incomplete (the same command resumes)",
             results.runs.len(),
             results.runs_planned
         );

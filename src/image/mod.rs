@@ -9,7 +9,7 @@ pub mod sidecar;
 pub mod tonemap;
 
 pub use metrics::{compare, Metrics, MetricsError};
-pub use sidecar::{output_paths, write_all, PassRecord, RenderRecord};
+pub use sidecar::{output_paths, write_all, OutputFiles, PassRecord, RenderRecord};
 
 /// A linear RGB image, row 0 at the top, `pixels[y * width + x]`.
 #[derive(Clone, Debug, PartialEq)]

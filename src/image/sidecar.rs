@@ -1,13 +1,14 @@
 //! The JSON record beside every render (DESIGN.md "Outputs"): what was rendered, how, on what,
 //! how long each pass took and, when a reference was given, how far from it. Also where the
-//! three outputs of `-o <out>` go, and writing all three.
+//! outputs of `-o <out>` go, and writing them as one set.
 
 use std::collections::BTreeMap;
 use std::ffi::OsString;
 use std::fs;
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
 
-use anyhow::{Context, Result};
+use anyhow::{bail, ensure, Context, Result};
 use serde::{Deserialize, Serialize};
 
 use super::metrics::Metrics;
@@ -52,6 +53,10 @@ pub struct RenderRecord {
     /// Method-specific figures (bir: fractions of kept VPLs per side, rays per kept VPL).
     #[serde(default)]
     pub stats: BTreeMap<String, f64>,
+    /// The files of this render beside this JSON (EXR, PNG, maps): a map left by an earlier
+    /// render under the same `-o` is not among them.
+    #[serde(default)]
+    pub files: Vec<String>,
     pub irad_version: String,
 }
 
@@ -81,66 +86,250 @@ impl RenderRecord {
     }
 }
 
-/// The EXR, PNG and JSON paths for `-o <out>`: the extensions are appended to `out`
-/// (`out/cornell` gives `out/cornell.exr`, `out/cornell.png`, `out/cornell.json`; a dot in the
-/// stem is kept). When `out` already ends in `.exr`, `.png` or `.json` that extension is
-/// dropped first, so `-o out/cornell.png` does not give `out/cornell.png.png`.
-pub fn output_paths(out: &Path) -> (PathBuf, PathBuf, PathBuf) {
+/// The stem of `-o <out>`'s files. A folder (an existing one, or a path ending in `/`, `.` or
+/// `..`) gets the stem `<out>/render`, so its files are named, not hidden (`-o out/` would
+/// otherwise give `out/.exr`); otherwise `out`, less a final `.exr`, `.png` or `.json` (so
+/// `-o out/cornell.png` does not give `out/cornell.png.png`; any other dot in the name stays).
+pub fn output_stem(out: &Path) -> PathBuf {
+    if names_a_folder(out) {
+        return out.join(FOLDER_STEM);
+    }
     let is_ours = out.extension().is_some_and(|e| {
         let e = e.to_string_lossy().to_ascii_lowercase();
         e == "exr" || e == "png" || e == "json"
     });
-    let stem = if is_ours {
+    if is_ours {
         out.with_extension("")
     } else {
         out.to_path_buf()
-    };
-    let with = |ext: &str| {
-        let mut s = OsString::from(stem.as_os_str());
-        s.push(".");
-        s.push(ext);
-        PathBuf::from(s)
-    };
-    (with("exr"), with("png"), with("json"))
+    }
 }
 
-/// Writes a per-pixel map beside the image: `<out>.<name>.exr` (float32) and
-/// `<out>.<name>.png` (the values in [0, 1] as 8 bits, no tone mapping or sRGB curve: a
-/// visualisation, not a picture). Returns the two paths.
-pub fn write_map(out: &Path, name: &str, map: &Image) -> Result<(PathBuf, PathBuf)> {
-    let (exr_path, ..) = output_paths(out);
-    let stem = exr_path.with_extension("");
-    let with = |ext: &str| {
-        let mut s = OsString::from(stem.as_os_str());
-        s.push(format!(".{name}.{ext}"));
-        PathBuf::from(s)
-    };
-    let (exr_map, png_map) = (with("exr"), with("png"));
-    exr::write(&exr_map, map)?;
-    let bytes: Vec<u8> = map
-        .pixels
-        .iter()
-        .flat_map(|p| p.map(|c| (c.clamp(0.0, 1.0) * 255.0).round() as u8))
-        .collect();
-    png::write_rgb8(&png_map, map.width, map.height, &bytes)?;
-    Ok((exr_map, png_map))
+/// The file stem a folder given as `-o` gets.
+pub const FOLDER_STEM: &str = "render";
+
+/// `out` is a folder: an existing one, or written as one (`dir/`, `.`, `..`, `dir/.`).
+fn names_a_folder(out: &Path) -> bool {
+    let text = out.to_string_lossy();
+    let written_as_folder = text.is_empty()
+        || text.ends_with(std::path::is_separator)
+        || Path::new(text.rsplit(std::path::is_separator).next().unwrap_or(""))
+            .file_name()
+            .is_none();
+    written_as_folder || out.is_dir()
 }
 
-/// Writes `<out>.exr` (float32 linear RGB), `<out>.png` (tone-mapped at `exposure` stops) and
-/// `<out>.json`, creating the parent folder, and returns the three paths.
+/// The EXR, PNG and JSON paths for `-o <out>`: the extensions appended to `output_stem(out)`
+/// (`out/cornell` gives `out/cornell.exr`, `out/cornell.png`, `out/cornell.json`).
+pub fn output_paths(out: &Path) -> (PathBuf, PathBuf, PathBuf) {
+    let stem = output_stem(out);
+    (
+        with_suffix(&stem, ".exr"),
+        with_suffix(&stem, ".png"),
+        with_suffix(&stem, ".json"),
+    )
+}
+
+/// A per-pixel map's EXR and PNG paths: `<stem>.<name>.exr` and `<stem>.<name>.png`.
+pub fn map_paths(out: &Path, name: &str) -> (PathBuf, PathBuf) {
+    let stem = output_stem(out);
+    (
+        with_suffix(&stem, &format!(".{name}.exr")),
+        with_suffix(&stem, &format!(".{name}.png")),
+    )
+}
+
+fn with_suffix(stem: &Path, suffix: &str) -> PathBuf {
+    let mut s = OsString::from(stem.as_os_str());
+    s.push(suffix);
+    PathBuf::from(s)
+}
+
+/// The files one render writes.
+#[derive(Clone, Debug, PartialEq)]
+pub struct OutputFiles {
+    pub exr: PathBuf,
+    pub png: PathBuf,
+    pub json: PathBuf,
+    /// Each map's EXR and PNG, in the order the method gave them.
+    pub maps: Vec<(PathBuf, PathBuf)>,
+}
+
+impl OutputFiles {
+    pub fn new(out: &Path, map_names: &[&str]) -> OutputFiles {
+        let (exr, png, json) = output_paths(out);
+        OutputFiles {
+            exr,
+            png,
+            json,
+            maps: map_names.iter().map(|n| map_paths(out, n)).collect(),
+        }
+    }
+
+    /// Every file, the JSON last.
+    pub fn all(&self) -> Vec<&Path> {
+        let mut all = vec![self.exr.as_path(), self.png.as_path()];
+        for (e, p) in &self.maps {
+            all.extend([e.as_path(), p.as_path()]);
+        }
+        all.push(&self.json);
+        all
+    }
+
+    /// The folder they are written in.
+    pub fn folder(&self) -> PathBuf {
+        match self.json.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+            _ => PathBuf::from("."),
+        }
+    }
+
+    /// The file names beside the JSON that belong to it (what `RenderRecord::files` lists).
+    pub fn names(&self) -> Vec<String> {
+        self.all()
+            .iter()
+            .filter(|p| **p != self.json)
+            .map(|p| {
+                p.file_name()
+                    .map(|n| n.to_string_lossy().into_owned())
+                    .unwrap_or_default()
+            })
+            .collect()
+    }
+}
+
+/// Checks, before any work, that the outputs of `-o <out>` can be written: their folder
+/// exists or can be created, a file can be created in it, and no folder sits where one of
+/// the EXR, PNG and JSON goes. Creates the folder.
+pub fn check_writable(out: &Path) -> Result<OutputFiles> {
+    let files = OutputFiles::new(out, &[]);
+    prepare_folder(&files)?;
+    let folder = files.folder();
+    let probe = temp_name(&folder.join(".irad-probe"));
+    fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(&probe)
+        .with_context(|| {
+            format!(
+                "the output folder {} is not writable (creating {})",
+                folder.display(),
+                probe.display()
+            )
+        })?;
+    fs::remove_file(&probe).with_context(|| format!("removing {}", probe.display()))?;
+    Ok(files)
+}
+
+/// Creates the outputs' folder and checks that no output name is taken by a folder (the
+/// rename would fail halfway through the set).
+fn prepare_folder(files: &OutputFiles) -> Result<()> {
+    let folder = files.folder();
+    fs::create_dir_all(&folder)
+        .with_context(|| format!("creating the output folder {}", folder.display()))?;
+    for path in files.all() {
+        if path.is_dir() {
+            bail!(
+                "{} is a folder, so the render cannot be written there: choose another -o",
+                path.display()
+            );
+        }
+    }
+    Ok(())
+}
+
+/// A temporary name beside `path`, unique to this process and call: `.<name>.<pid>-<n>.tmp`.
+fn temp_name(path: &Path) -> PathBuf {
+    static NEXT: AtomicU64 = AtomicU64::new(0);
+    let n = NEXT.fetch_add(1, Ordering::Relaxed);
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    path.with_file_name(format!(".{name}.{}-{n}.tmp", std::process::id()))
+}
+
+/// Files written under temporary names, renamed into place by `commit`; dropped before that,
+/// their temporary files are removed, so a failed or interrupted write leaves the previous
+/// files as they were and no partial file under an output's name.
+#[derive(Default)]
+struct Pending {
+    /// (temporary, final) names, in the order they are renamed.
+    files: Vec<(PathBuf, PathBuf)>,
+}
+
+impl Pending {
+    fn write(&mut self, path: &Path, write: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
+        let tmp = temp_name(path);
+        // Recorded first, so the drop removes what a failed write left.
+        self.files.push((tmp.clone(), path.to_path_buf()));
+        write(&tmp).with_context(|| format!("writing {}", path.display()))
+    }
+
+    /// Renames every file into place, in order, while holding the folder's lock: two renders
+    /// writing the same names take turns, so the set left is one render's whole set.
+    fn commit(mut self, files: &OutputFiles) -> Result<()> {
+        let _lock = crate::lock::FolderLock::wait(&files.folder())?;
+        // Checked again under the lock: a folder put in an output's place since the start
+        // would fail its rename after the others had replaced the previous set.
+        prepare_folder(files)?;
+        let files = std::mem::take(&mut self.files);
+        for (i, (tmp, path)) in files.iter().enumerate() {
+            if let Err(e) = fs::rename(tmp, path) {
+                // The drop removes the temporary files not renamed yet.
+                self.files = files[i..].to_vec();
+                return Err(e)
+                    .with_context(|| format!("renaming {} to {}", tmp.display(), path.display()));
+            }
+        }
+        Ok(())
+    }
+}
+
+impl Drop for Pending {
+    fn drop(&mut self) {
+        for (tmp, _) in &self.files {
+            let _ = fs::remove_file(tmp);
+        }
+    }
+}
+
+/// Writes a render's files as one set: `<out>.exr` (float32 linear RGB), `<out>.png` (tone
+/// mapped at `exposure` stops), each map's `<out>.<name>.exr` and `.png` (the values in
+/// [0, 1] as 8 bits, no tone mapping or sRGB curve: a visualisation, not a picture) and
+/// `<out>.json`, creating the folder. Every file is written under a temporary name first, then
+/// all are renamed into place, the JSON last: a failure (a full disk, a bad exposure) leaves
+/// the previous set as it was, and a finished JSON means its images are in place. The record
+/// is written as given; its `files` should be `OutputFiles::names`.
 pub fn write_all(
     out: &Path,
     image: &Image,
     record: &RenderRecord,
     exposure: f32,
-) -> Result<(PathBuf, PathBuf, PathBuf)> {
-    let (exr_path, png_path, json_path) = output_paths(out);
-    if let Some(parent) = exr_path.parent().filter(|p| !p.as_os_str().is_empty()) {
-        fs::create_dir_all(parent)
-            .with_context(|| format!("creating the output folder {}", parent.display()))?;
+    maps: &[(String, Image)],
+) -> Result<OutputFiles> {
+    ensure!(
+        exposure.is_finite(),
+        "exposure must be a finite number of stops, got {exposure}"
+    );
+    let names: Vec<&str> = maps.iter().map(|(n, _)| n.as_str()).collect();
+    let files = OutputFiles::new(out, &names);
+    prepare_folder(&files)?;
+    let mut pending = Pending::default();
+    pending.write(&files.exr, |p| exr::write(p, image))?;
+    pending.write(&files.png, |p| png::write(p, image, exposure))?;
+    for ((_, map), (exr_map, png_map)) in maps.iter().zip(&files.maps) {
+        pending.write(exr_map, |p| exr::write(p, map))?;
+        let bytes: Vec<u8> = map
+            .pixels
+            .iter()
+            .flat_map(|p| p.map(|c| (c.clamp(0.0, 1.0) * 255.0).round() as u8))
+            .collect();
+        pending.write(png_map, |p| {
+            png::write_rgb8(p, map.width, map.height, &bytes)
+        })?;
     }
-    exr::write(&exr_path, image)?;
-    png::write(&png_path, image, exposure)?;
-    record.write(&json_path)?;
-    Ok((exr_path, png_path, json_path))
+    pending.write(&files.json, |p| record.write(p))?;
+    pending.commit(&files)?;
+    Ok(files)
 }

@@ -70,6 +70,13 @@ pub fn calibrate(
     })
 }
 
+/// A time budget cannot be met when the run, at the smallest count (1), took longer than it
+/// (`ms`: its median GPU time, or wall time without timestamps). A run over its budget at a
+/// larger count is the calibration's error, which a smaller count would have avoided.
+pub fn missed(time_ms: f64, count: u32, ms: f64) -> bool {
+    count <= 1 && ms > time_ms
+}
+
 /// The count whose predicted time is the budget, from the line through the last two trials
 /// (one trial, or a line that does not rise: proportional to the last), at most 4x the
 /// proportional count (a near-flat line through two noisy times would predict any count).
@@ -126,6 +133,14 @@ mod tests {
         assert_eq!(fill(&trials(&[(1, 5000.0)]), 2000.0), 1);
         // Two trials of one count: no line, proportional to the last.
         assert_eq!(fill(&trials(&[(2, 100.0), (2, 100.0)]), 1000.0), 20);
+    }
+
+    #[test]
+    fn a_budget_is_missed_only_when_one_count_is_over_it() {
+        assert!(missed(1.0, 1, 4.2));
+        assert!(!missed(1.0, 1, 0.9));
+        // Over the budget at 7 frames: 6 would have been under; not a budget that cannot be met.
+        assert!(!missed(1.0, 7, 1.3));
     }
 
     #[test]

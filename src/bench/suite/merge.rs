@@ -5,6 +5,11 @@
 //! an error, and missing runs leave the merged results marked incomplete. Parts measured on
 //! different devices, drivers or irad versions are refused unless allowed: their GPU times
 //! do not share an axis (when allowed, each device gets its own lines and Pareto marks).
+//!
+//! Every part is checked (its results, its images/ and every image its results name) before
+//! anything is written. The merged folder is built under a temporary name beside the output
+//! folder and renamed into place, with the output folder locked as a suite locks it, so a
+//! failed merge leaves no half-built folder and a suite writing there meanwhile is refused.
 
 use std::collections::BTreeMap;
 use std::fs;
@@ -33,6 +38,7 @@ pub fn merge(parts: &[PathBuf], out: &Path, allow_mixed_devices: bool) -> Result
             );
         }
         let results = SuiteResults::read(&part.join("results.json"))?;
+        check_images(part, &results)?;
         if let Some(m) = &merged {
             if m.suite_hash != results.suite_hash {
                 bail!(
@@ -93,19 +99,121 @@ pub fn merge(parts: &[PathBuf], out: &Path, allow_mixed_devices: bool) -> Result
     }
     merged.mark_pareto();
 
-    output::prepare(out)?;
+    check_target(out)?;
+    let _lock = output::lock(out, &mut |holder| {
+        log::warn!(
+            "{}: took over the lock left by {holder}, which is no longer running",
+            out.display()
+        )
+    })?;
+    let target = fs::canonicalize(out).with_context(|| format!("resolving {}", out.display()))?;
+    let (Some(parent), Some(name)) = (target.parent(), target.file_name()) else {
+        bail!("{}: cannot merge into the root folder", out.display());
+    };
+    let name = name.to_string_lossy();
+    let building = Building(parent.join(format!(".{name}.merging-{}", std::process::id())));
+    if building.0.exists() {
+        fs::remove_dir_all(&building.0)
+            .with_context(|| format!("removing {}", building.0.display()))?;
+    }
+    fs::create_dir(&building.0).with_context(|| format!("creating {}", building.0.display()))?;
+    output::prepare(&building.0, false)?;
     for (part, _) in &loaded {
         let images = part.join("images");
         let entries =
             fs::read_dir(&images).with_context(|| format!("reading {}", images.display()))?;
         for entry in entries {
             let entry = entry.with_context(|| format!("reading {}", images.display()))?;
-            let to = out.join("images").join(entry.file_name());
+            let to = building.0.join("images").join(entry.file_name());
             fs::copy(entry.path(), &to).with_context(|| {
                 format!("copying {} to {}", entry.path().display(), to.display())
             })?;
         }
     }
-    output::write(out, &merged)?;
+    output::write(&building.0, &merged)?;
+    // Into place: the old folder (ours, locked) aside, the new one in, the old one removed.
+    let old = parent.join(format!(".{name}.replaced-{}", std::process::id()));
+    fs::rename(&target, &old)
+        .with_context(|| format!("renaming {} to {}", target.display(), old.display()))?;
+    if let Err(e) = fs::rename(&building.0, &target) {
+        let _ = fs::rename(&old, &target);
+        return Err(e)
+            .with_context(|| format!("renaming {} to {}", building.0.display(), target.display()));
+    }
+    fs::remove_dir_all(&old).with_context(|| format!("removing {}", old.display()))?;
     Ok(merged)
+}
+
+/// A folder being built; removed unless it was renamed into place.
+struct Building(PathBuf);
+
+impl Drop for Building {
+    fn drop(&mut self) {
+        let _ = fs::remove_dir_all(&self.0);
+    }
+}
+
+/// A part is a whole suite output folder: images/ with every image its results name.
+fn check_images(part: &Path, results: &SuiteResults) -> Result<()> {
+    let images = part.join("images");
+    if !images.is_dir() {
+        bail!(
+            "{}: no images/ folder, so this is not a whole suite output folder (copy the shard's folder whole); nothing was written",
+            part.display()
+        );
+    }
+    let named = results
+        .runs
+        .iter()
+        .flat_map(|r| [&r.image, &r.error_map].map(|i| (i, r.id.as_str())))
+        .filter_map(|(i, id)| i.as_ref().map(|i| (i.as_str(), id)))
+        .chain(
+            results
+                .references
+                .iter()
+                .map(|(scene, r)| (r.image.as_str(), scene.as_str())),
+        );
+    for (image, of) in named {
+        if !part.join(image).is_file() {
+            bail!(
+                "{}: {image} (of {of}) is missing; nothing was written",
+                part.display()
+            );
+        }
+    }
+    Ok(())
+}
+
+/// The merge replaces its output folder whole, so that folder must be new, empty or a suite's
+/// output folder: nothing else in it would survive.
+fn check_target(out: &Path) -> Result<()> {
+    if !out.exists() {
+        return Ok(());
+    }
+    if !out.is_dir() {
+        bail!(
+            "{} is not a folder: choose another output folder",
+            out.display()
+        );
+    }
+    const SUITE_FILES: &[&str] = &[
+        "results.json",
+        "results.csv",
+        "report.md",
+        "images",
+        "charts",
+        crate::lock::LOCK_FILE,
+    ];
+    for entry in fs::read_dir(out).with_context(|| format!("reading {}", out.display()))? {
+        let entry = entry.with_context(|| format!("reading {}", out.display()))?;
+        let name = entry.file_name().to_string_lossy().into_owned();
+        // A temporary file of an interrupted write (output.rs) is a suite's too.
+        if !SUITE_FILES.contains(&name.as_str()) && !name.ends_with(".tmp") {
+            bail!(
+                "{} holds {name}, which is not a suite output: the merge replaces the whole folder, so choose another output folder",
+                out.display()
+            );
+        }
+    }
+    Ok(())
 }

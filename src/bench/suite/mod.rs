@@ -3,8 +3,9 @@
 //! reference, measures its flicker, and writes results.json, results.csv, one SVG chart per
 //! scene (relMSE against GPU time, log-log) and report.md with thumbnails and error maps.
 //! Everything is rewritten after each run (write then rename), so an interrupted suite leaves
-//! readable results of the runs it finished. `--shard i/n` runs part of a suite; `merge`
-//! combines parts.
+//! readable results of the runs it finished, and running it again into the same folder resumes
+//! it (resume.rs). The folder is locked while a suite writes it (`crate::lock`). `--shard i/n`
+//! runs part of a suite; `merge` combines parts.
 
 pub mod calibrate;
 pub mod eta;
@@ -15,6 +16,7 @@ pub mod output;
 pub mod references;
 pub mod report;
 pub mod results;
+pub mod resume;
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -67,7 +69,13 @@ pub enum Event<'a> {
         done: u32,
         total: u32,
     },
-    /// Run `run` of `of` is recorded and the outputs rewritten.
+    /// The output folder held an interrupted run of this suite: the runs with these indices
+    /// (of this shard's `of`) are kept from it and not rendered again.
+    Resumed { kept: Vec<usize>, of: usize },
+    /// The folder's lock was left by a process that is gone (`holder`); it was taken over.
+    StaleLock { holder: String },
+    /// `run` of this shard's `of` runs are recorded (kept ones included), the last `record`,
+    /// and the outputs rewritten.
     Finished {
         run: usize,
         of: usize,
@@ -83,8 +91,15 @@ pub fn run(
     mut on: impl FnMut(Event),
 ) -> Result<SuiteResults> {
     let planned = suite.shard(options.shard);
-    output::prepare(&options.out)?;
     let info = ctx.info();
+    // One writer at a time: a second suite or a merge into this folder is refused.
+    let _lock = output::lock(&options.out, &mut |holder| on(Event::StaleLock { holder }))?;
+    let previous = resume::check(
+        &options.out,
+        suite,
+        options.shard,
+        (&info.name, &info.driver, IRAD_VERSION),
+    )?;
     let mut results = SuiteResults {
         suite: suite.name.clone(),
         suite_file: suite.file.clone(),
@@ -100,6 +115,26 @@ pub fn run(
         references: BTreeMap::new(),
         runs: Vec::new(),
     };
+    match &previous {
+        resume::Previous::Resume(_) if options.references_only => anyhow::bail!(
+            "{} holds an interrupted run of this suite; --references-only would replace it: choose another output folder, or run the suite to resume it",
+            options.out.display()
+        ),
+        resume::Previous::Resume(old) => {
+            results.runs = resume::kept_runs(old, suite, &planned, &options.out);
+            results.references = old.references.clone();
+            results.mark_pareto();
+            on(Event::Resumed {
+                kept: results.runs.iter().map(|r| r.index).collect(),
+                of: planned.len(),
+            });
+        }
+        resume::Previous::Fresh => {}
+    }
+    output::prepare(
+        &options.out,
+        matches!(previous, resume::Previous::Resume(_)),
+    )?;
     output::write(&options.out, &results)?;
     let renderers = Renderers::default();
     let stopped = || options.stop.is_some_and(|s| s.load(Ordering::SeqCst));
@@ -120,9 +155,13 @@ pub fn run(
         output::write(&options.out, &results)?;
         return Ok(results);
     }
-    let mut done = 0usize;
+    let kept: Vec<usize> = results.runs.iter().map(|r| r.index).collect();
+    let mut done = kept.len();
     for (s, suite_scene) in suite.scenes.iter().enumerate() {
-        let runs: Vec<_> = planned.iter().filter(|r| r.scene == s).collect();
+        let runs: Vec<_> = planned
+            .iter()
+            .filter(|r| r.scene == s && !kept.contains(&r.index))
+            .collect();
         if runs.is_empty() || stopped() {
             continue;
         }
@@ -157,14 +196,16 @@ pub fn run(
                     })
                 },
             )?;
-            results.runs.push(record);
+            // In suite order, kept runs and new ones alike.
+            let at = results.runs.partition_point(|r| r.index < record.index);
+            results.runs.insert(at, record);
             results.mark_pareto();
             output::write(&options.out, &results)?;
-            done += 1;
+            done = results.runs.len();
             on(Event::Finished {
                 run: done,
                 of: planned.len(),
-                record: results.runs.last().expect("just pushed"),
+                record: &results.runs[at],
             });
         }
     }
@@ -270,6 +311,7 @@ fn run_one(
         time_ms: spec.time_ms,
         calibrated_count: None,
         calibration: vec![],
+        budget_missed: false,
         parameters: spec.method.parameters(),
         status: Status::Ok,
         note: String::new(),
@@ -375,6 +417,9 @@ fn run_one(
     )?;
     let (w, h, data) = preview::error_map_rgb8(&m.image, reference, factor);
     image::png::write_rgb8(&options.out.join(&error_name), w, h, &data)?;
+    if let (Some(time_ms), Some(count)) = (spec.time_ms, record.calibrated_count) {
+        record.budget_missed = calibrate::missed(time_ms, count, m.gpu_ms.unwrap_or(m.wall_ms));
+    }
     record.gpu_ms = m.gpu_ms;
     record.pass_gpu_ms = m.pass_gpu_ms;
     record.wall_ms = Some(m.wall_ms);

@@ -1,6 +1,7 @@
 //! The suite's output folder: results.json, results.csv, `charts/<scene>.svg`, report.md and
-//! images/ (thumbnails and error maps, written by the runner). Every file is written under a
-//! temporary name and renamed, so a reader (or a Ctrl-C) never sees half a file.
+//! images/ (thumbnails and error maps, written by the runner), and its lock while a suite or a
+//! merge writes it. Every file is written under a temporary name and renamed, so a reader (or
+//! a Ctrl-C) never sees half a file.
 
 use std::fs;
 use std::path::Path;
@@ -8,16 +9,31 @@ use std::path::Path;
 use anyhow::{Context as _, Result};
 
 use crate::bench::chart::{Chart, Point, Series};
+use crate::lock::HolderLock;
 
 use super::file::file_safe;
 use super::report;
 use super::results::{Status, SuiteResults};
 
-/// Creates `out` with images/ and charts/. A folder that holds an earlier suite's results
-/// (a results.json) is emptied of what a suite writes first, so no stale chart or image
-/// survives; anything else in it is left alone.
-pub fn prepare(out: &Path) -> Result<()> {
-    if SuiteResults::read(&out.join("results.json")).is_ok() {
+/// Creates `out` and takes its lock (`crate::lock::HolderLock`), held until the guard drops:
+/// a second suite or merge writing the folder is refused, naming the holder. A lock left by a
+/// process that is gone is taken over and `stale` told its holder.
+pub fn lock(out: &Path, stale: &mut dyn FnMut(String)) -> Result<HolderLock> {
+    fs::create_dir_all(out)
+        .with_context(|| format!("creating the output folder {}", out.display()))?;
+    let acquired = HolderLock::acquire(out)?;
+    if let Some(holder) = acquired.stale {
+        stale(holder);
+    }
+    Ok(acquired.lock)
+}
+
+/// Creates images/ and charts/ in `out`. Unless `resume`, what an earlier run of the suite
+/// wrote there (images/, charts/, results and report; only when its results.json says it is a
+/// suite's folder) is removed first, so no stale chart or image survives; anything else in the
+/// folder is left alone.
+pub fn prepare(out: &Path, resume: bool) -> Result<()> {
+    if !resume && out.join("results.json").is_file() {
         for dir in ["images", "charts"] {
             let d = out.join(dir);
             if d.exists() {

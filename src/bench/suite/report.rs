@@ -105,7 +105,7 @@ pub fn markdown(results: &SuiteResults) -> String {
                 "| {mark} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
                 r.label,
                 r.budget,
-                fixed(r.gpu_ms, 2),
+                fixed(r.gpu_ms, 2) + missed_mark(r),
                 fixed(r.wall_ms, 1),
                 sci(m.map(|m| m.rel_mse))
                     + if limited_by_reference(r) {
@@ -124,6 +124,7 @@ pub fn markdown(results: &SuiteResults) -> String {
             );
         }
         md += "\n";
+        md += &missed_footnotes(&runs);
         md += &equal_time_table(&runs);
         let with_stats: Vec<&&RunRecord> = runs.iter().filter(|r| !r.stats.is_empty()).collect();
         if !with_stats.is_empty() {
@@ -214,7 +215,7 @@ fn equal_time_table(runs: &[&RunRecord]) -> String {
                 r.calibrated_count
                     .map(|c| c.to_string())
                     .unwrap_or_else(|| "-".into()),
-                fixed(r.gpu_ms, 1),
+                fixed(r.gpu_ms, 1) + missed_mark(r),
                 sci(m.map(|m| m.rel_mse))
                     + if limited_by_reference(r) {
                         LIMITED_MARK
@@ -235,6 +236,41 @@ fn equal_time_table(runs: &[&RunRecord]) -> String {
             md += "\n";
         }
         md += "\n";
+    }
+    md
+}
+
+/// Marks the time of a run whose time budget cannot be met on this device (results.rs,
+/// `budget_missed`); a footnote under the table gives the times.
+pub const MISSED_MARK: &str = " †";
+
+fn missed_mark(r: &RunRecord) -> &'static str {
+    if r.budget_missed {
+        MISSED_MARK
+    } else {
+        ""
+    }
+}
+
+/// One footnote line per run whose time budget was missed; empty when none was.
+fn missed_footnotes(runs: &[&RunRecord]) -> String {
+    let mut md = String::new();
+    for r in runs.iter().filter(|r| r.budget_missed) {
+        let took = r
+            .gpu_ms
+            .map(|t| (t, "GPU"))
+            .or(r.wall_ms.map(|t| (t, "wall")));
+        let _ = writeln!(
+            md,
+            "{} Time budget missed: {} {} took {} {} ms at a count of 1, over its budget of {} ms; \
+             no count meets it on this device, so its figures are not at equal time.\n",
+            MISSED_MARK.trim(),
+            r.label,
+            r.budget,
+            fixed(took.map(|t| t.0), 3),
+            took.map(|t| t.1).unwrap_or("GPU"),
+            r.time_ms.map(|t| t.to_string()).unwrap_or_else(|| "-".into()),
+        );
     }
     md
 }

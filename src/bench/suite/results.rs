@@ -59,6 +59,10 @@ pub struct RunRecord {
     /// The calibration renders behind `calibrated_count` (calibrate.rs).
     #[serde(default)]
     pub calibration: Vec<Trial>,
+    /// The time budget cannot be met on this device: even at a count of 1 the run took longer
+    /// (`gpu_ms`, or `wall_ms` without timestamps), so its figures are not at equal time.
+    #[serde(default)]
+    pub budget_missed: bool,
     pub parameters: BTreeMap<String, serde_json::Value>,
     pub status: Status,
     /// Why a run was declined or failed.
@@ -282,6 +286,7 @@ const COLUMNS: &[Column] = &[
             .map(|c| c.to_string())
             .unwrap_or_default()
     }),
+    ("budget_missed", |r| r.budget_missed.to_string()),
     ("status", |r| r.status.as_str().to_string()),
     ("expected_failure", |r| r.expected_failure.to_string()),
     ("home", |r| r.home.to_string()),
@@ -409,6 +414,7 @@ mod tests {
             time_ms: None,
             calibrated_count: None,
             calibration: vec![],
+            budget_missed: false,
             parameters: BTreeMap::new(),
             status: Status::Ok,
             note: String::new(),
@@ -546,15 +552,15 @@ mod tests {
         results
     }
 
-    /// The header is the one written before the columns became one table, and every row has
-    /// as many fields as it.
+    /// The header, column by column, and every row has as many fields as it.
     #[test]
     fn csv_header_and_rows_come_from_one_column_list() {
         let text = csv_sample().csv();
         let (header, _) = text.split_once('\n').unwrap();
         assert_eq!(
             header,
-            "index,id,scene,scene_path,method,label,budget,time_ms,calibrated_count,status,\
+            "index,id,scene,scene_path,method,label,budget,time_ms,calibrated_count,budget_missed,\
+             status,\
              expected_failure,home,pareto,width,height,seed,warmup,repeats,flicker_frames,scored,\
              gpu_ms,wall_ms,rel_mse,rmse,lab_error,bias,outliers,nan_inf,flicker,\
              image_mean_offset,nonfinite_estimates,reference_spp,reference_seed,\
@@ -570,7 +576,7 @@ mod tests {
         assert_eq!(rows[0].len(), COLUMNS.len() + 6);
     }
 
-    /// The rows are the bytes the CSV writer gave before the columns became one table.
+    /// The rows, byte for byte.
     #[test]
     fn csv_rows_are_unchanged() {
         let text = csv_sample().csv();
@@ -578,9 +584,9 @@ mod tests {
         assert_eq!(
             rows,
             "3,cornell-box/12.5/0.031,cornell-box,embedded:cornell-box,reference,pt,time 20ms,\
-             20,7,ok,false,true,true,1,1,0,0,1,0,1,12.5,,0.031,0,0,0,0,0,0.002,-0.01,0,1,9,0.00001,\
+             20,7,false,ok,false,true,true,1,1,0,0,1,0,1,12.5,,0.031,0,0,0,0,0,0.002,-0.01,0,1,9,0.00001,\
              \"gpu, \"\"fast\"\"\",,,\"two\nlines\",,bir,64,,3.25,0.75\n\
-             4,veach/1/0.5,veach,,reference,pt,,,,declined,true,false,false,1,1,0,0,1,0,1,,,,,,,,,,\
+             4,veach/1/0.5,veach,,reference,pt,,,,false,declined,true,false,false,1,1,0,0,1,0,1,,,,,,,,,,\
              ,0,1,9,,cpu,,,,16,,,,,\n"
         );
     }
