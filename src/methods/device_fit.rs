@@ -14,7 +14,10 @@ use glam::Vec4;
 
 use crate::methods::bundles::ray_bundles::BundleHit;
 use crate::methods::bundles::Bundles;
-use crate::methods::compensation::CompensationVertex;
+use crate::methods::bir::Split;
+use crate::methods::bundles::light_vertices::{LightSelection, LightVertex};
+use crate::methods::compensation::{CompensationVertex, VplClamp};
+use crate::methods::ir::schedule::{mean_albedo, Absorption, Schedule};
 use crate::methods::gbuffer::GBufferTexel;
 use crate::methods::ir::walk::Vpl;
 use crate::methods::ir::InstantRadiosity;
@@ -50,7 +53,7 @@ fn over(bytes: u64, limit: u64) -> String {
 
 /// The scene's image size and environment maps against `limit` (maxStorageBufferRange).
 pub fn check_scene(scene: &Scene, limit: u64) -> Result<(), String> {
-    check_pixels(scene, PIXEL_BYTES, limit)?;
+    check_pixels(scene, PIXEL_BYTES, "", limit)?;
     let file = scene_file(scene);
     if let Some(env) = &scene.environment {
         // EnvTexels (one Vec4 a texel), and for a sequence every map's texels in one buffer.
@@ -82,9 +85,10 @@ pub fn check_scene(scene: &Scene, limit: u64) -> Result<(), String> {
 }
 
 /// The image's pixels at `pixel_bytes` each against `limit`.
-fn check_pixels(scene: &Scene, pixel_bytes: u64, limit: u64) -> Result<(), String> {
+/// `what` names the buffer's use where it is not every method's G-buffer.
+fn check_pixels(scene: &Scene, pixel_bytes: u64, what: &str, limit: u64) -> Result<(), String> {
     let (w, h) = (scene.camera.width as u64, scene.camera.height as u64);
-    let bytes = w * h * pixel_bytes;
+    let bytes = (w * h).saturating_mul(pixel_bytes);
     if bytes <= limit {
         return Ok(());
     }
@@ -96,8 +100,9 @@ fn check_pixels(scene: &Scene, pixel_bytes: u64, limit: u64) -> Result<(), Strin
         ((h as f64 * scale) as u64).max(1),
     );
     Err(format!(
-        "{}: camera.resolution = [{w}, {h}]: {} pixels at {pixel_bytes} bytes a pixel {}; this \
-         device holds at most {pixels} pixels, e.g. [{fw}, {fh}]",
+        "{}: the image size {w}x{h} (camera.resolution, or the suite's or flag's size): {} \
+         pixels at {pixel_bytes} bytes a pixel{what} {}; this device holds at most {pixels} \
+         pixels, e.g. {fw}x{fh}",
         scene_file(scene),
         w * h,
         over(bytes, limit)
@@ -114,8 +119,22 @@ fn scene_file(scene: &Scene) -> String {
 /// The method's settings against `limit` on `scene` (which `check_scene` passed).
 pub fn check_method(method: &Method, scene: &Scene, limit: u64) -> Result<(), String> {
     let pixels = scene.camera.width as u64 * scene.camera.height as u64;
-    if matches!(method, Method::Ir(_) | Method::Bir(_) | Method::Bundles(_)) {
-        check_pixels(scene, COMPENSATION_PIXEL_BYTES, limit)?;
+    // ir's and bir's clamp compensation keeps per-pixel vertex lists (compensation.rs:
+    // allocated where it compensates a clamp other than 0).
+    let clamp = match method {
+        Method::Ir(s) => Some(s.clamp),
+        Method::Bir(s) => Some(s.clamp),
+        _ => None,
+    };
+    if let Some(c) = clamp {
+        if c.compensate && c.clamp != VplClamp::Fixed(0.0) {
+            check_pixels(
+                scene,
+                COMPENSATION_PIXEL_BYTES,
+                " in the clamp's compensation (compensate = false avoids it)",
+                limit,
+            )?;
+        }
     }
     match method {
         Method::Env(s) => {
@@ -153,11 +172,17 @@ pub fn check_method(method: &Method, scene: &Scene, limit: u64) -> Result<(), St
             }
         }
         Method::Bundles(s) => {
-            // BundleHits: a chunk of iterations' hits per pixel (bundles/mod.rs).
+            // BundleHits: a chunk of iterations' hits per pixel (bundles/mod.rs); the frame's
+            // light vertices: iterations x slots (bundles/light_vertices.rs).
+            let slots = match s.lights {
+                LightSelection::All => scene.lights.len().max(1) as u64,
+                LightSelection::Roulette => 1,
+            };
             let bytes = |iterations: u64| {
-                Bundles::chunk_size(iterations as u32, pixels as usize) as u64
+                let hits = Bundles::chunk_size(iterations as u32, pixels as usize) as u64
                     * pixels
-                    * size_of::<BundleHit>() as u64
+                    * size_of::<BundleHit>() as u64;
+                hits.max(iterations * slots * size_of::<LightVertex>() as u64)
             };
             let n = s.iterations as u64;
             if bytes(n) > limit {
@@ -171,7 +196,31 @@ pub fn check_method(method: &Method, scene: &Scene, limit: u64) -> Result<(), St
                 ));
             }
         }
-        Method::Reference(_) | Method::Bir(_) | Method::Lightfield(_) => {}
+        Method::Bir(s) => {
+            // Vpls: the standard walk's slots for a batch's light paths (bir/mod.rs).
+            let bytes = |vpls: u64| {
+                let vpls_per_frame = (vpls as u32).max(2);
+                let batch = if s.batch == 0 {
+                    vpls_per_frame
+                } else {
+                    s.batch.clamp(2, vpls_per_frame)
+                };
+                let rho = mean_albedo(scene);
+                let split = Split::new(s.strategy, batch, rho);
+                Schedule::new(split.light_paths, rho, Absorption::Fractional).slot_count as u64
+                    * size_of::<Vpl>() as u64
+            };
+            let vpls = s.vpls as u64;
+            if bytes(vpls) > limit {
+                let largest = largest_fitting(vpls, limit, bytes);
+                return Err(format!(
+                    "bir: vpls = {vpls} (--vpls): the standard VPLs {}; the largest that fits is \
+                     {largest} (or a smaller batch)",
+                    over(bytes(vpls), limit)
+                ));
+            }
+        }
+        Method::Reference(_) | Method::Lightfield(_) => {}
     }
     Ok(())
 }

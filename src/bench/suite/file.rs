@@ -320,6 +320,16 @@ impl Suite {
                 let h = (w as f64 * cam.height as f64 / cam.width as f64)
                     .round()
                     .max(1.0);
+                if h > f64::from(MAX_RESOLUTION) {
+                    return Err(field(
+                        "width",
+                        w.to_string(),
+                        &format!(
+                            "gives {} ({}x{h} at its aspect ratio) a height over {MAX_RESOLUTION}",
+                            entry.path, w
+                        ),
+                    ));
+                }
                 cam.width = w as u32;
                 cam.height = h as u32;
             }

@@ -471,6 +471,19 @@ impl PlacedLuminaire {
                 "must be finite",
             ));
         }
+        for (field, v) in [("position", f.position), ("look_at", f.look_at)] {
+            if v.iter().any(|x| x.abs() > crate::scene::obj::MAX_COORDINATE) {
+                return Err(invalid(
+                    field,
+                    format!("{v:?}"),
+                    &format!(
+                        "a coordinate's magnitude is over {:e}, the most irad's f32 rays handle \
+                         (scale the scene down)",
+                        crate::scene::obj::MAX_COORDINATE
+                    ),
+                ));
+            }
+        }
         let z = (look_at - position).normalize_or_zero();
         if z == Vec3::ZERO {
             return Err(invalid(
