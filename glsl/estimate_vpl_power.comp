@@ -6,6 +6,10 @@
 // `scale`) and row 1 (1 for a VPL, 0 for an empty slot: only those get the CDF's floor).
 //
 // Numbers: pixel m of candidate c is pcg(seed, c, m) mod the pixel count.
+//
+// The M camera points are split over dispatches, [sample_begin, sample_end) each (a shadow
+// ray per point; lavapipe's loop budget, README "Kernels"): the first writes its share of
+// the estimate, the others add theirs.
 
 #extension GL_GOOGLE_include_directive : require
 
@@ -21,7 +25,7 @@ layout(local_size_x = 64, local_size_y = 1, local_size_z = 1) in;
 #include "vpl_shading.glsl"
 
 // Two rows of `row_length`: the weights, then the non-empty flags.
-layout(set = 0, binding = 17, std430) writeonly buffer Weights { float weights[]; };
+layout(set = 0, binding = 17, std430) buffer Weights { float weights[]; };
 
 layout(push_constant) uniform PowerParams {
     uint count;        // candidates in this dispatch
@@ -32,6 +36,8 @@ layout(push_constant) uniform PowerParams {
     uint seed;
     uint pixels;
     float scale;       // the side's weight (standard VPLs' 1/2 under `both`)
+    uint sample_begin; // this dispatch's camera points
+    uint sample_end;
 } params;
 
 void main() {
@@ -45,7 +51,7 @@ void main() {
         return;
     }
     float sum = 0.0;
-    for (uint m = 0u; m < params.samples; ++m) {
+    for (uint m = params.sample_begin; m < min(params.sample_end, params.samples); ++m) {
         uint pixel = hash4(params.seed, c, m, 0x706f7772u) % params.pixels;
         GBufferTexel g = gbuffer[pixel];
         vec3 wo, side, n;
@@ -55,6 +61,7 @@ void main() {
         sum += luminance(shade_from_vpl(v, x, offset_origin(x, side), n, side, wo, mat, 0.0));
     }
     float w = sum * params.scale * float(params.pixels) / float(max(params.samples, 1u));
+    if (params.sample_begin > 0u) w += weights[c];
     weights[c] = (isnan(w) || isinf(w)) ? 0.0 : w;
     weights[params.row_length + c] = 1.0;
 }

@@ -12,6 +12,11 @@
 // `both` stays unbiased whatever the pool misses. The side is taken from the VPL's shading
 // normal (the geometric normal is not stored; the same on flat-shaded meshes). At most M shadow
 // rays per VPL, fewer where a pool point sees it (the test stops at the first).
+//
+// The pool is split over dispatches, points [pool_begin, pool_end) each (lavapipe's loop
+// budget, README "Kernels"). incident.w carries "no pool point so far reaches it" between
+// them: the first dispatch sets it where its points miss, a later one clears it where its
+// points reach, and the last scales the power of those still marked.
 
 #extension GL_GOOGLE_include_directive : require
 
@@ -32,6 +37,8 @@ layout(push_constant) uniform CoverParams {
     uint seed;             // the pool's seed (the batch's reverse VPLs')
     uint pixels;           // G-buffer texels
     float uncovered_scale;
+    uint pool_begin;       // this dispatch's pool points
+    uint pool_end;
 } params;
 
 void main() {
@@ -39,11 +46,21 @@ void main() {
     if (slot >= params.vpl_end) return;
     Vpl v = vpls[slot];
     if (vpl_kind(v) != VPL_SURFACE) return;
+    bool first = params.pool_begin == 0u;
+    bool last = params.pool_end >= params.pool;
+    // Reached by an earlier dispatch's pool points.
+    if (!first && v.incident.w == 0.0) return;
     vec3 n = v.normal.xyz;
     vec3 origin = offset_origin(v.position.xyz, n);
-    if (pool_density(params.seed, params.pixels, params.pool, v.position.xyz, n, n, origin, true) > 0.0)
+    if (pool_density(params.seed, params.pixels, params.pool, params.pool_begin,
+                     params.pool_end, v.position.xyz, n, n, origin, true) > 0.0) {
+        if (!first) {
+            v.incident.w = 0.0;
+            vpls[slot] = v;
+        }
         return;
-    v.power.rgb *= params.uncovered_scale;
+    }
+    if (last) v.power.rgb *= params.uncovered_scale;
     v.incident.w = 1.0;
     vpls[slot] = v;
 }

@@ -20,6 +20,11 @@
 // vertices were drawn), weighted f2 cos / pdf (1 - b / G). Bundles' paths end at two bounces,
 // so one level and no recursion: clamped term plus compensation is the unclamped term's
 // expectation. Random numbers: PCG keyed by (seed, pixel, iteration of the render, dimension).
+//
+// A chunk is shaded in dispatches of a few iterations (`hit_first` the first's place among the
+// chunk's bundle hits): each iteration casts about four shadow rays per light vertex, each a
+// traversal loop, and lavapipe stops an invocation's loops silently after 65535 iterations in
+// all (README "Kernels").
 
 #extension GL_GOOGLE_include_directive : require
 
@@ -55,6 +60,7 @@ layout(push_constant) uniform ShadeParams {
     uint frame_first;      // the frame's first iteration of the render (frame * I)
     uint seed;
     uint compensate;       // 1: compensate the two-bounce clamp (two_bounce > 0)
+    uint hit_first;        // bundle_hits' iteration of first_index (the chunk's from 0)
 } params;
 
 #define STRATEGY_VPL 0u
@@ -179,7 +185,7 @@ void main() {
         Material m2;
         if (params.trace_bundles != 0u && cos3 > 0.0 && p_r > 0.0) {
             f3 = bsdf_eval(m3, n3, wo3, d);
-            BundleHit h = bundle_hits[j * pixels + index];
+            BundleHit h = bundle_hits[(params.hit_first + j) * pixels + index];
             if (h.position.w < 0.0) {
                 // Escaped: the environment's direct light (Eq. 14: d_3 = N p_r).
                 if (params.environment != 0u) {

@@ -15,6 +15,11 @@
 //
 // Numbers: PCG keyed by (seed, k, dimension); dimensions 0-1 the direction. The pool:
 // reverse_pool.glsl.
+//
+// Eq. 7's M shadow rays are split over dispatches, pool points [pool_begin, pool_end) each
+// (lavapipe's loop budget, README "Kernels"): every dispatch traces x2 again (the same ray),
+// the first writes the VPL and its share of the density, the others add theirs, and the last
+// empties the VPL where the density is 0.
 
 #extension GL_GOOGLE_include_directive : require
 
@@ -35,11 +40,17 @@ layout(push_constant) uniform ReverseParams {
     uint pool;    // M camera points
     uint seed;
     uint pixels;  // G-buffer texels
+    uint pool_begin;  // this dispatch's pool points
+    uint pool_end;
 } params;
 
 void main() {
     uint k = gl_GlobalInvocationID.x;
     if (k >= params.count) return;
+    bool first = params.pool_begin == 0u;
+    bool last = params.pool_end >= params.pool;
+    // A later dispatch adds to a VPL an earlier one wrote, unless that one found no x2.
+    if (!first && vpl_kind(reverse_vpls[k]) == VPL_NONE) return;
     Vpl v;
     v.position = vec4(0.0, 0.0, 0.0, uintBitsToFloat(VPL_NONE));
     v.normal = vec4(0.0);
@@ -65,10 +76,11 @@ void main() {
     vec3 n2 = dot(ns2, side2) >= 0.0 ? ns2 : -ns2;
     vec3 origin2 = offset_origin(x2, side2);
 
-    // Eq. 7 over the pool.
-    float density =
-        pool_density(params.seed, params.pixels, params.pool, x2, ng2, side2, origin2, false);
-    if (!(density > 0.0)) {
+    // Eq. 7 over this dispatch's pool points.
+    float density = pool_density(params.seed, params.pixels, params.pool, params.pool_begin,
+                                 params.pool_end, x2, ng2, side2, origin2, false);
+    if (!first) density += reverse_vpls[k].power.w;
+    if (last && !(density > 0.0)) {
         reverse_vpls[k] = v;
         return;
     }

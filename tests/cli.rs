@@ -635,6 +635,52 @@ fn a_long_render_shows_its_time_left() {
     );
 }
 
+/// A single long frame shows how far it has come: bir's frame of 2^20 VPLs runs for minutes
+/// on lavapipe, and a bar that counts frames would stand at 0/1 all along. The frame runs in
+/// parts (each waited for) and the bar's message counts its dispatches, which must move
+/// within a few seconds.
+#[test]
+fn a_long_frame_shows_its_progress() {
+    let have = |tool: &str| {
+        Command::new(tool)
+            .arg("--version")
+            .output()
+            .is_ok_and(|o| o.status.success())
+    };
+    if !have("script") || !have("timeout") {
+        assert!(
+            !common_under_ci(),
+            "`script` and `timeout` (util-linux, coreutils) are needed"
+        );
+        eprintln!("note: no `script` or `timeout`; skipping");
+        return;
+    }
+    let dir = temp_dir("frame-progress");
+    let render = format!(
+        "timeout 8 '{}' render --method bir --vpls 1048576 --frames 1 -o '{}'",
+        env!("CARGO_BIN_EXE_irad"),
+        dir.join("never").display()
+    );
+    let o = Command::new("script")
+        .args(["-q", "-c", &render, "/dev/null"])
+        .env_remove("IRAD_VALIDATE")
+        .output()
+        .unwrap();
+    std::fs::remove_dir_all(&dir).ok();
+    let screen = String::from_utf8_lossy(&o.stdout);
+    // "frame 1: N of ~M dispatches" with at least two values of N.
+    let counts: std::collections::BTreeSet<&str> = screen
+        .split("frame 1: ")
+        .skip(1)
+        .filter_map(|rest| rest.split(" of ~").next())
+        .filter(|n| n.chars().all(|c| c.is_ascii_digit()))
+        .collect();
+    assert!(
+        screen.contains("0/1 (") && counts.len() >= 2,
+        "{counts:?}\n{screen}"
+    );
+}
+
 /// As tests/common's under_ci (this file does not use the GPU helpers).
 fn common_under_ci() -> bool {
     std::env::var("CI").is_ok_and(|v| !v.is_empty() && v != "false" && v != "0")

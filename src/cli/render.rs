@@ -94,8 +94,23 @@ pub fn run(options: &ContextOptions, args: RenderArgs) -> Result<()> {
         device_line(ctx.info())
     );
     let bar = progress(job.method_samples(), "render");
-    let report =
-        render::render_checked(&ctx, &job, checked, |done, _| bar.set_position(done as u64))?;
+    // Within a long frame (or submission of frames), how far its dispatches have come.
+    let within = bar.clone();
+    irad::methods::progressive::observe_frames(Some(Box::new(move |w| {
+        let frames = match w.frames {
+            1 => format!("frame {}", w.frames_done + 1),
+            n => format!("frames {}-{}", w.frames_done + 1, w.frames_done + n),
+        };
+        within.set_message(format!(
+            "{frames}: {} of ~{} dispatches",
+            w.dispatches_done, w.dispatches
+        ));
+    })));
+    let report = render::render_checked(&ctx, &job, checked, |done, _| {
+        within_done(&bar, done);
+    });
+    irad::methods::progressive::observe_frames(None);
+    let report = report?;
     bar.finish_and_clear();
     let r = &report.record;
     println!("per-pass GPU time:\n{}", report.passes);
@@ -129,4 +144,10 @@ pub fn run(options: &ContextOptions, args: RenderArgs) -> Result<()> {
     let (json, images) = files.split_last().expect("a render writes files");
     println!("wrote {} and {json}", images.join(", "));
     Ok(())
+}
+
+/// Frames `done`: the bar's position, and no message of a submission under way.
+fn within_done(bar: &indicatif::ProgressBar, done: u32) {
+    bar.set_position(done as u64);
+    bar.set_message("");
 }

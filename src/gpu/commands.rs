@@ -4,6 +4,11 @@
 //!
 //! `Commands<'a>` borrows every kernel and buffer it records for 'a, so none can be dropped
 //! before the submission has completed.
+//!
+//! A submission can report its progress (`on_progress`): then it is submitted in parts of a
+//! number of dispatches each, waited for, and the hook told how many dispatches are done. The
+//! parts run the same commands in the same order, so the results are the same bits; a pass
+//! cut between two parts is timed as the sum of its pieces.
 
 use std::marker::PhantomData;
 use std::time::Instant;
@@ -28,6 +33,15 @@ pub struct Commands<'a> {
     query_pool: Option<vk::QueryPool>,
     passes: Vec<(String, u32)>,
     open_pass: Option<String>,
+    /// Passes timed in earlier parts of the submission (`on_progress`), and the GPU time the
+    /// open pass spent in them.
+    finished: Vec<PassTime>,
+    open_partial_ms: Option<f64>,
+    parts_wall_ms: f64,
+    dispatches: u32,
+    since_part: u32,
+    part_dispatches: u32,
+    hook: Option<Box<dyn FnMut(u32) + 'a>>,
     _borrows: PhantomData<&'a ()>,
 }
 
@@ -41,21 +55,89 @@ impl<'a> Commands<'a> {
             query_pool: None,
             passes: Vec::new(),
             open_pass: None,
+            finished: Vec::new(),
+            open_partial_ms: None,
+            parts_wall_ms: 0.0,
+            dispatches: 0,
+            since_part: 0,
+            part_dispatches: 0,
+            hook: None,
             _borrows: PhantomData,
         };
-        let device = ctx.device();
+        cmd.begin()?;
+        Ok(cmd)
+    }
+
+    /// Begins `cb` and resets the timestamps.
+    fn begin(&mut self) -> GpuResult<()> {
+        let device = self.ctx.device();
         let begin = vk::CommandBufferBeginInfo::default()
             .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
-        unsafe { device.begin_command_buffer(cb, &begin) }.vk("vkBeginCommandBuffer")?;
-        if ctx.info().timestamps() {
-            let info = vk::QueryPoolCreateInfo::default()
-                .query_type(vk::QueryType::TIMESTAMP)
-                .query_count(2 * MAX_PASSES);
-            let pool = unsafe { device.create_query_pool(&info, None) }.vk("vkCreateQueryPool")?;
-            cmd.query_pool = Some(pool);
-            unsafe { device.cmd_reset_query_pool(cb, pool, 0, 2 * MAX_PASSES) };
+        unsafe { device.begin_command_buffer(self.cb, &begin) }.vk("vkBeginCommandBuffer")?;
+        if self.ctx.info().timestamps() {
+            let pool = match self.query_pool {
+                Some(pool) => pool,
+                None => {
+                    let info = vk::QueryPoolCreateInfo::default()
+                        .query_type(vk::QueryType::TIMESTAMP)
+                        .query_count(2 * MAX_PASSES);
+                    let pool =
+                        unsafe { device.create_query_pool(&info, None) }.vk("vkCreateQueryPool")?;
+                    self.query_pool = Some(pool);
+                    pool
+                }
+            };
+            unsafe { device.cmd_reset_query_pool(self.cb, pool, 0, 2 * MAX_PASSES) };
         }
-        Ok(cmd)
+        Ok(())
+    }
+
+    /// Submits in parts from now on, calling `hook` with the dispatches done after each part
+    /// (and not after the last: `submit_and_wait`'s caller knows). A part is one dispatch at
+    /// first, then twice or half as many as the last while parts take under 0.05 or over 0.2
+    /// s. For progress within long submissions; the results are the same bits.
+    pub fn on_progress(&mut self, hook: Box<dyn FnMut(u32) + 'a>) {
+        self.part_dispatches = 1;
+        self.hook = Some(hook);
+    }
+
+    /// Dispatches recorded so far.
+    pub fn dispatches(&self) -> u32 {
+        self.dispatches
+    }
+
+    /// Submits what is recorded, waits, keeps its pass times and begins a new part. A pass
+    /// open now goes on in the new part (its two pieces' times are summed).
+    fn submit_part(&mut self) -> GpuResult<()> {
+        if self.open_pass.is_some() {
+            let index = self.passes.len() as u32;
+            self.timestamp(2 * index + 1);
+        }
+        let timings = self.end_submit_and_read()?;
+        self.parts_wall_ms += timings.wall_ms;
+        let mut times = timings.passes.into_iter();
+        for time in times.by_ref().take(self.passes.len()) {
+            self.finished.push(time);
+        }
+        if let Some(piece) = times.next() {
+            self.open_partial_ms = add_ms(self.open_partial_ms.or(Some(0.0)), piece.gpu_ms);
+        }
+        self.passes.clear();
+        // Free what the part used and start afresh.
+        let device = self.ctx.device();
+        unsafe {
+            for &pool in &self.descriptor_pools {
+                device.destroy_descriptor_pool(pool, None);
+            }
+        }
+        self.descriptor_pools.clear();
+        self.ctx.free_command_buffer(self.cb);
+        self.cb = self.ctx.allocate_command_buffer()?;
+        self.begin()?;
+        if self.open_pass.is_some() {
+            self.timestamp(0);
+        }
+        Ok(())
     }
 
     /// Records the work `record` does as one pass named `name`, timed on the GPU.
@@ -78,11 +160,19 @@ impl<'a> Commands<'a> {
             });
         }
         self.open_pass = Some(name.to_string());
+        self.open_partial_ms = None;
         self.timestamp(2 * index);
         let result = record(self);
+        // Parts submitted inside the pass leave its last piece at the first index.
+        let index = self.passes.len() as u32;
         self.timestamp(2 * index + 1);
         self.open_pass = None;
-        self.passes.push((name.to_string(), index));
+        match self.open_partial_ms.take() {
+            Some(ms) => self
+                .passes
+                .push((format!("{PARTIAL}{ms}\u{0}{name}"), index)),
+            None => self.passes.push((name.to_string(), index)),
+        }
         result
     }
 
@@ -148,6 +238,25 @@ impl<'a> Commands<'a> {
             }
         }
         self.barrier_between_passes();
+        self.dispatches += 1;
+        self.since_part += 1;
+        if self.hook.is_some() && self.since_part >= self.part_dispatches {
+            self.since_part = 0;
+            let start = Instant::now();
+            self.submit_part()?;
+            // Parts of about a tenth of a second: one dispatch may take minutes (bir's
+            // reverse radiance of 2^20 VPLs), a thousand may take a millisecond.
+            let seconds = start.elapsed().as_secs_f64();
+            if seconds < 0.05 {
+                self.part_dispatches = (2 * self.part_dispatches).min(MAX_PART_DISPATCHES);
+            } else if seconds > 0.2 {
+                self.part_dispatches = (self.part_dispatches / 2).max(1);
+            }
+            let done = self.dispatches;
+            if let Some(hook) = self.hook.as_mut() {
+                hook(done);
+            }
+        }
         Ok(())
     }
 
@@ -265,7 +374,19 @@ impl<'a> Commands<'a> {
     }
 
     /// Submits, waits for completion and returns every pass's GPU time and the wall clock.
-    pub fn submit_and_wait(self) -> GpuResult<Timings> {
+    pub fn submit_and_wait(mut self) -> GpuResult<Timings> {
+        let last = self.end_submit_and_read()?;
+        let mut passes = std::mem::take(&mut self.finished);
+        passes.extend(last.passes);
+        Ok(Timings {
+            passes,
+            wall_ms: self.parts_wall_ms + last.wall_ms,
+        })
+    }
+
+    /// Ends `cb`, submits it, waits, and reads the times of `passes` (a pass that went on
+    /// from an earlier part gets that part's time added), and of the open pass's piece last.
+    fn end_submit_and_read(&mut self) -> GpuResult<Timings> {
         let device = self.ctx.device();
         // Make every write visible to the host reads that follow.
         let barrier = [vk::MemoryBarrier::default()
@@ -288,7 +409,8 @@ impl<'a> Commands<'a> {
         self.ctx.submit_and_wait(self.cb)?;
         let wall_ms = start.elapsed().as_secs_f64() * 1e3;
 
-        let mut ticks = vec![0u64; 2 * self.passes.len()];
+        let open = usize::from(self.open_pass.is_some());
+        let mut ticks = vec![0u64; 2 * (self.passes.len() + open)];
         if let (Some(pool), false) = (self.query_pool, ticks.is_empty()) {
             unsafe {
                 device.get_query_pool_results(
@@ -306,23 +428,50 @@ impl<'a> Commands<'a> {
         } else {
             (1u64 << info.timestamp_valid_bits) - 1
         };
-        let passes = self
+        let has_pool = self.query_pool.is_some();
+        let time = |i: usize| {
+            has_pool.then(|| {
+                // Masked after subtracting, so a counter of fewer than 64 bits may wrap.
+                let (a, b) = (ticks[2 * i], ticks[2 * i + 1]);
+                (b.wrapping_sub(a) & mask) as f64 * info.timestamp_period_ns as f64 * 1e-6
+            })
+        };
+        let mut passes: Vec<PassTime> = self
             .passes
             .iter()
-            .map(|(name, i)| {
-                let gpu_ms = self.query_pool.map(|_| {
-                    // Masked after subtracting, so a counter of fewer than 64 bits may wrap.
-                    let (a, b) = (ticks[2 * *i as usize], ticks[2 * *i as usize + 1]);
-                    (b.wrapping_sub(a) & mask) as f64 * info.timestamp_period_ns as f64 * 1e-6
-                });
-                PassTime {
-                    name: name.clone(),
-                    gpu_ms,
+            .map(|(name, i)| match name.strip_prefix(PARTIAL) {
+                // A pass that began in an earlier part: its earlier pieces' time, then its name.
+                Some(rest) => {
+                    let (ms, name) = rest.split_once('\u{0}').expect("written by pass()");
+                    PassTime {
+                        name: name.to_string(),
+                        gpu_ms: add_ms(ms.parse().ok(), time(*i as usize)),
+                    }
                 }
+                None => PassTime {
+                    name: name.clone(),
+                    gpu_ms: time(*i as usize),
+                },
             })
             .collect();
+        if open == 1 {
+            passes.push(PassTime {
+                name: String::new(),
+                gpu_ms: time(self.passes.len()),
+            });
+        }
         Ok(Timings { passes, wall_ms })
     }
+}
+
+/// Most dispatches in one part of a submission (`on_progress`).
+const MAX_PART_DISPATCHES: u32 = 4096;
+
+/// Marks a pass name that carries the time of the pass's pieces in earlier parts.
+const PARTIAL: &str = "\u{0}partial:";
+
+fn add_ms(a: Option<f64>, b: Option<f64>) -> Option<f64> {
+    a.zip(b).map(|(a, b)| a + b)
 }
 
 impl Drop for Commands<'_> {

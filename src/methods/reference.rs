@@ -63,20 +63,18 @@ pub const SETTINGS: &[Setting<ReferenceSettings>] = &[
     field_setting!(
         "max_depth",
         max_depth,
-        Kind::Count {
-            min: 1,
-            max: u32::MAX
-        },
+        // A path's bounces run in one kernel invocation, whose loops lavapipe stops silently
+        // after 65535 iterations in all (README "Kernels"): two traversals a bounce, so 1024
+        // bounces (the default) is as far as a path in a closed, white scene may go.
+        Kind::Count { min: 1, max: 1024 },
         Count,
         "Most scattering events per path (a safety cap: Russian roulette ends paths first).",
     ),
     field_setting!(
         "roulette_depth",
         roulette_depth,
-        Kind::Count {
-            min: 0,
-            max: u32::MAX
-        },
+        // Without roulette every path of a closed scene runs to max_depth (see max_depth).
+        Kind::Count { min: 0, max: 64 },
         Count,
         "First bounce at which Russian roulette may end a path.",
         // alpha_frames shades the direct light without paths.

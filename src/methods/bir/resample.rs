@@ -12,6 +12,8 @@ use crate::methods::ir::walk::Vpl;
 use crate::methods::scene_kernel::SceneKernel;
 use crate::scene::gpu::GpuScene;
 
+use super::reverse::{pieces, RAYS_PER_DISPATCH};
+
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
 struct PowerParams {
@@ -23,6 +25,8 @@ struct PowerParams {
     seed: u32,
     pixels: u32,
     scale: f32,
+    sample_begin: u32,
+    sample_end: u32,
 }
 
 #[repr(C)]
@@ -109,7 +113,7 @@ impl EstimateVplPower {
         bindings.push(bind("GBuffer", &gbuffer.texels));
         bindings.push(bind("Vpls", source));
         bindings.push(bind("Weights", &buffers.weights));
-        let params = PowerParams {
+        let mut params = PowerParams {
             count,
             source_begin,
             offset,
@@ -118,10 +122,17 @@ impl EstimateVplPower {
             seed,
             pixels: scene.pixel_count() as u32,
             scale,
+            sample_begin: 0,
+            sample_end: 0,
         };
-        self.0
-            .get(scene.features)?
-            .dispatch(cmd, &bindings, &params, [count.div_ceil(64), 1, 1])
+        // A shadow ray per camera point: RAYS_PER_DISPATCH of them per dispatch.
+        let kernel = self.0.get(scene.features)?;
+        for (begin, end) in pieces(params.samples, RAYS_PER_DISPATCH) {
+            params.sample_begin = begin;
+            params.sample_end = end;
+            kernel.dispatch(cmd, &bindings, &params, [count.div_ceil(64), 1, 1])?;
+        }
+        Ok(())
     }
 }
 

@@ -21,6 +21,8 @@ struct ReverseParams {
     pool: u32,
     seed: u32,
     pixels: u32,
+    pool_begin: u32,
+    pool_end: u32,
 }
 
 #[repr(C)]
@@ -34,6 +36,22 @@ struct ShadeParams {
     weight: f32,
     connections: u32,
     depth: u32,
+    sample_begin: u32,
+    sample_end: u32,
+    connection_begin: u32,
+    connection_end: u32,
+}
+
+/// Shadow and closest-hit rays per invocation in one dispatch of bir's per-VPL kernels.
+/// lavapipe stops an invocation's loops silently after 65535 iterations in all (README
+/// "Kernels"), and each ray is a traversal loop of tens of iterations in the shipped scenes:
+/// as ir's gather, which shades 512 VPL slots per dispatch, one shadow ray each.
+pub const RAYS_PER_DISPATCH: u32 = 512;
+
+/// The ranges `0..count` cut into pieces of at most `per` (at least one piece, maybe empty).
+pub fn pieces(count: u32, per: u32) -> impl Iterator<Item = (u32, u32)> {
+    let per = per.max(1);
+    (0..count.div_ceil(per).max(1)).map(move |i| (i * per, count.min((i + 1) * per)))
 }
 
 #[repr(C)]
@@ -45,6 +63,8 @@ struct CoverParams {
     seed: u32,
     pixels: u32,
     uncovered_scale: f32,
+    pool_begin: u32,
+    pool_end: u32,
 }
 
 pub struct TraceReverseVpls(Kernel);
@@ -69,14 +89,22 @@ impl TraceReverseVpls {
         bindings.push(bind("GBuffer", &gbuffer.texels));
         bindings.push(bind("ReverseVpls", reverse));
         let count = reverse.len() as u32;
-        let params = ReverseParams {
+        let mut params = ReverseParams {
             count,
             pool: pool.max(1),
             seed,
             pixels: scene.pixel_count() as u32,
+            pool_begin: 0,
+            pool_end: 0,
         };
-        self.0
-            .dispatch(cmd, &bindings, &params, [count.div_ceil(64), 1, 1])
+        // x2's ray and a shadow ray per pool point.
+        for (begin, end) in pieces(params.pool, RAYS_PER_DISPATCH - 1) {
+            params.pool_begin = begin;
+            params.pool_end = end;
+            self.0
+                .dispatch(cmd, &bindings, &params, [count.div_ceil(64), 1, 1])?;
+        }
+        Ok(())
     }
 }
 
@@ -111,7 +139,15 @@ impl ShadeReverseVpls {
         bindings.push(bind("Vpls", vpls));
         bindings.push(bind("ReverseVpls", reverse));
         let count = reverse.len() as u32;
-        let params = ShadeParams {
+        let depth = depth.max(1);
+        let samples = light_samples.max(1);
+        let slot_count = slots.end - slots.start;
+        let connection_count = if connections == 0 || connections >= slot_count {
+            slot_count
+        } else {
+            connections
+        };
+        let mut params = ShadeParams {
             count,
             light_samples,
             vpl_begin: slots.start,
@@ -119,11 +155,36 @@ impl ShadeReverseVpls {
             seed,
             weight,
             connections,
-            depth: depth.max(1),
+            depth,
+            sample_begin: 0,
+            sample_end: 0,
+            connection_begin: 0,
+            connection_end: 0,
         };
-        self.0
-            .get(scene.features)?
-            .dispatch(cmd, &bindings, &params, [count.div_ceil(64), 1, 1])
+        // A sample's path casts a next-event ray at x2 and two rays per vertex, then one per
+        // connection: whole samples per dispatch where they fit, else one sample per
+        // dispatch with its connections in pieces (its path traced again for each).
+        let path_rays = 1 + 2 * depth;
+        let (samples_per, connections_per) =
+            if path_rays.saturating_add(connection_count) <= RAYS_PER_DISPATCH {
+                (
+                    RAYS_PER_DISPATCH / (path_rays + connection_count),
+                    connection_count,
+                )
+            } else {
+                (1, RAYS_PER_DISPATCH.saturating_sub(path_rays).max(64))
+            };
+        let kernel = self.0.get(scene.features)?;
+        for (sample_begin, sample_end) in pieces(samples, samples_per) {
+            for (connection_begin, connection_end) in pieces(connection_count, connections_per) {
+                params.sample_begin = sample_begin;
+                params.sample_end = sample_end;
+                params.connection_begin = connection_begin;
+                params.connection_end = connection_end;
+                kernel.dispatch(cmd, &bindings, &params, [count.div_ceil(64), 1, 1])?;
+            }
+        }
+        Ok(())
     }
 }
 
@@ -152,15 +213,23 @@ impl FindUncoveredVpls {
         bindings.push(bind("GBuffer", &gbuffer.texels));
         bindings.push(bind("Vpls", vpls));
         let count = slots.end - slots.start;
-        let params = CoverParams {
+        let mut params = CoverParams {
             vpl_begin: slots.start,
             vpl_end: slots.end,
             pool: pool.max(1),
             seed,
             pixels: scene.pixel_count() as u32,
             uncovered_scale,
+            pool_begin: 0,
+            pool_end: 0,
         };
-        self.0
-            .dispatch(cmd, &bindings, &params, [count.div_ceil(64), 1, 1])
+        // A shadow ray per pool point.
+        for (begin, end) in pieces(params.pool, RAYS_PER_DISPATCH) {
+            params.pool_begin = begin;
+            params.pool_end = end;
+            self.0
+                .dispatch(cmd, &bindings, &params, [count.div_ceil(64), 1, 1])?;
+        }
+        Ok(())
     }
 }

@@ -34,7 +34,15 @@ struct ShadeParams {
     frame_first: u32,
     seed: u32,
     compensate: u32,
+    hit_first: u32,
 }
+
+/// Shadow rays per invocation in one dispatch: lavapipe stops an invocation's loops silently
+/// after 65535 iterations in all (README "Kernels"), and a ray's traversal loop runs tens of
+/// iterations in the shipped scenes (as ir's gather, 512 VPL slots per dispatch). An
+/// iteration casts up to 4 rays per light vertex (VPL path, bundle path, two-bounce path,
+/// compensation) and one more for the compensation's y.
+const RAYS_PER_DISPATCH: u32 = 512;
 
 /// What one chunk of iterations shades.
 pub struct Chunk {
@@ -100,7 +108,7 @@ impl ShadeBundlePaths {
         bindings.push(bind("BundleHits", hits));
         bindings.extend(directions.bindings());
         let suppression = shading.suppression;
-        let params = ShadeParams {
+        let mut params = ShadeParams {
             first_index: chunk.first_index,
             count: chunk.count,
             per_frame: chunk.per_frame,
@@ -126,9 +134,19 @@ impl ShadeBundlePaths {
             frame_first: chunk.frame_first,
             seed: shading.seed,
             compensate: shading.compensate as u32,
+            hit_first: 0,
         };
-        self.0
-            .get(scene.features)?
-            .dispatch(cmd, &bindings, &params, scene.image_workgroups())
+        let kernel = self.0.get(scene.features)?;
+        let per_dispatch = (RAYS_PER_DISPATCH / (4 * vertices.slots + 1)).max(1);
+        let mut begin = 0;
+        while begin < chunk.count {
+            let count = per_dispatch.min(chunk.count - begin);
+            params.first_index = chunk.first_index + begin;
+            params.count = count;
+            params.hit_first = begin;
+            kernel.dispatch(cmd, &bindings, &params, scene.image_workgroups())?;
+            begin += count;
+        }
+        Ok(())
     }
 }

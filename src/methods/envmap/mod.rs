@@ -310,6 +310,15 @@ impl Env {
         let seed = pcg::hash(&[settings.seed, 0x656e76]);
         let counts = Buffer::<[f32; 2]>::zeroed(ctx, "EnvSampleCounts", gpu_scene.pixel_count())?;
         let alpha = Buffer::<[f32; 2]>::zeroed(ctx, "EnvAlpha", gpu_scene.pixel_count())?;
+        let alpha_terms = Buffer::<[f32; 2]>::zeroed(
+            ctx,
+            "EnvAlphaTerms",
+            if strategy == Strategy::Alpha {
+                gpu_scene.pixel_count()
+            } else {
+                1
+            },
+        )?;
         let latlong = EquirectTable::new(ctx, gpu_scene, 0.0, strategy == Strategy::Latlong)?;
         let pyramid = EnvPyramid::new(ctx, gpu_scene, strategy == Strategy::Hierarchical)?;
         let frames = settings.frames.max(1);
@@ -365,6 +374,7 @@ impl Env {
                         &accumulation,
                         &counts,
                         &alpha,
+                        &alpha_terms,
                         &shade::ShadeSettings {
                             strategy,
                             spp,

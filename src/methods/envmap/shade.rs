@@ -27,7 +27,18 @@ struct ShadeParams {
     alpha_samples: f32,
     shadows: u32,
     windows: u32,
+    item_begin: u32,
+    item_end: u32,
+    alpha_step: u32,
 }
+
+/// Samples per pixel in one dispatch. lavapipe stops an invocation's loops silently after
+/// 65535 iterations in all (README "Kernels"); a sample costs one shadow ray (a traversal
+/// loop: tens of iterations in the shipped scenes) and at most about 25 iterations of table
+/// searches, so 128 samples stay inside the budget for traversals of up to ~400 iterations.
+/// Measured before the split (glossy-env 32x32, pixel centres, 1 frame): 16384 samples per
+/// pixel came out 10% dark, latlong's 8192 40%, 65536 36-80%.
+pub const SAMPLES_PER_DISPATCH: u32 = 128;
 
 /// What the shading does this frame.
 pub struct ShadeSettings {
@@ -42,6 +53,23 @@ pub struct ShadeSettings {
     pub shadows: bool,
     pub frame: u32,
     pub seed: u32,
+}
+
+impl ShadeSettings {
+    /// The most samples a pixel numbers in one step (alpha: `step` 1 or 2; the others: 0):
+    /// the fractional per-face counts of the cube strategies round up once per face and
+    /// once for the BRDF share.
+    fn items(&self, step: u32) -> u32 {
+        let spp = self.spp.max(1);
+        let rounding = 7;
+        match (self.strategy, step) {
+            (Strategy::Brdf | Strategy::Cosine, _) => spp,
+            (Strategy::Latlong | Strategy::Hierarchical, _) => 2 * spp.div_ceil(2),
+            (Strategy::Alpha, 1) => self.alpha_samples.min(spp) + rounding,
+            (Strategy::Alpha, _) => spp - self.alpha_samples.min(spp) + rounding,
+            _ => spp + rounding,
+        }
+    }
 }
 
 pub struct ShadeEnv(Kernel);
@@ -63,6 +91,7 @@ impl ShadeEnv {
         accumulation: &'a Accumulation,
         counts: &'a Buffer<[f32; 2]>,
         alpha: &'a Buffer<[f32; 2]>,
+        alpha_terms: &'a Buffer<[f32; 2]>,
         settings: &ShadeSettings,
     ) -> GpuResult<()> {
         let mut bindings = scene.bindings();
@@ -74,7 +103,8 @@ impl ShadeEnv {
         bindings.push(bind("EnvSampleCounts", counts));
         bindings.push(pyramid.binding());
         bindings.push(bind("EnvAlpha", alpha));
-        let params = ShadeParams {
+        bindings.push(bind("EnvAlphaTerms", alpha_terms));
+        let mut params = ShadeParams {
             resolution: cube.resolution,
             per_face: cube.per_face,
             strategy: settings.strategy.code(),
@@ -86,8 +116,32 @@ impl ShadeEnv {
             alpha_samples: settings.alpha_samples as f32,
             shadows: settings.shadows as u32,
             windows: cube.windows,
+            item_begin: 0,
+            item_end: 0,
+            alpha_step: 0,
         };
-        self.0
-            .dispatch(cmd, &bindings, &params, scene.image_workgroups())
+        // Alpha's second step reads the alpha its first step's dispatches estimated.
+        let steps: &[u32] = if settings.strategy == Strategy::Alpha {
+            &[1, 2]
+        } else {
+            &[0]
+        };
+        for &step in steps {
+            params.alpha_step = step;
+            let items = settings.items(step);
+            let mut begin = 0;
+            // At least one dispatch per step (alpha's first writes its sums even when empty).
+            loop {
+                params.item_begin = begin;
+                params.item_end = begin.saturating_add(SAMPLES_PER_DISPATCH);
+                self.0
+                    .dispatch(cmd, &bindings, &params, scene.image_workgroups())?;
+                begin = params.item_end;
+                if begin >= items {
+                    break;
+                }
+            }
+        }
+        Ok(())
     }
 }
