@@ -12,13 +12,13 @@ use std::mem::size_of;
 
 use glam::Vec4;
 
-use crate::methods::bundles::ray_bundles::BundleHit;
-use crate::methods::bundles::Bundles;
 use crate::methods::bir::Split;
 use crate::methods::bundles::light_vertices::{LightSelection, LightVertex};
+use crate::methods::bundles::ray_bundles::BundleHit;
+use crate::methods::bundles::Bundles;
 use crate::methods::compensation::{CompensationVertex, VplClamp};
-use crate::methods::ir::schedule::{mean_albedo, Absorption, Schedule};
 use crate::methods::gbuffer::GBufferTexel;
+use crate::methods::ir::schedule::{mean_albedo, Absorption, Schedule};
 use crate::methods::ir::walk::Vpl;
 use crate::methods::ir::InstantRadiosity;
 use crate::methods::Method;

@@ -472,7 +472,9 @@ impl PlacedLuminaire {
             ));
         }
         for (field, v) in [("position", f.position), ("look_at", f.look_at)] {
-            if v.iter().any(|x| x.abs() > crate::scene::obj::MAX_COORDINATE) {
+            if v.iter()
+                .any(|x| x.abs() > crate::scene::obj::MAX_COORDINATE)
+            {
                 return Err(invalid(
                     field,
                     format!("{v:?}"),
