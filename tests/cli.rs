@@ -593,11 +593,10 @@ fn sizes_over_the_device_limits_are_refused_before_rendering() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
-/// A long render shows a progress bar with its time left (issue 22 item 1i: `--spp 2000000000`
-/// printed nothing for minutes). The bar draws only on a terminal, so the render runs under
-/// `script` (util-linux), stopped after a few seconds.
-#[test]
-fn a_long_render_shows_its_time_left() {
+/// What `irad render ARGS` draws on a terminal in its first 8 s: run under `script`
+/// (util-linux), since the bar draws only on a terminal. None where `script` or `timeout` is
+/// missing (outside CI only).
+fn screen_of_render(name: &str, args: &str) -> Option<String> {
     let have = |tool: &str| {
         Command::new(tool)
             .arg("--version")
@@ -610,11 +609,11 @@ fn a_long_render_shows_its_time_left() {
             "`script` and `timeout` (util-linux, coreutils) are needed"
         );
         eprintln!("note: no `script` or `timeout`; skipping");
-        return;
+        return None;
     }
-    let dir = temp_dir("progress");
+    let dir = temp_dir(name);
     let render = format!(
-        "timeout 8 '{}' render --spp 2000000000 -o '{}'",
+        "timeout 8 '{}' render {args} -o '{}'",
         env!("CARGO_BIN_EXE_irad"),
         dir.join("never").display()
     );
@@ -624,7 +623,17 @@ fn a_long_render_shows_its_time_left() {
         .output()
         .unwrap();
     std::fs::remove_dir_all(&dir).ok();
-    let screen = String::from_utf8_lossy(&o.stdout);
+    Some(String::from_utf8_lossy(&o.stdout).into_owned())
+}
+
+/// A long render shows a progress bar with its time left (issue 22 item 1i: `--spp 2000000000`
+/// printed nothing for minutes). The bar draws only on a terminal, so the render runs under
+/// `script` (util-linux), stopped after a few seconds.
+#[test]
+fn a_long_render_shows_its_time_left() {
+    let Some(screen) = screen_of_render("progress", "--spp 2000000000") else {
+        return;
+    };
     assert!(
         screen.contains("/2000000000 (") && screen.contains("elapsed,") && screen.contains("left)"),
         "{screen}"
@@ -637,33 +646,10 @@ fn a_long_render_shows_its_time_left() {
 /// within a few seconds.
 #[test]
 fn a_long_frame_shows_its_progress() {
-    let have = |tool: &str| {
-        Command::new(tool)
-            .arg("--version")
-            .output()
-            .is_ok_and(|o| o.status.success())
-    };
-    if !have("script") || !have("timeout") {
-        assert!(
-            !common_under_ci(),
-            "`script` and `timeout` (util-linux, coreutils) are needed"
-        );
-        eprintln!("note: no `script` or `timeout`; skipping");
+    let Some(screen) = screen_of_render("frame-progress", "--method bir --vpls 1048576 --frames 1")
+    else {
         return;
-    }
-    let dir = temp_dir("frame-progress");
-    let render = format!(
-        "timeout 8 '{}' render --method bir --vpls 1048576 --frames 1 -o '{}'",
-        env!("CARGO_BIN_EXE_irad"),
-        dir.join("never").display()
-    );
-    let o = Command::new("script")
-        .args(["-q", "-c", &render, "/dev/null"])
-        .env_remove("IRAD_VALIDATE")
-        .output()
-        .unwrap();
-    std::fs::remove_dir_all(&dir).ok();
-    let screen = String::from_utf8_lossy(&o.stdout);
+    };
     // "frame 1: N of ~M dispatches" with at least two values of N.
     let counts: std::collections::BTreeSet<&str> = screen
         .split("frame 1: ")
