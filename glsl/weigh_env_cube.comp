@@ -9,6 +9,12 @@
 // margin on every side, and every column with the rows up to the pole for the texel that holds
 // a pole. One invocation
 // per cube texel: (i, j, face). src/sampling/cubemap.rs mirrors it (cube_weights).
+//
+// The footprint's texels, taken row by row, are split over dispatches: each takes the range
+// [first, first + count) of them and keeps the larger of its peak and the weight an earlier
+// dispatch wrote (first 0 writes). A texel near a pole covers the map's whole width, so its
+// footprint grows as w h / R; src/methods/envmap/cube.rs bounds it (footprint_bound) and records
+// as many dispatches as the bound needs, so lavapipe's loop budget never cuts the search.
 
 #extension GL_GOOGLE_include_directive : require
 
@@ -20,10 +26,12 @@ layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 #include "sampling.glsl"
 #include "cubemap.glsl"
 
-layout(set = 0, binding = 20, std430) writeonly buffer CubeWeights { float cube_weights[]; };
+layout(set = 0, binding = 20, std430) buffer CubeWeights { float cube_weights[]; };
 
 layout(push_constant) uniform CubeParams {
     uint resolution;  // R: texels along a face's side
+    uint first;       // the first footprint texel this dispatch takes, row-major
+    uint count;       // how many it takes at most
 } params;
 
 // The continuous (column, row) of direction d on the W x H map.
@@ -98,12 +106,22 @@ void main() {
         i1 = w - 1;
     }
 
+    uint columns = uint(i1 - i0 + 1);
+    uint texels = uint(j1 - j0 + 1) * columns;
+    if (params.first >= texels) return;
+    uint end = min(texels, params.first + params.count);
+    int row = j0 + int(params.first / columns);
+    int col = i0 + int(params.first % columns);
     float peak = 0.0;
-    for (int row = j0; row <= j1; ++row) {
-        for (int col = i0; col <= i1; ++col) {
-            int wrapped = ((col % w) + w) % w;
-            peak = max(peak, luminance(env_texels[row * w + wrapped].rgb));
+    for (uint k = params.first; k < end; ++k) {
+        int wrapped = ((col % w) + w) % w;
+        peak = max(peak, luminance(env_texels[row * w + wrapped].rgb));
+        if (++col > i1) {
+            col = i0;
+            ++row;
         }
     }
-    cube_weights[(f * r + j) * r + i] = peak * cube_texel_solid_angle(r, i, j);
+    uint index = (f * r + j) * r + i;
+    float weight = peak * cube_texel_solid_angle(r, i, j);
+    cube_weights[index] = params.first == 0u ? weight : max(cube_weights[index], weight);
 }

@@ -240,3 +240,53 @@ fn both_sides_beat_reverse_only_in_the_halogen_office() {
         );
     });
 }
+
+/// build_light_cdf walks the lights sequentially in ranges a dispatch, carrying its sums
+/// between dispatches (so lavapipe's loop budget never cuts a table of many lights short):
+/// the camera-driven table is the same bits whatever the range, and a valid integer CDF.
+#[test]
+fn the_camera_light_table_is_the_same_whatever_the_split() {
+    use irad::gpu::Commands;
+    use irad::methods::bir::light_cdf::LightCdf;
+    use irad::methods::gbuffer::{GBuffer, PixelSampling, WriteGBuffer};
+    with_gpu(|ctx| {
+        let scene = scene_file("failure/conference-room", 16, 16);
+        let gpu = GpuScene::upload(ctx, &scene).unwrap();
+        let gbuffer = GBuffer::new(ctx, &gpu).unwrap();
+        let write = WriteGBuffer::new(ctx).unwrap();
+        let mut cdf = LightCdf::new(ctx, &gpu).unwrap();
+        let table = |cdf: &LightCdf| {
+            let mut cmd = Commands::new(ctx).unwrap();
+            cmd.pass("gbuffer", |cmd| {
+                write.record(cmd, &gpu, &gbuffer, 0, 1, PixelSampling::Centres)
+            })
+            .unwrap();
+            cmd.pass("light cdf", |cmd| cdf.record(cmd, &gpu, &gbuffer, 5, 0.1))
+                .unwrap();
+            cmd.submit_and_wait().unwrap();
+            cdf.table.read().unwrap()
+        };
+        let whole = table(&cdf);
+        assert!(whole.len() >= 8, "{} lights", whole.len());
+        for per_dispatch in [1, 3, 7] {
+            cdf.lights_per_dispatch = per_dispatch;
+            let split = table(&cdf);
+            assert!(
+                bytemuck::cast_slice::<_, u8>(&split) == bytemuck::cast_slice::<_, u8>(&whole),
+                "{per_dispatch} lights a dispatch"
+            );
+        }
+        let mut previous = 0u32;
+        let mut total = 0.0f64;
+        for e in &whole {
+            assert!(e.upper >= previous);
+            let p = (e.upper - previous) as f64 / 2147483648.0;
+            assert_eq!(e.probability, p as f32);
+            assert!(p > 0.0, "the floor keeps every light possible");
+            total += p;
+            previous = e.upper;
+        }
+        assert_eq!(previous, 0x80000000);
+        assert!((total - 1.0).abs() < 1e-12);
+    });
+}

@@ -520,6 +520,34 @@ fn sizes_over_the_device_limits_are_refused_before_rendering() {
         "4096",
     ];
     let pixels: Vec<&str> = vec!["render", &big];
+    // 34000 emissive triangles: bir's camera-driven light table measures each at 1024 camera
+    // points, 139264000 bytes in one buffer.
+    let lights = dir.join("lights.toml");
+    let mut obj = String::from("mtllib lights.mtl\nusemtl floor\nv -9 0 -9\nv 9 0 -9\nv 9 0 9\nv -9 0 9\nf 1 4 3 2\nusemtl light\n");
+    for k in 0..17000 {
+        let (x, z) = ((k % 130) as f32 * 0.1 - 6.5, (k / 130) as f32 * 0.1 - 6.5);
+        obj += &format!(
+            "v {x} 2 {z}\nv {} 2 {z}\nv {} 2 {}\nv {x} 2 {}\nf -4 -3 -2 -1\n",
+            x + 0.05,
+            x + 0.05,
+            z + 0.05,
+            z + 0.05
+        );
+    }
+    std::fs::write(dir.join("lights.obj"), obj).unwrap();
+    std::fs::write(
+        dir.join("lights.mtl"),
+        "newmtl floor\nKd 0.5 0.5 0.5\nnewmtl light\nKd 0 0 0\nKe 1 1 1\n",
+    )
+    .unwrap();
+    std::fs::write(
+        &lights,
+        "[camera]\nposition = [0, 1, 5]\nlook_at = [0, 0, 0]\nfov_y = 40\nresolution = [8, 8]\n\
+         [[mesh]]\nobj = \"lights.obj\"\n",
+    )
+    .unwrap();
+    let lights = lights.to_str().unwrap().to_string();
+    let bir: Vec<&str> = vec!["render", &lights, "--method", "bir", "--frames", "1"];
     let ir: Vec<&str> = vec!["render", "--method", "ir", "--vpls", "1048576"];
     // BundleHits at 65536 iterations on 256x256 pixels is 11 GB, over any device's range;
     // ir's 1048576 VPLs need 156716096 bytes, over lavapipe's 128 MiB but within a discrete
@@ -552,6 +580,16 @@ fn sizes_over_the_device_limits_are_refused_before_rendering() {
             vec!["vpls = 1048576 (--vpls)", "the largest that fits is"],
         ));
     }
+    if range < 139_264_000 {
+        cases.push((
+            bir,
+            vec![
+                "light_cdf = true (--light-cdf)",
+                "34000 lights",
+                "--light-cdf=false",
+            ],
+        ));
+    }
     for (mut args, needles) in cases {
         args.extend(["-o", &out]);
         let start = std::time::Instant::now();
@@ -559,7 +597,14 @@ fn sizes_over_the_device_limits_are_refused_before_rendering() {
         let mut needles = needles;
         needles.push("maxStorageBufferRange");
         assert_clean_error(&o, &needles);
-        for internal in ["CubeWeights", "GBuffer", "BundleHits", "Vpls`", "buffer `"] {
+        for internal in [
+            "CubeWeights",
+            "GBuffer",
+            "BundleHits",
+            "Vpls`",
+            "buffer `",
+            "Contributions",
+        ] {
             assert!(!stderr(&o).contains(internal), "{}", stderr(&o));
         }
         assert!(

@@ -234,6 +234,56 @@ fn cube_samples_follow_their_pdf() {
     });
 }
 
+/// A cube texel holding a pole covers every column of the map down to its edge, more texels
+/// than lavapipe lets one invocation loop over (65535): at R = 2 on a 1024 x 512 map, about
+/// 160k. weigh_env_cube splits that search over dispatches, so a bright texel deep in such a
+/// footprint (past index 65535) still sets the texel's weight, as the CPU mirror's.
+#[test]
+fn cube_weights_search_footprints_past_the_loop_budget() {
+    with_gpu(|ctx| {
+        let (w, h, r) = (1024u32, 512u32, 2u32);
+        let fp = cubemap::equirect_footprint(r, 2, 0, 0, w, h);
+        assert!(fp.columns.is_none(), "a pole texel covers every column");
+        let row = fp.rows.1 - 3;
+        let index = (row - fp.rows.0) * w + 500;
+        assert!(
+            index > 65535,
+            "the bright texel lies at {index} in the footprint"
+        );
+        let mut texels = vec![Vec3::splat(0.1); (w * h) as usize];
+        texels[(row * w + 500) as usize] = Vec3::splat(100.0);
+        let mut scene = scene_file("glossy-env", 8, 8);
+        scene.environment = Some(Environment {
+            width: w,
+            height: h,
+            texels,
+            source: "bright texel".into(),
+        });
+        let gpu = GpuScene::upload(ctx, &scene).unwrap();
+        let (gpu_weights, _) = build_table(ctx, &gpu, r, 16);
+        let cpu_weights = cubemap::cube_weights(scene.environment.as_ref().unwrap(), r);
+        let t = cubemap::texel_index(r, 2, 0, 0);
+        let bright = 100.0 * cubemap::texel_solid_angle(r, 0, 0);
+        assert!(
+            (cpu_weights[t] - bright).abs() < 1e-3 * bright,
+            "{}",
+            cpu_weights[t]
+        );
+        assert!(
+            (gpu_weights[t] as f64 - bright).abs() < 1e-3 * bright,
+            "the pole texel's GPU weight {} against {bright}",
+            gpu_weights[t]
+        );
+        for (k, (&g, &c)) in gpu_weights.iter().zip(&cpu_weights).enumerate() {
+            // f32 solid angles: 5e-4 apart at R = 2.
+            assert!(
+                (g as f64 - c).abs() <= 2e-3 * c,
+                "texel {k}: GPU {g} against {c}"
+            );
+        }
+    });
+}
+
 /// The cube map is built from each cube texel's whole footprint, so a sun smaller than a cube
 /// texel is never lost: for a map with one bright texel (at the seam, at the pole, and inside),
 /// every direction inside that texel lies in a cube texel of positive GPU weight (the pdf is

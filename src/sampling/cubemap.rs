@@ -244,6 +244,21 @@ pub fn footprint_texels(fp: Footprint, w: u32) -> impl Iterator<Item = (u32, u32
         .flat_map(move |je| (i0..=i1).map(move |ie| (ie.rem_euclid(w as i64) as u32, je)))
 }
 
+/// At least as many map texels as any cube texel's footprint holds, on a W x H map and faces R
+/// texels wide: weigh_env_cube.comp splits its search over dispatches by it. Columns: at most W
+/// (a wider footprint takes every column once). Rows: the footprint's points lie in one texel,
+/// whose angular diameter is at most its diagonal on the face, 2 sqrt(2) / R (central projection
+/// from a plane at distance 1 shortens every path), and the polar angle changes no faster than
+/// the direction, so they span at most 2 sqrt(2) H / (pi R) rows, plus one for the floors, one
+/// of margin each side and the pole's texel, which reaches the pole inside that diameter, and
+/// one more against float rounding on the GPU.
+pub fn footprint_bound(w: u32, h: u32, r: u32) -> u64 {
+    let span = (2.0 * std::f64::consts::SQRT_2 * h as f64
+        / (std::f64::consts::PI * r.max(1) as f64))
+        .ceil() as u64;
+    w as u64 * (span + 5).min(h as u64)
+}
+
 /// Per cube texel (index f R^2 + j R + i, 6 R^2 in all), its sampling weight: the largest
 /// luminance Y over the map texels of its footprint, clamped at >= 0, times its exact solid
 /// angle (weigh_env_cube.comp).
@@ -643,6 +658,49 @@ mod tests {
             columns: None,
         };
         assert_eq!(footprint_texels(all, 8).count(), 8);
+    }
+
+    #[test]
+    fn footprint_bound_holds_every_footprint() {
+        let maps = [
+            (1, 1),
+            (3, 2),
+            (16, 8),
+            (64, 32),
+            (100, 50),
+            (256, 128),
+            (512, 256),
+            (2048, 1024),
+            (37, 91),
+        ];
+        for (w, h) in maps {
+            for r in [1, 2, 3, 4, 5, 7, 8, 16, 33, 64] {
+                let bound = footprint_bound(w, h, r);
+                let mut largest = 0u64;
+                for face in 0..6 {
+                    for j in 0..r {
+                        for i in 0..r {
+                            let fp = equirect_footprint(r, face, i, j, w, h);
+                            let columns = fp.columns.map_or(w as u64, |(a, b)| (b - a + 1) as u64);
+                            let rows = (fp.rows.1 - fp.rows.0 + 1) as u64;
+                            largest = largest.max(rows * columns);
+                            assert_eq!(footprint_texels(fp, w).count() as u64, rows * columns);
+                        }
+                    }
+                }
+                assert!(
+                    largest <= bound,
+                    "map {w}x{h}, R {r}: footprint {largest} > bound {bound}"
+                );
+                // Tight enough that the split costs no more than a few dispatches more than it must.
+                if h >= 256 {
+                    assert!(
+                        bound <= 3 * largest,
+                        "map {w}x{h}, R {r}: bound {bound}, footprint {largest}"
+                    );
+                }
+            }
+        }
     }
 
     #[test]

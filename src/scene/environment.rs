@@ -78,8 +78,15 @@ pub fn check(file: &str, env: &EnvironmentFile) -> Result<(), SceneError> {
     Ok(())
 }
 
+/// How many times as wide as tall a map may be: weigh_env_pyramid.comp's leaves (H' >= H rows
+/// of W' = 2 H' columns, env_pyramid.glsl) each search at most (W / 2H + 1) x 2 map texels in
+/// one loop, about 16k at this ratio, a quarter of lavapipe's loop budget of 65535 iterations
+/// an invocation. The built-in sky is at most 16384 x 1.
+pub const MAX_ASPECT: u64 = 16384;
+
 /// Reads the map at `path` (named `display` in messages) and scales it; every texel must be
 /// finite and non-negative, before and after scaling.
+/// At most `MAX_ASPECT` times as wide as tall.
 pub fn read(display: &str, path: &Path, scale: f32) -> Result<Environment, SceneError> {
     let image = crate::image::exr::read(path).map_err(|e| SceneError::File {
         file: display.to_string(),
@@ -91,6 +98,18 @@ pub fn read(display: &str, path: &Path, scale: f32) -> Result<Environment, Scene
             field: "size".into(),
             value: format!("{}x{}", image.width, image.height),
             problem: "an environment map needs at least one texel".into(),
+        });
+    }
+    if image.width as u64 > MAX_ASPECT * image.height as u64 {
+        return Err(SceneError::Invalid {
+            file: display.to_string(),
+            field: "size".into(),
+            value: format!("{}x{}", image.width, image.height),
+            problem: format!(
+                "an equirectangular map may be at most {MAX_ASPECT} times as wide as tall (2:1 \
+                 is usual): each leaf of env's hierarchical sampler searches the map texels it \
+                 covers in one loop, which must stay within the device's loop budget"
+            ),
         });
     }
     let mut texels = Vec::with_capacity(image.pixels.len());
@@ -172,6 +191,26 @@ pub fn expand_glob(dir: &Path, pattern: &str) -> std::io::Result<Vec<PathBuf>> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn maps_far_wider_than_tall_are_refused_by_name() {
+        let dir = std::env::temp_dir().join(format!("irad-env-aspect-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("wide.exr");
+        let w = MAX_ASPECT as u32 + 1;
+        let image = crate::image::Image::new(w, 1);
+        crate::image::exr::write(&path, &image).unwrap();
+        let e = read("wide.exr", &path, 1.0).unwrap_err().to_string();
+        assert!(
+            e.contains("wide.exr") && e.contains(&format!("{w}x1")),
+            "{e}"
+        );
+        assert!(e.contains("16384 times as wide as tall"), "{e}");
+        let path = dir.join("ok.exr");
+        crate::image::exr::write(&path, &crate::image::Image::new(w - 1, 1)).unwrap();
+        assert!(read("ok.exr", &path, 1.0).is_ok());
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 
     #[test]
     fn globs_are_recognized() {

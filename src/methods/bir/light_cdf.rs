@@ -7,7 +7,7 @@
 use bytemuck::{Pod, Zeroable};
 
 use crate::gpu::prefix_sum::PrefixSum;
-use crate::gpu::{bind, Buffer, Commands, Context, GpuResult, Kernel};
+use crate::gpu::{bind, Buffer, Commands, Context, GpuError, GpuResult, Kernel};
 use crate::methods::gbuffer::GBuffer;
 use crate::methods::scene_kernel::SceneKernel;
 use crate::scene::gpu::{GpuScene, LightEntry};
@@ -29,7 +29,14 @@ struct ContributionParams {
 struct CdfParams {
     entries: u32,
     floor_fraction: f32,
+    first: u32,
+    count: u32,
+    phase: u32,
 }
+
+/// Lights one build_light_cdf dispatch walks: half lavapipe's loop budget of 65535 iterations
+/// an invocation.
+const LIGHTS_PER_DISPATCH: u32 = 32768;
 
 pub struct LightCdf {
     estimate: SceneKernel,
@@ -39,14 +46,31 @@ pub struct LightCdf {
     sums: Buffer<f32>,
     totals: Buffer<f32>,
     scan: PrefixSum,
+    /// build_light_cdf's sums carried from one dispatch to the next (CdfState).
+    state: Buffer<[u32; 4]>,
     /// The camera-driven light table, laid out as the scene's LightEntries.
     pub table: Buffer<LightEntry>,
+    /// Lights build_light_cdf walks a dispatch (LIGHTS_PER_DISPATCH; tests lower it).
+    pub lights_per_dispatch: u32,
 }
 
 impl LightCdf {
     pub fn new(ctx: &Context, scene: &GpuScene) -> GpuResult<Self> {
         let entries = scene.light_entries.len().max(1) as u32;
-        let n = (entries * SAMPLES) as usize;
+        let n = entries as usize * SAMPLES as usize;
+        // The contributions, one float per light and camera sample, in one buffer: refused
+        // here, before any frame, in the setting's words.
+        let bytes = n as u64 * size_of::<f32>() as u64;
+        let limit = ctx.info().max_storage_buffer_range;
+        if bytes > limit {
+            return Err(GpuError::DoesNotFit(format!(
+                "bir: light_cdf = true (--light-cdf): measuring each of the scene's {entries} \
+                 lights at {SAMPLES} camera points would take {bytes} bytes in one buffer, over \
+                 this device's maxStorageBufferRange of {limit} bytes (`irad info`); at most {} \
+                 lights fit: set light_cdf = false (--light-cdf=false) to choose lights by power",
+                limit / (SAMPLES as u64 * size_of::<f32>() as u64)
+            )));
+        }
         Ok(LightCdf {
             estimate: SceneKernel::new(ctx, "estimate_light_contributions")?,
             build: Kernel::new(ctx, "build_light_cdf")?,
@@ -55,7 +79,9 @@ impl LightCdf {
             sums: Buffer::zeroed(ctx, "light contribution sums", n)?,
             totals: Buffer::zeroed(ctx, "RowTotals", entries as usize)?,
             scan: PrefixSum::new(ctx, SAMPLES as usize, entries as usize)?,
+            state: Buffer::zeroed(ctx, "CdfState", 1)?,
             table: Buffer::zeroed(ctx, "CameraLightEntries", entries as usize)?,
+            lights_per_dispatch: LIGHTS_PER_DISPATCH,
         })
     }
 
@@ -87,11 +113,23 @@ impl LightCdf {
             .record(cmd, &self.contributions, &self.sums, &self.totals)?;
         let mut bindings = scene.bindings();
         bindings.push(bind("RowTotals", &self.totals));
+        bindings.push(bind("CdfState", &self.state));
         bindings.push(bind("CameraLightEntries", &self.table));
-        let params = CdfParams {
-            entries: self.entries,
-            floor_fraction,
-        };
-        self.build.dispatch(cmd, &bindings, &params, [1, 1, 1])
+        // Two sequential walks over the lights, each in ranges a dispatch (one each for fewer
+        // than LIGHTS_PER_DISPATCH lights).
+        for phase in 0..2 {
+            let count = self.lights_per_dispatch.clamp(1, LIGHTS_PER_DISPATCH);
+            for first in (0..self.entries).step_by(count as usize) {
+                let params = CdfParams {
+                    entries: self.entries,
+                    floor_fraction,
+                    first,
+                    count,
+                    phase,
+                };
+                self.build.dispatch(cmd, &bindings, &params, [1, 1, 1])?;
+            }
+        }
+        Ok(())
     }
 }

@@ -8,13 +8,20 @@ use bytemuck::{Pod, Zeroable};
 
 use crate::gpu::prefix_sum::PrefixSum;
 use crate::gpu::{bind, Binding, Buffer, Commands, Context, GpuResult, Kernel};
+use crate::sampling::cubemap::footprint_bound;
 use crate::scene::gpu::GpuScene;
 
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
 struct CubeParams {
     resolution: u32,
+    first: u32,
+    count: u32,
 }
+
+/// Map texels one weigh_env_cube invocation searches per dispatch: half lavapipe's loop budget
+/// of 65535 iterations an invocation (the rest of the kernel loops at most 8 times).
+const FOOTPRINT_TEXELS_PER_DISPATCH: u32 = 32768;
 
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
@@ -88,7 +95,9 @@ impl CubeTable {
         ]
     }
 
-    /// Pass "cube map": the weights from the scene's map.
+    /// Pass "cube map": the weights from the scene's map, the footprints' search split over
+    /// as many dispatches as the largest footprint needs (`footprint_bound`; one for the
+    /// shipped maps at the default resolution).
     pub fn record_weights<'a>(
         &'a self,
         cmd: &mut Commands<'a>,
@@ -97,9 +106,19 @@ impl CubeTable {
         let mut bindings = scene.bindings();
         bindings.push(bind("CubeWeights", &self.weights));
         let r = self.resolution;
-        let params = CubeParams { resolution: r };
-        self.weigh
-            .dispatch_threads(cmd, &bindings, &params, [r, r, 6])
+        let [w, h] = scene.environment_size.unwrap_or([1, 1]);
+        let count = FOOTPRINT_TEXELS_PER_DISPATCH;
+        let dispatches = footprint_bound(w, h, r).div_ceil(count as u64) as u32;
+        for d in 0..dispatches.max(1) {
+            let params = CubeParams {
+                resolution: r,
+                first: d * count,
+                count,
+            };
+            self.weigh
+                .dispatch_threads(cmd, &bindings, &params, [r, r, 6])?;
+        }
+        Ok(())
     }
 
     /// Pass "cdf": the scans of the weights.
