@@ -133,7 +133,8 @@ void main() {
                 } else {
                     uint end = min(params.connection_end, params.connections);
                     for (uint c = params.connection_begin; c < end; ++c) {
-                        uint pick = random_u31(params.seed, k, 0x636f6e6eu, j * 4096u + c) % slots;
+                        // Sample and connection keyed apart: no two share picks at any count.
+                        uint pick = random_u31(params.seed, k, 0x636f6e6eu + j, c) % slots;
                         sum += shade_from_vpl(vpls[params.vpl_begin + pick], xd, od, nd, sided,
                                               wod, md, 0.0);
                     }
