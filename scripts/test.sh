@@ -15,5 +15,6 @@ if [ "$#" -eq 0 ]; then
   echo "== the GPU tests again, staged buffers and 4-lane subgroups"
   IRAD_FORCE_STAGING=1 LP_NATIVE_VECTOR_WIDTH=128 cargo test --locked \
     --test prefix_sum --test bvh --test buffers --test reference --test ir --test bir \
-    --test bundles --test compensation --test env --test lightfield --test tables
+    --test bundles --test compensation --test env --test lightfield --test tables \
+    --test pixel_hashes
 fi
