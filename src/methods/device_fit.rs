@@ -157,7 +157,7 @@ pub fn check_method(method: &Method, scene: &Scene, limit: u64) -> Result<(), St
             let bytes = |paths: u64| {
                 let settings = crate::methods::ir::IrSettings {
                     paths: paths as u32,
-                    ..s.clone()
+                    ..*s
                 };
                 InstantRadiosity::schedule(scene, &settings).slot_count as u64
                     * size_of::<Vpl>() as u64
