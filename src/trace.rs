@@ -1,5 +1,8 @@
 //! glsl/trace_rays.comp: a buffer of rays traced through the BVH (glsl/include/bvh.glsl), closest
 //! hit or any hit. The kernel the BVH test and `irad bench rays` run.
+//!
+//! The wrapper only records; once the submission has completed, `GpuBvh::check_loop_cuts`
+//! says whether the device's loop limit cut a traversal short (the hits are then wrong).
 
 use glam::Vec3;
 
@@ -100,8 +103,14 @@ impl TraceRays {
             expected: u32::MAX as usize,
             given: rays.len(),
         })?;
-        let [nodes, triangles] = bvh.bindings();
-        let bindings = [nodes, triangles, bind("Rays", rays), bind("Hits", hits)];
+        let [nodes, triangles, loop_cuts] = bvh.bindings();
+        let bindings = [
+            nodes,
+            triangles,
+            loop_cuts,
+            bind("Rays", rays),
+            bind("Hits", hits),
+        ];
         let params = TraceParams {
             ray_count,
             mode: match mode {

@@ -90,6 +90,7 @@ fn trace(ctx: &Context, bvh: &GpuBvh, rays: &[TraceRay], mode: TraceMode) -> Vec
     })
     .unwrap();
     cmd.submit_and_wait().unwrap();
+    bvh.check_loop_cuts().unwrap_or_else(|e| panic!("{e}"));
     hits.read().unwrap()
 }
 
