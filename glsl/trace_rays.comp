@@ -28,7 +28,9 @@ layout(set = 0, binding = 3, std430) writeonly buffer Hits { uvec4 hits[]; };
 layout(push_constant) uniform TraceParams {
     uint ray_count;
     uint mode;  // 0: closest hit, 1: any hit
-    uint _pad0;
+    // Times each ray is traced (0 counts as 1): more than 1 only in tests/bvh.rs, to spend
+    // lavapipe's loop budget within one invocation and see the cut reported (bvh.glsl LoopCuts).
+    uint repeat;
     uint _pad1;
 } params;
 
@@ -43,17 +45,20 @@ void main() {
     vec4 origin_t_max = rays[i].origin_t_max;
     vec3 direction = rays[i].direction.xyz;
     TraceHit out_hit;
-    if (params.mode == 0u) {
-        RayHit hit;
-        trace_closest(origin_t_max.xyz, direction, origin_t_max.w, hit);
-        out_hit = TraceHit(hit.t, hit.triangle, hit.barycentrics);
-        if (hit.triangle == BVH_NO_TRIANGLE) {
-            out_hit.t = 0.0;
+    uint r = 0u;
+    do {
+        if (params.mode == 0u) {
+            RayHit hit;
+            trace_closest(origin_t_max.xyz, direction, origin_t_max.w, hit);
+            out_hit = TraceHit(hit.t, hit.triangle, hit.barycentrics);
+            if (hit.triangle == BVH_NO_TRIANGLE) {
+                out_hit.t = 0.0;
+            }
+        } else {
+            bool any = trace_any(origin_t_max.xyz, direction, origin_t_max.w);
+            out_hit = TraceHit(0.0, any ? TRACE_ANY_HIT : BVH_NO_TRIANGLE, vec2(0.0));
         }
-    } else {
-        bool any = trace_any(origin_t_max.xyz, direction, origin_t_max.w);
-        out_hit = TraceHit(0.0, any ? TRACE_ANY_HIT : BVH_NO_TRIANGLE, vec2(0.0));
-    }
+    } while (++r < params.repeat);
     hits[i] = uvec4(floatBitsToUint(out_hit.t), out_hit.triangle,
                     floatBitsToUint(out_hit.barycentrics));
 }

@@ -28,7 +28,7 @@ use obvhs::cwbvh::{builder::build_cwbvh_from_tris, node::CwBvhNode, CwBvh};
 use obvhs::triangle::Triangle;
 use obvhs::BvhBuildParams;
 
-use crate::gpu::{bind, Binding, Buffer, Context, GpuResult};
+use crate::gpu::{bind, Binding, Buffer, Context, GpuError, GpuResult};
 
 pub mod procedural;
 
@@ -171,18 +171,22 @@ fn max_depth(nodes: &[CwBvhNode], index: usize) -> usize {
         .unwrap_or(0)
 }
 
-/// The BVH on the GPU: bind both buffers under their GLSL block names (`BvhNodes`,
-/// `BvhTriangles`) in every kernel that includes bvh.glsl.
+/// The BVH on the GPU: bind its buffers under their GLSL block names (`BvhNodes`,
+/// `BvhTriangles`, `LoopCuts`) in every kernel that includes bvh.glsl.
 pub struct GpuBvh {
     pub nodes: Buffer<BvhNode>,
     pub triangles: Buffer<BvhTriangle>,
+    /// bvh.glsl's `loop_cuts`: 1 once a traversal was cut short by the device's loop limit
+    /// (lavapipe: 65535 loop iterations an invocation), zeroed at upload and by
+    /// `clear_loop_cuts` and `check_loop_cuts`.
+    pub loop_cuts: Buffer<u32>,
 }
 
 impl GpuBvh {
     pub fn upload(ctx: &Context, bvh: &Bvh) -> GpuResult<GpuBvh> {
         let depth = bvh.depth();
         if depth > GPU_STACK_SIZE {
-            return Err(crate::gpu::GpuError::BvhTooDeep {
+            return Err(GpuError::BvhTooDeep {
                 depth,
                 limit: GPU_STACK_SIZE,
             });
@@ -190,13 +194,32 @@ impl GpuBvh {
         Ok(GpuBvh {
             nodes: Buffer::from_slice(ctx, "BvhNodes", &bvh.nodes)?,
             triangles: Buffer::from_slice(ctx, "BvhTriangles", &bvh.triangles)?,
+            loop_cuts: Buffer::zeroed(ctx, "LoopCuts", 1)?,
         })
     }
 
-    pub fn bindings(&self) -> [Binding<'_>; 2] {
+    pub fn bindings(&self) -> [Binding<'_>; 3] {
         [
             bind("BvhNodes", &self.nodes),
             bind("BvhTriangles", &self.triangles),
+            bind("LoopCuts", &self.loop_cuts),
         ]
+    }
+
+    /// Forgets any cut traversal recorded so far (before a render). The GPU must be idle on
+    /// the buffer (every submission is waited for).
+    pub fn clear_loop_cuts(&self) -> GpuResult<()> {
+        self.loop_cuts.write(&[0])
+    }
+
+    /// After the submissions that traced through this BVH have completed: the error
+    /// [`GpuError::TraversalCut`] when one of their traversals was cut short by the device's
+    /// loop limit (its hits, and what was computed from them, are wrong), clearing the record.
+    pub fn check_loop_cuts(&self) -> GpuResult<()> {
+        if self.loop_cuts.read()?[0] == 0 {
+            return Ok(());
+        }
+        self.clear_loop_cuts()?;
+        Err(GpuError::TraversalCut)
     }
 }

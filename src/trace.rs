@@ -1,5 +1,8 @@
 //! glsl/trace_rays.comp: a buffer of rays traced through the BVH (glsl/include/bvh.glsl), closest
 //! hit or any hit. The kernel the BVH test and `irad bench rays` run.
+//!
+//! The wrapper only records; once the submission has completed, `GpuBvh::check_loop_cuts`
+//! says whether the device's loop limit cut a traversal short (the hits are then wrong).
 
 use glam::Vec3;
 
@@ -69,7 +72,8 @@ pub enum TraceMode {
 struct TraceParams {
     ray_count: u32,
     mode: u32,
-    _pad: [u32; 2],
+    repeat: u32,
+    _pad: u32,
 }
 
 pub struct TraceRays(Kernel);
@@ -88,6 +92,21 @@ impl TraceRays {
         hits: &'a Buffer<TraceHit>,
         mode: TraceMode,
     ) -> GpuResult<()> {
+        self.record_repeated(cmd, bvh, rays, hits, mode, 1)
+    }
+
+    /// As `record`, each ray traced `repeat` times (0 counts as 1) by its invocation, the
+    /// same hit each time: enough repeats spend lavapipe's loop budget within one invocation
+    /// (tests/bvh.rs checks that the cut is reported).
+    pub fn record_repeated<'a>(
+        &'a self,
+        cmd: &mut Commands<'a>,
+        bvh: &'a GpuBvh,
+        rays: &'a Buffer<TraceRay>,
+        hits: &'a Buffer<TraceHit>,
+        mode: TraceMode,
+        repeat: u32,
+    ) -> GpuResult<()> {
         if hits.len() != rays.len() {
             return Err(GpuError::BufferLength {
                 name: "trace hits".into(),
@@ -100,15 +119,22 @@ impl TraceRays {
             expected: u32::MAX as usize,
             given: rays.len(),
         })?;
-        let [nodes, triangles] = bvh.bindings();
-        let bindings = [nodes, triangles, bind("Rays", rays), bind("Hits", hits)];
+        let [nodes, triangles, loop_cuts] = bvh.bindings();
+        let bindings = [
+            nodes,
+            triangles,
+            loop_cuts,
+            bind("Rays", rays),
+            bind("Hits", hits),
+        ];
         let params = TraceParams {
             ray_count,
             mode: match mode {
                 TraceMode::Closest => 0,
                 TraceMode::Any => 1,
             },
-            _pad: [0; 2],
+            repeat,
+            _pad: 0,
         };
         // A 2D grid (trace_rays.comp folds y into the ray index): x at most 65535 groups.
         let groups = ray_count.div_ceil(self.0.workgroup_size()[0]).max(1);

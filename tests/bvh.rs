@@ -20,7 +20,7 @@ use obvhs::BvhBuildParams;
 
 use irad::bvh::procedural::{self, Random};
 use irad::bvh::{obvhs_triangles, Bvh, BvhTriangle, GpuBvh, GPU_STACK_SIZE};
-use irad::gpu::{Buffer, Commands, Context};
+use irad::gpu::{Buffer, Commands, Context, GpuError, GpuResult};
 use irad::trace::{TraceHit, TraceMode, TraceRay, TraceRays, ANY_HIT, NO_TRIANGLE};
 
 const T_TOLERANCE: f32 = 1e-4;
@@ -80,17 +80,32 @@ fn test_rays(bounds: (Vec3, Vec3), count: usize) -> Vec<TraceRay> {
         .collect()
 }
 
+/// Every ray's hit, no traversal cut short by the device's loop limit.
 fn trace(ctx: &Context, bvh: &GpuBvh, rays: &[TraceRay], mode: TraceMode) -> Vec<TraceHit> {
+    let (hits, cuts) = trace_repeated(ctx, bvh, rays, mode, 1);
+    cuts.unwrap_or_else(|e| panic!("{e}"));
+    hits
+}
+
+/// Every ray's hit, each ray traced `repeat` times by its invocation, and what
+/// `GpuBvh::check_loop_cuts` says after the submission.
+fn trace_repeated(
+    ctx: &Context,
+    bvh: &GpuBvh,
+    rays: &[TraceRay],
+    mode: TraceMode,
+    repeat: u32,
+) -> (Vec<TraceHit>, GpuResult<()>) {
     let trace = TraceRays::new(ctx).unwrap();
     let ray_buffer = Buffer::from_slice(ctx, "rays", rays).unwrap();
     let hits = Buffer::<TraceHit>::zeroed(ctx, "hits", rays.len()).unwrap();
     let mut cmd = Commands::new(ctx).unwrap();
     cmd.pass("trace", |cmd| {
-        trace.record(cmd, bvh, &ray_buffer, &hits, mode)
+        trace.record_repeated(cmd, bvh, &ray_buffer, &hits, mode, repeat)
     })
     .unwrap();
     cmd.submit_and_wait().unwrap();
-    hits.read().unwrap()
+    (hits.read().unwrap(), bvh.check_loop_cuts())
 }
 
 /// The closest hit by obvhs's BVH2 traversal: (input triangle, t, u, v).
@@ -325,6 +340,53 @@ fn small_and_flat_meshes_match_brute_force() {
                     "ray {i}: any-hit disagrees"
                 );
             }
+        }
+    });
+}
+
+/// A traversal cut short by lavapipe's loop limit (65535 iterations an invocation, all its
+/// loops together, then every loop breaks out silently; README "Kernels") is reported, not
+/// left in the hits: each invocation traces its ray 65535 times, which spends the budget
+/// within a few thousand traversals and cuts the one under way. Without the limit (a GPU
+/// driver) nothing is cut and nothing reported. Traced once or 64 times (within the budget),
+/// nothing is reported, and the check clears the record, so the next submission starts clean.
+#[test]
+fn a_traversal_cut_by_the_loop_limit_is_reported() {
+    let triangles = procedural::noisy_sphere(5, 24, 500);
+    let bvh = Bvh::build(&triangles);
+    let rays = test_rays(procedural::bounds(&triangles), 128);
+    common::with_gpu(|ctx| {
+        let gpu_bvh = GpuBvh::upload(ctx, &bvh).unwrap();
+        let limited = ctx.info().driver.contains("llvmpipe");
+        for mode in [TraceMode::Closest, TraceMode::Any] {
+            let once = trace(ctx, &gpu_bvh, &rays, mode);
+            assert!(
+                once.iter().filter(|h| h.is_hit()).count() > rays.len() / 4,
+                "{mode:?}: the rays hit enough to traverse far"
+            );
+            // Within the budget (a few thousand iterations): nothing cut, nothing reported.
+            let (within, cuts) = trace_repeated(ctx, &gpu_bvh, &rays, mode, 64);
+            cuts.unwrap_or_else(|e| panic!("{mode:?}, traced 64 times: {e}"));
+            assert_eq!(within, once, "{mode:?}: traced 64 times, the same hits");
+            let (repeated, cuts) = trace_repeated(ctx, &gpu_bvh, &rays, mode, 65535);
+            let differ = once.iter().zip(&repeated).filter(|(a, b)| a != b).count();
+            eprintln!(
+                "{mode:?}, driver {}: traced 65535 times, {differ} of {} hits differ from \
+                 traced once; check: {cuts:?}",
+                ctx.info().driver,
+                rays.len()
+            );
+            if limited {
+                let e = cuts.expect_err("a cut traversal is reported");
+                assert!(matches!(e, GpuError::TraversalCut), "{e}");
+                assert!(e.to_string().contains("loop limit"), "{e}");
+                assert!(differ > 0, "{mode:?}: the cut traversals' hits are wrong");
+            } else {
+                cuts.unwrap_or_else(|e| panic!("{mode:?}: {e}"));
+                assert_eq!(differ, 0, "{mode:?}: the same hit every time");
+            }
+            // The record was cleared: traced once again, nothing is reported.
+            assert_eq!(trace(ctx, &gpu_bvh, &rays, mode), once);
         }
     });
 }

@@ -859,3 +859,59 @@ fn a_setting_beside_a_strategy_it_does_not_apply_to_is_refused() {
         "{out}"
     );
 }
+
+/// A scene whose BVH traversals pass lavapipe's loop limit (65535 iterations an invocation,
+/// then every loop breaks out silently) is refused in the user's words, not rendered wrong:
+/// 40000 long slivers through one cube, so every ray's traversal visits most of the tree
+/// (tens of thousands of steps; bvh.glsl's LoopCuts). Elsewhere (no limit) it renders.
+#[test]
+fn a_render_whose_traversals_pass_the_loop_limit_is_refused() {
+    let limited = irad::gpu::list_devices()
+        .ok()
+        .and_then(|d| {
+            let i = irad::gpu::device_info::choose(&d, None).ok()?;
+            d.into_iter().find(|x| x.index == i)
+        })
+        .is_some_and(|d| d.driver.contains("llvmpipe"));
+    let dir = temp_dir("loop-limit");
+    let mut rng = irad::bvh::procedural::Random::new(1, 0);
+    let mut obj = String::from("mtllib slivers.mtl\nusemtl grey\n");
+    for i in 0..40_000 {
+        let a = rng.point_in(glam::Vec3::splat(-1.0), glam::Vec3::splat(1.0));
+        let b = -a + rng.point_in(glam::Vec3::splat(-0.1), glam::Vec3::splat(0.1));
+        let c = a + 0.001;
+        for v in [a, b, c] {
+            obj += &format!("v {} {} {}\n", v.x, v.y, v.z);
+        }
+        obj += &format!("f {} {} {}\n", 3 * i + 1, 3 * i + 2, 3 * i + 3);
+    }
+    std::fs::write(dir.join("slivers.obj"), obj).unwrap();
+    std::fs::write(dir.join("slivers.mtl"), "newmtl grey\nKd 0.5 0.5 0.5\n").unwrap();
+    let scene = dir.join("scene.toml");
+    std::fs::write(
+        &scene,
+        "[camera]\nposition = [0, 2, 3]\nlook_at = [0, 0, 0]\nfov_y = 45\nresolution = [16, 16]\n\
+         [[mesh]]\nobj = \"slivers.obj\"\n[[light]]\nkind = \"point\"\nposition = [0, 1.5, 0]\n\
+         intensity = [3, 3, 3]\n",
+    )
+    .unwrap();
+    let out = dir.join("slivers");
+    let o = irad(
+        &[
+            "render",
+            scene.to_str().unwrap(),
+            "--spp",
+            "1",
+            "-o",
+            out.to_str().unwrap(),
+        ],
+        &[],
+    );
+    if limited {
+        assert_clean_error(&o, &["loop limit", "BVH traversal", "simplify the scene"]);
+        assert!(!out.with_extension("exr").exists(), "no image is written");
+    } else {
+        assert!(o.status.success(), "{}", stderr(&o));
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -1,5 +1,5 @@
-// BVH traversal (src/bvh.rs builds the layout). Declares bindings 0 and 1; kernels that
-// include this number their own bindings from 2.
+// BVH traversal (src/bvh.rs builds the layout). Declares bindings 0, 1 and 63 (LoopCuts);
+// kernels that include this number their own bindings from 2 (scene.glsl holds 2..9).
 //
 // The BVH is obvhs's compressed wide BVH8 (Ylitie, Karras and Laine 2017), traversed as in
 // their paper: a node holds its 8 children's boxes quantized to 8 bits in the node's own
@@ -40,6 +40,13 @@ struct BvhTriangle { vec4 v0; vec4 e1; vec4 e2; };
 
 layout(set = 0, binding = 0, std430) readonly buffer BvhNodes { BvhNode bvh_nodes[]; };
 layout(set = 0, binding = 1, std430) readonly buffer BvhTriangles { BvhTriangle bvh_triangles[]; };
+// Set to 1 by a traversal that the device's loop limit cut short (lavapipe: 65535 loop
+// iterations an invocation, all loops together, then every loop breaks out silently; README
+// "Kernels"). The host zeroes it before a render and refuses the render when it reads 1
+// (src/bvh.rs GpuBvh::check_loop_cuts). Binding 63: far above the numbers kernels give their
+// own bindings (2..36 now), so a kernel's next binding does not run into it (reflection
+// refuses two bindings of one number: src/gpu/reflect.rs).
+layout(set = 0, binding = 63, std430) writeonly buffer LoopCuts { uint loop_cuts; };
 
 struct RayHit {
     float t;           // distance along the (unit or not) direction: origin + t * direction
@@ -189,6 +196,13 @@ bool bvh_traverse(vec3 origin, vec3 direction, float t_max, bool any_hit, out Ra
             }
             node_group = stack[--stack_size];
         }
+    }
+    // The loop ends itself only with no work left: no node bits (an iteration that goes on
+    // leaves some, its own node's or a popped entry's) and no untested triangle (the triangle
+    // loop ends on none). Work left means the loop limit broke out of a loop: one branch and a
+    // rare store after the loop, no test inside it (the any-hit return is a natural end too).
+    if ((node_group.y & 0xff000000u) != 0u || triangle_group.y != 0u) {
+        loop_cuts = 1u;
     }
     return hit.triangle != BVH_NO_TRIANGLE;
 }

@@ -1,7 +1,7 @@
 // The scene as every method's kernels see it (src/scene/gpu.rs uploads it): shading data per
 // triangle in BVH order, materials, analytic lights, the light-selection table, emissive
 // triangles, the environment map and its CDF, and the scene constants. Bindings 2-9
-// (bvh.glsl holds 0 and 1); kernels number their own from 10.
+// (bvh.glsl holds 0, 1 and 63); kernels number their own from 10.
 #ifndef SCENE_GLSL
 #define SCENE_GLSL
 

@@ -99,6 +99,7 @@ pub fn run(
                     trace.record(cmd, &gpu_bvh, &ray_buffer, &hits, mode)
                 })?;
                 let t = cmd.submit_and_wait()?;
+                gpu_bvh.check_loop_cuts()?;
                 if i > 0 {
                     gpu_ms.push(t.gpu_ms("trace").unwrap_or(t.wall_ms));
                 }

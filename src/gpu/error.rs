@@ -106,6 +106,12 @@ pub enum GpuError {
     )]
     BvhTooDeep { depth: usize, limit: usize },
 
+    /// A BVH traversal that the device's loop limit broke out of (bvh.glsl's LoopCuts).
+    #[error(
+        "the device's loop limit (lavapipe: 65535 iterations an invocation) cut a ray's BVH traversal short in this render, so the image would be wrong; this scene's BVH needs more traversal steps than the kernels' ray batches allow on this driver: render it on a GPU driver without the limit, or simplify the scene"
+    )]
+    TraversalCut,
+
     #[error("kernel `{kernel}`: binding `{binding}` bound twice")]
     DuplicateBinding { kernel: String, binding: String },
 

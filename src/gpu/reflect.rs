@@ -88,6 +88,13 @@ pub fn reflect(kernel: &str, spirv: &[u8]) -> GpuResult<Reflection> {
         if pair[0].name == pair[1].name {
             return Err(fail(format!("two bindings are named `{}`", pair[0].name)));
         }
+        // Vulkan refuses a set layout that numbers two bindings alike; say which.
+        if pair[0].binding == pair[1].binding {
+            return Err(fail(format!(
+                "`{}` and `{}` are both binding {}",
+                pair[0].name, pair[1].name, pair[0].binding
+            )));
+        }
     }
     Ok(Reflection {
         bindings,

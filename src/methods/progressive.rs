@@ -55,7 +55,9 @@ fn observe(within: Within) {
 /// Records frames 0..frames with `record(cmd, frame)`, each submission starting with a clear
 /// of `accumulation`'s GPU sums; calls `progress(done, frames)` after each submission. A frame
 /// of a scene with a dynamic map starts with that frame's map (GpuScene's pass "environment
-/// frame").
+/// frame"). Fails with `GpuError::TraversalCut` after the first submission by whose end the
+/// device's loop limit has cut a traversal of the scene's BVH short, in it or in a pass before
+/// the frames (since the record was last cleared: `Renderers::run` clears it before a render).
 pub fn run<'s>(
     ctx: &Context,
     scene: &'s GpuScene,
@@ -102,6 +104,9 @@ pub fn run<'s>(
         }
         per_frame = cmd.dispatches() / count;
         let timings = cmd.submit_and_wait()?;
+        // Each submission's traversals (and those of the passes before the frames) whole, or
+        // the render refused: a cut one leaves the image silently wrong.
+        scene.bvh.check_loop_cuts()?;
         accumulation.collect()?;
         passes.add(&timings);
         done += count;

@@ -51,6 +51,9 @@ impl Renderers {
         }
         device_fit::check_method(method, scene, ctx.info().max_storage_buffer_range)
             .map_err(|e| RunError::Gpu(GpuError::DoesNotFit(e)))?;
+        // A cut traversal left over from an earlier render (one that failed before its
+        // check) is not this render's; the methods' frames check it (progressive::run).
+        gpu_scene.bvh.clear_loop_cuts()?;
         match method {
             Method::Reference(settings) => {
                 let r = get_or_try_init(&self.reference, || Reference::new(ctx))?;
