@@ -915,3 +915,53 @@ fn a_render_whose_traversals_pass_the_loop_limit_is_refused() {
     }
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// 5000 coincident quads build a BVH far deeper than the GPU traversal's stack: refused in one
+/// line naming the depth (the dependency's own debug assertion panicked here in test builds).
+#[test]
+fn a_bvh_too_deep_for_the_traversal_is_refused() {
+    let dir = temp_dir("deep-bvh");
+    let mut obj = String::from("mtllib d.mtl\nusemtl m\n");
+    for k in 0..5000 {
+        let b = 4 * k + 1;
+        obj += &format!(
+            "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf {b} {} {} {}\n",
+            b + 1,
+            b + 2,
+            b + 3
+        );
+    }
+    std::fs::write(dir.join("d.obj"), obj).unwrap();
+    std::fs::write(dir.join("d.mtl"), "newmtl m\nKd 0.5 0.5 0.5\nKe 1 1 1\n").unwrap();
+    let scene = dir.join("scene.toml");
+    std::fs::write(
+        &scene,
+        "[camera]\nposition = [0.5, 0.5, 3]\nlook_at = [0.5, 0.5, 0]\nfov_y = 40\n\
+         resolution = [8, 8]\n[[mesh]]\nobj = \"d.obj\"\n",
+    )
+    .unwrap();
+    let out = dir.join("out");
+    let o = irad(
+        &[
+            "render",
+            scene.to_str().unwrap(),
+            "--spp",
+            "1",
+            "-o",
+            out.to_str().unwrap(),
+        ],
+        &[],
+    );
+    assert!(
+        stderr(&o).contains("levels deep, over the 32"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(
+        !o.status.success() && !stderr(&o).contains("panicked"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!dir.join("out.exr").exists());
+    std::fs::remove_dir_all(&dir).ok();
+}
