@@ -32,6 +32,7 @@ layout(push_constant) uniform CubeParams {
     uint resolution;  // R: texels along a face's side
     uint first;       // the first footprint texel this dispatch takes, row-major
     uint count;       // how many it takes at most
+    uint planned;     // how many the dispatches take in all (footprint_bound, rounded up)
 } params;
 
 // The continuous (column, row) of direction d on the W x H map.
@@ -108,6 +109,9 @@ void main() {
 
     uint columns = uint(i1 - i0 + 1);
     uint texels = uint(j1 - j0 + 1) * columns;
+    // The bound is proven (footprint_bound); should a footprint ever pass it, the render is
+    // refused rather than the texels past it left out.
+    if (params.first == 0u && texels > params.planned) loop_cuts = 1u;
     if (params.first >= texels) return;
     uint end = min(texels, params.first + params.count);
     int row = j0 + int(params.first / columns);

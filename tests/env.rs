@@ -236,50 +236,67 @@ fn cube_samples_follow_their_pdf() {
 
 /// A cube texel holding a pole covers every column of the map down to its edge, more texels
 /// than lavapipe lets one invocation loop over (65535): at R = 2 on a 1024 x 512 map, about
-/// 160k. weigh_env_cube splits that search over dispatches, so a bright texel deep in such a
-/// footprint (past index 65535) still sets the texel's weight, as the CPU mirror's.
+/// 160k, 5 dispatches of 32768. weigh_env_cube splits that search over dispatches and keeps
+/// the largest over them, as the CPU mirror does. Two maps on a floor of 0.1: a bright texel
+/// only a late dispatch reaches (a search cut short misses it), and a brighter one in the first
+/// dispatch beside a dimmer late one and a brighter still just past the footprint's rows (a
+/// dispatch that overwrites instead of keeping the larger, or reads past its footprint, gets
+/// the pole texel's weight wrong).
 #[test]
 fn cube_weights_search_footprints_past_the_loop_budget() {
     with_gpu(|ctx| {
         let (w, h, r) = (1024u32, 512u32, 2u32);
         let fp = cubemap::equirect_footprint(r, 2, 0, 0, w, h);
         assert!(fp.columns.is_none(), "a pole texel covers every column");
-        let row = fp.rows.1 - 3;
-        let index = (row - fp.rows.0) * w + 500;
+        let late = fp.rows.1 - 3;
         assert!(
-            index > 65535,
-            "the bright texel lies at {index} in the footprint"
+            (late - fp.rows.0) * w + 500 > 4 * 32768,
+            "a late dispatch's texel"
         );
-        let mut texels = vec![Vec3::splat(0.1); (w * h) as usize];
-        texels[(row * w + 500) as usize] = Vec3::splat(100.0);
-        let mut scene = scene_file("glossy-env", 8, 8);
-        scene.environment = Some(Environment {
-            width: w,
-            height: h,
-            texels,
-            source: "bright texel".into(),
-        });
-        let gpu = GpuScene::upload(ctx, &scene).unwrap();
-        let (gpu_weights, _) = build_table(ctx, &gpu, r, 16);
-        let cpu_weights = cubemap::cube_weights(scene.environment.as_ref().unwrap(), r);
-        let t = cubemap::texel_index(r, 2, 0, 0);
-        let bright = 100.0 * cubemap::texel_solid_angle(r, 0, 0);
+        // The row after the footprint, within its last dispatch's range.
+        let past = fp.rows.1 + 1;
         assert!(
-            (cpu_weights[t] - bright).abs() < 1e-3 * bright,
-            "{}",
-            cpu_weights[t]
+            (past - fp.rows.0) * w + 500 < 5 * 32768,
+            "within a dispatch that runs"
         );
-        assert!(
-            (gpu_weights[t] as f64 - bright).abs() < 1e-3 * bright,
-            "the pole texel's GPU weight {} against {bright}",
-            gpu_weights[t]
-        );
-        for (k, (&g, &c)) in gpu_weights.iter().zip(&cpu_weights).enumerate() {
-            // f32 solid angles: 5e-4 apart at R = 2.
+        let pole = cubemap::texel_index(r, 2, 0, 0);
+        let solid_angle = cubemap::texel_solid_angle(r, 0, 0);
+        for (bright, expected) in [
+            (vec![(late, 100.0)], 100.0),
+            (vec![(2, 200.0), (late, 100.0), (past, 300.0)], 200.0),
+        ] {
+            let mut texels = vec![Vec3::splat(0.1); (w * h) as usize];
+            for &(row, value) in &bright {
+                texels[(row * w + 500) as usize] = Vec3::splat(value);
+            }
+            let mut scene = scene_file("glossy-env", 8, 8);
+            scene.environment = Some(Environment {
+                width: w,
+                height: h,
+                texels,
+                source: "bright texels".into(),
+            });
+            let gpu = GpuScene::upload(ctx, &scene).unwrap();
+            let (gpu_weights, _) = build_table(ctx, &gpu, r, 16);
+            let cpu_weights = cubemap::cube_weights(scene.environment.as_ref().unwrap(), r);
+            let want = expected * solid_angle;
             assert!(
-                (g as f64 - c).abs() <= 2e-3 * c,
-                "texel {k}: GPU {g} against {c}"
+                (cpu_weights[pole] - want).abs() < 1e-3 * want,
+                "{}",
+                cpu_weights[pole]
             );
+            assert!(
+                (gpu_weights[pole] as f64 - want).abs() < 1e-3 * want,
+                "{bright:?}: the pole texel's GPU weight {} against {want}",
+                gpu_weights[pole]
+            );
+            for (k, (&g, &c)) in gpu_weights.iter().zip(&cpu_weights).enumerate() {
+                // f32 solid angles: 5e-4 apart at R = 2.
+                assert!(
+                    (g as f64 - c).abs() <= 2e-3 * c,
+                    "texel {k}: GPU {g} against {c}"
+                );
+            }
         }
     });
 }

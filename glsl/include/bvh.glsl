@@ -40,9 +40,10 @@ struct BvhTriangle { vec4 v0; vec4 e1; vec4 e2; };
 
 layout(set = 0, binding = 0, std430) readonly buffer BvhNodes { BvhNode bvh_nodes[]; };
 layout(set = 0, binding = 1, std430) readonly buffer BvhTriangles { BvhTriangle bvh_triangles[]; };
-// Set to 1 by a traversal that the device's loop limit cut short (lavapipe: 65535 loop
-// iterations an invocation, all loops together, then every loop breaks out silently; README
-// "Kernels"). The host zeroes it before a render and refuses the render when it reads 1
+// Set to 1 by a traversal that the device's loop limit cut short, or by a search that found
+// its trip count past the bound its dispatches were planned by (weigh_env_cube.comp) (lavapipe:
+// 65535 loop iterations a group of lanes, all loops together, then every loop breaks out
+// silently; README "Kernels"). The host zeroes it before a render and refuses the render when it reads 1
 // (src/bvh.rs GpuBvh::check_loop_cuts). Binding 63: far above the numbers kernels give their
 // own bindings (2..36 now), so a kernel's next binding does not run into it (reflection
 // refuses two bindings of one number: src/gpu/reflect.rs).

@@ -106,9 +106,10 @@ pub enum GpuError {
     )]
     BvhTooDeep { depth: usize, limit: usize },
 
-    /// A BVH traversal that the device's loop limit broke out of (bvh.glsl's LoopCuts).
+    /// A kernel loop the device's loop limit broke out of (bvh.glsl's LoopCuts): a BVH
+    /// traversal left unfinished, or weigh_env_cube's footprint past its proven bound.
     #[error(
-        "the device's loop limit (lavapipe: 65535 iterations an invocation) cut a ray's BVH traversal short in this render, so the image would be wrong; this scene's BVH needs more traversal steps than the kernels' ray batches allow on this driver: render it on a GPU driver without the limit, or simplify the scene"
+        "the device's loop limit (lavapipe: 65535 loop iterations a group of lanes) cut a kernel's loop short in this render (a ray's BVH traversal left unfinished, or a table's search past its bound), so the image would be wrong: render this scene on a GPU driver without the limit, or simplify the scene"
     )]
     TraversalCut,
 

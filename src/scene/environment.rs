@@ -79,7 +79,7 @@ pub fn check(file: &str, env: &EnvironmentFile) -> Result<(), SceneError> {
 }
 
 /// How many times as wide as tall a map may be: weigh_env_pyramid.comp's leaves (H' >= H rows
-/// of W' = 2 H' columns, env_pyramid.glsl) each search at most (W / 2H + 1) x 2 map texels in
+/// of W' = 2 H' columns, env_pyramid.glsl) each search at most (W / 2H' + 2) x 2 map texels in
 /// one loop, about 16k at this ratio, a quarter of lavapipe's loop budget of 65535 iterations
 /// an invocation. The built-in sky is at most 16384 x 1.
 pub const MAX_ASPECT: u64 = 16384;

@@ -58,17 +58,25 @@ impl LightCdf {
     pub fn new(ctx: &Context, scene: &GpuScene) -> GpuResult<Self> {
         let entries = scene.light_entries.len().max(1) as u32;
         let n = entries as usize * SAMPLES as usize;
-        // The contributions, one float per light and camera sample, in one buffer: refused
-        // here, before any frame, in the setting's words.
+        // The contributions, one float per light and camera sample, in one buffer, and one
+        // row of workgroups per light: refused here, before any frame, in the setting's words.
         let bytes = n as u64 * size_of::<f32>() as u64;
         let limit = ctx.info().max_storage_buffer_range;
-        if bytes > limit {
+        let rows = ctx.info().max_workgroup_count[1] as u64;
+        let most = (limit / (SAMPLES as u64 * size_of::<f32>() as u64)).min(rows);
+        if entries as u64 > most {
+            let why = if bytes > limit {
+                format!(
+                    "would take {bytes} bytes in one buffer, over this device's \
+                     maxStorageBufferRange of {limit} bytes"
+                )
+            } else {
+                format!("would take more than this device's {rows} workgroups down a dispatch")
+            };
             return Err(GpuError::DoesNotFit(format!(
                 "bir: light_cdf = true (--light-cdf): measuring each of the scene's {entries} \
-                 lights at {SAMPLES} camera points would take {bytes} bytes in one buffer, over \
-                 this device's maxStorageBufferRange of {limit} bytes (`irad info`); at most {} \
-                 lights fit: set light_cdf = false (--light-cdf=false) to choose lights by power",
-                limit / (SAMPLES as u64 * size_of::<f32>() as u64)
+                 lights at {SAMPLES} camera points {why} (`irad info`); at most {most} lights \
+                 fit: set light_cdf = false (--light-cdf=false) to choose lights by power"
             )));
         }
         Ok(LightCdf {

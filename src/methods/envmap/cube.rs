@@ -17,10 +17,12 @@ struct CubeParams {
     resolution: u32,
     first: u32,
     count: u32,
+    planned: u32,
 }
 
 /// Map texels one weigh_env_cube invocation searches per dispatch: half lavapipe's loop budget
-/// of 65535 iterations an invocation (the rest of the kernel loops at most 8 times).
+/// of 65535 iterations (the rest of the kernel loops at most 8 + 12 times: the footprint's
+/// walk and cube_texel_solid_angle).
 const FOOTPRINT_TEXELS_PER_DISPATCH: u32 = 32768;
 
 #[repr(C)]
@@ -108,12 +110,13 @@ impl CubeTable {
         let r = self.resolution;
         let [w, h] = scene.environment_size.unwrap_or([1, 1]);
         let count = FOOTPRINT_TEXELS_PER_DISPATCH;
-        let dispatches = footprint_bound(w, h, r).div_ceil(count as u64) as u32;
-        for d in 0..dispatches.max(1) {
+        let dispatches = footprint_bound(w, h, r).div_ceil(count as u64).max(1) as u32;
+        for d in 0..dispatches {
             let params = CubeParams {
                 resolution: r,
                 first: d * count,
                 count,
+                planned: dispatches.saturating_mul(count),
             };
             self.weigh
                 .dispatch_threads(cmd, &bindings, &params, [r, r, 6])?;
