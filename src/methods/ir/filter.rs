@@ -39,8 +39,7 @@ impl FilterInterleaved {
         accumulation: &'a Accumulation,
         interleave: u32,
     ) -> GpuResult<()> {
-        let mut bindings = scene.bindings();
-        bindings.retain(|b| !b.name.starts_with("Bvh"));
+        let mut bindings = scene.scene_bindings();
         bindings.push(bind("GBuffer", &gbuffer.texels));
         bindings.extend(accumulation.bindings());
         bindings.push(bind("VplRadiance", vpl_radiance));
