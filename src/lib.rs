@@ -1,5 +1,5 @@
 //! irad: a research renderer for many-light and light-source importance sampling, run as
-//! Vulkan compute kernels through raw `ash`. See DESIGN.md (shared/) for the map.
+//! Vulkan compute kernels through raw `ash`. docs/DESIGN.md is the map.
 //!
 //! A render in memory: a Vulkan context, a scene (from a TOML file with `scene::load`, or the
 //! embedded Cornell box), the scene uploaded, a method with its settings (built as a struct,

@@ -1,4 +1,4 @@
-//! One render from a loaded scene to files on disk (DESIGN.md "Outputs"): check everything
+//! One render from a loaded scene to files on disk (docs/DESIGN.md "Outputs"): check everything
 //! that can fail without the GPU, upload the scene, run the chosen method, score the image
 //! against a reference when one is given, and write `<out>.exr`, `<out>.png`, any maps and
 //! `<out>.json` as one set (`image::write_all`). `irad render` is a thin shell over this.

@@ -1,4 +1,4 @@
-//! Image outputs and error metrics (DESIGN.md "Error metrics", "Outputs"): metrics against
+//! Image outputs and error metrics (docs/DESIGN.md "Error metrics", "Outputs"): metrics against
 //! values worked by hand, Lab against published values, the sRGB curve at its defining points,
 //! and EXR, PNG and JSON round trips. No GPU.
 

@@ -1,6 +1,6 @@
 //! Procedural meshes and ray sets for the BVH test and `irad bench rays`: a displaced sphere
 //! with random triangles around it, camera rays, and incoherent random rays. Deterministic
-//! per seed (PCG hash, DESIGN.md).
+//! per seed (PCG hash, docs/DESIGN.md "Sampling").
 
 use glam::Vec3;
 

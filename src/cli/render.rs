@@ -14,7 +14,7 @@ use super::{device_line, progress};
 
 #[derive(clap::Args)]
 pub struct RenderArgs {
-    /// Scene TOML file (DESIGN.md "Scene files"); default: the embedded Cornell box.
+    /// Scene TOML file (format: README "Scenes"); default: the embedded Cornell box.
     scene: Option<PathBuf>,
     /// Rendering method (`irad methods` lists them and their settings).
     #[arg(long, default_value = "reference", value_parser = method_names())]

@@ -2,7 +2,7 @@
 //! spv/<name>.spv (committed, embedded by build.rs) and spirv-val checks every module.
 //!
 //! Target env vulkan1.1 (SPIR-V 1.3): from SPIR-V 1.4 on glslang emits OpCopyLogical, which
-//! naga's reflection rejects (DESIGN.md).
+//! naga's reflection rejects (docs/DESIGN.md "naga's limits").
 
 use std::path::{Path, PathBuf};
 use std::process::Command;

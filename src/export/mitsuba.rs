@@ -4,7 +4,7 @@
 //! `llvm_ad_rgb`, `cuda_ad_rgb`): spectral variants upsample every RGB value and multiply
 //! emitters by D65, which irad does not.
 //!
-//! Exact (the same function of the scene as irad's, DESIGN.md "Conventions"):
+//! Exact (the same function of the scene as irad's, docs/DESIGN.md "Conventions"):
 //! - camera: `perspective`, `fov_axis` y, `to_world` `lookat` with irad's position, target and
 //!   up, `hdrfilm` with a `box` filter (pixel averages). Mitsuba's `lookat` puts camera +x
 //!   to the left (left = up x dir) and its film puts camera -x at the image's right, so the

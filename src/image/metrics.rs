@@ -1,4 +1,4 @@
-//! The error metrics of DESIGN.md "Error metrics", one definition used by tests, `render` and
+//! The error metrics of docs/DESIGN.md "Error metrics", one definition used by tests, `render` and
 //! the benchmark harness. With x the image under test and r the reference:
 //!
 //! - relMSE = mean over pixels and channels of (x - r)^2 / (r^2 + 0.01);
@@ -28,7 +28,7 @@ pub const REL_MSE_EPSILON: f64 = 0.01;
 pub const OUTLIER_SCALE: f64 = 10.0;
 pub const OUTLIER_OFFSET: f64 = 0.1;
 
-/// Rec. 709 luminance weights (DESIGN.md "Conventions").
+/// Rec. 709 luminance weights (docs/DESIGN.md "Conventions").
 pub const LUMINANCE: [f64; 3] = [0.2126, 0.7152, 0.0722];
 
 /// Linear sRGB (Rec. 709 primaries) to CIE XYZ, IEC 61966-2-1 as tabulated by Lindbloom.
@@ -110,7 +110,7 @@ pub enum MetricsError {
     TooFewImages { count: usize },
 }
 
-/// Scores `x` against the reference `r` (DESIGN.md "Error metrics").
+/// Scores `x` against the reference `r` (docs/DESIGN.md "Error metrics").
 pub fn compare(x: &Image, r: &Image) -> Result<Metrics, MetricsError> {
     check(x, "image under test")?;
     check(r, "reference")?;

@@ -1,4 +1,4 @@
-//! Images out of irad (DESIGN.md "Outputs"): float RGB frames, EXR in and out, PNG through a
+//! Images out of irad (docs/DESIGN.md "Outputs"): float RGB frames, EXR in and out, PNG through a
 //! tone map, the JSON sidecar, and the error metrics every accuracy figure uses.
 
 pub mod exr;

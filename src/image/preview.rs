@@ -1,6 +1,6 @@
 //! Small images for reports: thumbnails (box-filtered down by an integer factor, so each
 //! thumbnail pixel is the plain average of the pixels it covers) and error maps (per-pixel
-//! relMSE against the reference, DESIGN.md "Error metrics", on a log colour scale).
+//! relMSE against the reference, docs/DESIGN.md "Error metrics", on a log colour scale).
 
 use super::metrics::REL_MSE_EPSILON;
 use super::Image;

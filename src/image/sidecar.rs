@@ -1,4 +1,4 @@
-//! The JSON record beside every render (DESIGN.md "Outputs"): what was rendered, how, on what,
+//! The JSON record beside every render (docs/DESIGN.md "Outputs"): what was rendered, how, on what,
 //! how long each pass took and, when a reference was given, how far from it. Also where the
 //! outputs of `-o <out>` go, and writing them as one set.
 

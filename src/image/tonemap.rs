@@ -1,4 +1,4 @@
-//! The one tone map from linear radiance to display sRGB (DESIGN.md "Outputs", "Error
+//! The one tone map from linear radiance to display sRGB (docs/DESIGN.md "Outputs", "Error
 //! metrics"): scale by 2^exposure, clamp to [0, 1], then the piecewise sRGB transfer function
 //! of IEC 61966-2-1. The PNG writer and the Lab error metric both go through here, so what is
 //! scored is what is shown.

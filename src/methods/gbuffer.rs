@@ -32,7 +32,7 @@ struct FrameParams {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum PixelSampling {
     /// Low-discrepancy positions over the pixel, a new one each frame: the box-filtered
-    /// pixel average (DESIGN.md "Pixels").
+    /// pixel average (docs/DESIGN.md "Conventions", pixels).
     #[default]
     Jittered,
     /// The pixel centre every frame: no antialiasing, so two methods compared at the same

@@ -1,5 +1,5 @@
-//! Rendering methods (DESIGN.md): each method is a set of passes over the shared G-buffer,
-//! BVH, samplers and accumulation buffer. `reference` is the ground truth.
+//! Rendering methods (docs/DESIGN.md "Methods"): each method is a set of passes over the shared
+//! G-buffer, BVH, samplers and accumulation buffer. `reference` is the ground truth.
 
 pub mod accumulation;
 pub mod bir;

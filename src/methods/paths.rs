@@ -39,9 +39,9 @@ pub enum PathStarts {
 }
 
 /// Camera samples per pixel in one dispatch: lavapipe stops an invocation's loops silently
-/// after 65535 iterations in all (DESIGN.md); a depth-1 sample traces three rays, each a
-/// traversal loop of up to a few hundred iterations in the largest scenes, so 16 samples
-/// stay well inside the budget and more are split across dispatches.
+/// after 65535 iterations in all (docs/DESIGN.md "The loop budget"); a depth-1 sample traces
+/// three rays, each a traversal loop of up to a few hundred iterations in the largest scenes,
+/// so 16 samples stay well inside the budget and more are split across dispatches.
 const CAMERA_SAMPLES_PER_DISPATCH: u32 = 16;
 
 /// The kernel, specialized to each scene's features and to where paths start (its constant

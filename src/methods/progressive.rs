@@ -3,7 +3,7 @@
 //! limit of one submission is never reached), the accumulation folded into f64 after each, GPU
 //! time summed per pass name. The schedule depends only on the frame count, never on measured
 //! time: submissions end the f32 sums, so a timing-driven schedule would change the bits of
-//! the image from run to run (DESIGN.md: same seed, same device, same bits).
+//! the image from run to run (docs/DESIGN.md "Determinism": same seed, same device, same bits).
 
 use std::cell::RefCell;
 

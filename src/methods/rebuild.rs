@@ -1,7 +1,7 @@
 //! When a method rebuilds the sampling tables it derives from a light's data (env's cube map,
 //! CDFs, latitude-longitude table and pyramid; bundles' direction table; lightfield's luminaire
 //! tables): once for a still map or atlas, every frame for a sequence or the procedural sky
-//! (DESIGN.md principle 9: build a table once unless its input changes). Lu 14 rebuilds every
+//! (docs/DESIGN.md principle 9: build a table once unless its input changes). Lu 14 rebuilds every
 //! frame (its maps are dynamic); `EveryFrame` keeps that for timing the dynamic case. The
 //! kernels are deterministic, so a still input gives the same bits either way.
 

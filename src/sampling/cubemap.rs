@@ -1,4 +1,4 @@
-//! The cube map that drives environment sampling (Lu 14 Chapter 3; DESIGN.md "Conventions"),
+//! The cube map that drives environment sampling (Lu 14 Chapter 3; docs/DESIGN.md "Conventions"),
 //! mirrored in f64 from cubemap.glsl, weigh_env_cube.comp and env_cube.glsl: the face layout
 //! and the direction <-> (face, u, v) maps, the texels' exact solid angles, each cube texel's
 //! conservative footprint on the equirectangular map and the sampling weights built from it,
@@ -115,9 +115,9 @@ pub fn texel_solid_angle(r: u32, i: u32, j: u32) -> f64 {
     rectangle_solid_angle(u0, v0, u1, v1)
 }
 
-/// The continuous (column, row) of a unit direction on a W x H equirectangular map (DESIGN.md):
-/// (frac(atan2(x, -z) / 2 pi) W, acos(y) / pi H). The column lies in [0, W] (W only by
-/// rounding of a tiny negative angle), the row in [0, H].
+/// The continuous (column, row) of a unit direction on a W x H equirectangular map
+/// (docs/DESIGN.md "Conventions"): (frac(atan2(x, -z) / 2 pi) W, acos(y) / pi H). The column
+/// lies in [0, W] (W only by rounding of a tiny negative angle), the row in [0, H].
 pub fn equirect_coordinates(d: DVec3, w: u32, h: u32) -> (f64, f64) {
     let u = (d.x.atan2(-d.z) / (2.0 * PI)).rem_euclid(1.0);
     let v = d.y.clamp(-1.0, 1.0).acos() / PI;

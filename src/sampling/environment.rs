@@ -1,4 +1,4 @@
-//! The environment map's geometry (DESIGN.md "Conventions"), mirrored from envmap.glsl: texel
+//! The environment map's geometry (docs/DESIGN.md "Conventions"), mirrored from envmap.glsl: texel
 //! solid angles integrated exactly over each row, the sampling weights (luminance times solid
 //! angle) and the cosine-weighted integrals the analytic tests compare against.
 

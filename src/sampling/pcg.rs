@@ -1,5 +1,5 @@
-//! Counter-based pseudo-random numbers (DESIGN.md): the PCG hash of Jarzynski and Olano 2020,
-//! "Hash Functions for GPU Rendering", keyed by any number of u32 words.
+//! Counter-based pseudo-random numbers (docs/DESIGN.md "Sampling"): the PCG hash of Jarzynski
+//! and Olano 2020, "Hash Functions for GPU Rendering", keyed by any number of u32 words.
 
 /// PCG-RXS-M-XS hash of one word.
 pub fn pcg_hash(v: u32) -> u32 {

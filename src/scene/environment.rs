@@ -1,4 +1,4 @@
-//! The `[environment]` table: an equirectangular RGB OpenEXR map (DESIGN.md "Conventions"),
+//! The `[environment]` table: an equirectangular RGB OpenEXR map (docs/DESIGN.md "Conventions"),
 //! checked texel by texel and multiplied by `scale`; or a sequence of them (a glob, one map per
 //! frame); or a built-in procedural sky (sky.rs).
 

@@ -1,5 +1,5 @@
 //! Why a scene did not load. Every message names the file, the field (TOML key path, MTL
-//! material and key, OBJ line) and the offending value (DESIGN.md principle 8).
+//! material and key, OBJ line) and the offending value (docs/DESIGN.md principle 8).
 
 /// A scene that could not be loaded.
 #[derive(Debug, thiserror::Error)]

@@ -1,4 +1,4 @@
-//! The scene file's TOML schema (DESIGN.md "Scene files"), deserialized with unknown fields
+//! The scene file's TOML schema (docs/DESIGN.md "Scene files"), deserialized with unknown fields
 //! refused. Values are checked where they become scene types (camera.rs, lights.rs, ...).
 
 use serde::Deserialize;

@@ -1,13 +1,14 @@
-//! Scenes (DESIGN.md "Scene files"): the CPU description every method starts from. A TOML file
-//! names a camera, OBJ/MTL meshes, analytic lights, an optional environment map and, for the
-//! stability suite (scenes/failure/), a `[failure]` note; `load` turns it into flat triangle,
-//! material and light lists, checked and in irad's conventions.
+//! Scenes (docs/DESIGN.md "Scene files"): the CPU description every method starts from. A TOML
+//! file names a camera, OBJ/MTL meshes, analytic lights, an optional environment map,
+//! light-field luminaires and, for the stability suite (scenes/failure/), a `[failure]` note;
+//! `load` turns it into flat triangle, material and light lists, checked and in irad's
+//! conventions.
 //! `gpu` uploads a `Scene` as a `GpuScene`.
 //!
 //! Loading conventions: paths are relative to the scene file (MTL files to their OBJ); an MTL
 //! key a material does not set is 0; faces with no material get a grey default (Kd 0.5) and a
 //! warning; OBJ `vn` normals are normalized, and corners with no, zero or NaN `vn` get the
-//! geometric normal; triangles of area <= `DEGENERATE_AREA` x the squared scene diagonal are
+//! geometric normal; triangles of area <= `DEGENERATE_AREA` x their longest edge squared are
 //! dropped with a warning; Kd + Ks may exceed 1 by at most 1e-5 per channel (decimal rounding).
 
 use glam::Vec3;
@@ -29,7 +30,7 @@ pub struct Camera {
     pub height: u32,
 }
 
-/// Lambert plus one normalized Phong lobe, plus diffuse emission (DESIGN.md "Conventions").
+/// Lambert plus one normalized Phong lobe, plus diffuse emission (docs/DESIGN.md "Conventions").
 #[derive(Clone, Debug, PartialEq)]
 pub struct Material {
     pub name: String,
@@ -78,8 +79,9 @@ pub enum Light {
     },
 }
 
-/// An equirectangular environment map (DESIGN.md "Conventions"), radiance already multiplied by
-/// the scene's `scale`. Texel (i, j) is `texels[j * width + i]`, row 0 at the top (+Y).
+/// An equirectangular environment map (docs/DESIGN.md "Conventions"), radiance already
+/// multiplied by the scene's `scale`. Texel (i, j) is `texels[j * width + i]`, row 0 at the
+/// top (+Y).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Environment {
     pub width: u32,

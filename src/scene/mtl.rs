@@ -1,5 +1,5 @@
 //! MTL files: `Kd` diffuse albedo, `Ks` and `Ns` one normalized Phong lobe, `Ke` emitted
-//! radiance (DESIGN.md "Scene files"); every other key is ignored. Parsed here rather than by
+//! radiance (docs/DESIGN.md "Scene files"); every other key is ignored. Parsed here rather than by
 //! tobj so that each value is checked with its file, line, material and key (tobj panics on a
 //! short `Kd` line and reports no line numbers). A key a material does not set is 0.
 

@@ -118,7 +118,7 @@ impl MovingSun {
     }
 
     /// The sun's direction at `frame`: azimuth 2 pi (frame mod frames) / frames, measured as
-    /// the map's u (DESIGN.md: u = atan2(x, -z) / 2 pi).
+    /// the map's u (docs/DESIGN.md "Conventions": u = atan2(x, -z) / 2 pi).
     pub fn sun_direction(&self, frame: u32) -> Vec3 {
         let phi = 2.0 * PI * (frame % self.frames.max(1)) as f32 / self.frames.max(1) as f32;
         let e = self.sun_elevation.to_radians();

@@ -44,7 +44,7 @@ pub fn markdown(results: &SuiteResults) -> String {
         md,
         "- GPU and wall times are medians over each run's repeats (successive seeds) after its \
          warm-up renders; each error figure is the mean over the run's images (successive \
-         seeds) of that image's figure against the scene's reference (DESIGN.md \"Error \
+         seeds) of that image's figure against the scene's reference (docs/DESIGN.md \"Error \
          metrics\"); flicker is the per-pixel temporal variance over the flicker frames \
          relative to the reference, averaged, square-rooted. {PARETO_MARK} marks the runs no other \
          run of the scene beats in both GPU time and relMSE (on the same device); a run with \
@@ -163,7 +163,7 @@ pub const HOME_MARK: &str = "⌂";
 
 /// Per time budget of the scene, every run at that budget: its calibrated count, GPU time,
 /// error, and its speed against each reference (path tracer) label at the same budget:
-/// relMSE x GPU time of the path tracer over the run's (DESIGN.md "Speed at equal error"),
+/// relMSE x GPU time of the path tracer over the run's (docs/DESIGN.md "Speed at equal error"),
 /// so over 1 the run reaches lower error in the same time. Empty without time budgets.
 fn equal_time_table(runs: &[&RunRecord]) -> String {
     let mut budgets: Vec<f64> = runs.iter().filter_map(|r| r.time_ms).collect();

@@ -1,4 +1,4 @@
-//! irad's BSDF (Lambert plus a normalized Phong lobe, DESIGN.md "Conventions") in Mitsuba 3
+//! irad's BSDF (Lambert plus a normalized Phong lobe, docs/DESIGN.md "Conventions") in Mitsuba 3
 //! terms, which has no Phong plugin: the lobe as a Beckmann `roughconductor` with no Fresnel
 //! (`material` none: eta 0 + 1i, a perfect mirror), blended with the `diffuse` part.
 

@@ -1,4 +1,4 @@
-//! irad's environment map, piecewise constant over its texels (DESIGN.md "Conventions"),
+//! irad's environment map, piecewise constant over its texels (docs/DESIGN.md "Conventions"),
 //! resampled for Mitsuba 3's `envmap`, which interpolates bilinearly.
 
 use crate::image::Image;
