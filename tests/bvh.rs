@@ -345,9 +345,9 @@ fn small_and_flat_meshes_match_brute_force() {
 }
 
 /// A traversal cut short by lavapipe's loop limit (65535 iterations an invocation, all its
-/// loops together, then every loop breaks out silently; README "Kernels") is reported, not
-/// left in the hits: each invocation traces its ray 65535 times, which spends the budget
-/// within a few thousand traversals and cuts the one under way. Without the limit (a GPU
+/// loops together, then every loop breaks out silently; docs/DESIGN.md "The loop budget") is
+/// reported, not left in the hits: each invocation traces its ray 65535 times, which spends the
+/// budget within a few thousand traversals and cuts the one under way. Without the limit (a GPU
 /// driver) nothing is cut and nothing reported. Traced once or 64 times (within the budget),
 /// nothing is reported, and the check clears the record, so the next submission starts clean.
 #[test]

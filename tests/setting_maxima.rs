@@ -1,9 +1,9 @@
 //! Every count-like setting of every method (the `Kind::Count` rows of the settings tables) at
 //! its documented maximum, one at a time, gives the image mean the method's default settings
-//! give. lavapipe stops an invocation's loops silently after 65535 iterations in all (README
-//! "Kernels"), so a kernel whose loop grows with a setting comes out dark there, with exit 0:
-//! env's 16384 samples per pixel were 10% dark and 65536 up to 80%, bir's 1024 light samples
-//! 8.5%.
+//! give. lavapipe stops an invocation's loops silently after 65535 iterations in all
+//! (docs/DESIGN.md "The loop budget"), so a kernel whose loop grows with a setting comes out
+//! dark there, with exit 0: env's 16384 samples per pixel were 10% dark and 65536 up to 80%,
+//! bir's 1024 light samples 8.5%.
 //!
 //! Noise model: each method's base image (its defaults, a few more frames where one frame is
 //! noisy; `base`) at SEEDS seeds gives the image mean's spread s (the sample standard deviation

@@ -64,8 +64,9 @@ pub const SETTINGS: &[Setting<ReferenceSettings>] = &[
         "max_depth",
         max_depth,
         // A path's bounces run in one kernel invocation, whose loops lavapipe stops silently
-        // after 65535 iterations in all (README "Kernels"): two traversals a bounce, so 1024
-        // bounces (the default) is as far as a path in a closed, white scene may go.
+        // after 65535 iterations in all (docs/DESIGN.md "The loop budget"): two traversals a
+        // bounce, so 1024 bounces (the default) is as far as a path in a closed, white scene
+        // may go.
         Kind::Count { min: 1, max: 1024 },
         Count,
         "Most scattering events per path (a safety cap: Russian roulette ends paths first).",

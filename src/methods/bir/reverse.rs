@@ -43,9 +43,9 @@ struct ShadeParams {
 }
 
 /// Shadow and closest-hit rays per invocation in one dispatch of bir's per-VPL kernels.
-/// lavapipe stops an invocation's loops silently after 65535 iterations in all (README
-/// "Kernels"), and each ray is a traversal loop of tens of iterations in the shipped scenes:
-/// as ir's gather, which shades 512 VPL slots per dispatch, one shadow ray each.
+/// lavapipe stops an invocation's loops silently after 65535 iterations in all (docs/DESIGN.md
+/// "The loop budget"), and each ray is a traversal loop of tens of iterations in the shipped
+/// scenes: as ir's gather, which shades 512 VPL slots per dispatch, one shadow ray each.
 pub const RAYS_PER_DISPATCH: u32 = 512;
 
 /// The ranges `0..count` cut into pieces of at most `per` (at least one piece, maybe empty).

@@ -38,9 +38,9 @@ struct ShadeParams {
 }
 
 /// Shadow rays per invocation in one dispatch: lavapipe stops an invocation's loops silently
-/// after 65535 iterations in all (README "Kernels"), and a ray's traversal loop runs tens of
-/// iterations in the shipped scenes (as ir's gather, 512 VPL slots per dispatch). An
-/// iteration casts up to 4 rays per light vertex (VPL path, bundle path, two-bounce path,
+/// after 65535 iterations in all (docs/DESIGN.md "The loop budget"), and a ray's traversal loop
+/// runs tens of iterations in the shipped scenes (as ir's gather, 512 VPL slots per dispatch).
+/// An iteration casts up to 4 rays per light vertex (VPL path, bundle path, two-bounce path,
 /// compensation) and one more for the compensation's y.
 const RAYS_PER_DISPATCH: u32 = 512;
 

@@ -32,12 +32,12 @@ struct ShadeParams {
     alpha_step: u32,
 }
 
-/// Samples per pixel in one dispatch. lavapipe stops an invocation's loops silently after
-/// 65535 iterations in all (README "Kernels"); a sample costs one shadow ray (a traversal
-/// loop: tens of iterations in the shipped scenes) and at most about 25 iterations of table
-/// searches, so 128 samples stay inside the budget for traversals of up to ~400 iterations.
-/// Measured before the split (glossy-env 32x32, pixel centres, 1 frame): 16384 samples per
-/// pixel came out 10% dark, latlong's 8192 40%, 65536 36-80%.
+/// Samples per pixel in one dispatch. lavapipe stops an invocation's loops silently after 65535
+/// iterations in all (docs/DESIGN.md "The loop budget"); a sample costs one shadow ray (a
+/// traversal loop: tens of iterations in the shipped scenes) and at most about 25 iterations of
+/// table searches, so 128 samples stay inside the budget for traversals of up to ~400
+/// iterations. Measured before the split (glossy-env 32x32, pixel centres, 1 frame): 16384
+/// samples per pixel came out 10% dark, latlong's 8192 40%, 65536 36-80%.
 pub const SAMPLES_PER_DISPATCH: u32 = 128;
 
 /// What the shading does this frame.

@@ -60,13 +60,13 @@ impl AccumulateVpls {
         bindings.extend(accumulation.bindings());
         bindings.push(bind("Vpls", vpls));
         bindings.push(bind("VplRadiance", vpl_radiance));
-        // One dispatch per SLOTS_PER_DISPATCH slots. On lavapipe (Mesa 22.3) this kernel's
-        // sums came out deterministically short once one dispatch looped over 32 or more
-        // chunks (4096 paths lost 6% of the image at 32 chunks, 63% unsplit; 24 chunks and
-        // fewer matched the reference). The cause: gallivm breaks out of an invocation's loops
-        // once they have run 65535 iterations together (LP_MAX_TGSI_LOOP_ITERATIONS; README
-        // "Kernels"). Short dispatches also keep real GPUs under watchdog limits. tests/ir.rs
-        // checks large slot counts against the reference.
+        // One dispatch per SLOTS_PER_DISPATCH slots. On lavapipe (Mesa 22.3) this kernel's sums
+        // came out deterministically short once one dispatch looped over 32 or more chunks
+        // (4096 paths lost 6% of the image at 32 chunks, 63% unsplit; 24 chunks and fewer
+        // matched the reference). The cause: gallivm breaks out of an invocation's loops once
+        // they have run 65535 iterations together (LP_MAX_TGSI_LOOP_ITERATIONS; docs/DESIGN.md
+        // "The loop budget"). Short dispatches also keep real GPUs under watchdog limits.
+        // tests/ir.rs checks large slot counts against the reference.
         let kernel = self.0.get(scene.features)?;
         let mut begin = slots.start;
         while begin < slots.end {
