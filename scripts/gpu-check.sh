@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# One command for a machine with a real GPU (issue 22 item 4): `irad info`, `irad selfcheck`, the
+# One command for a machine with a real GPU: `irad info`, `irad selfcheck`, the
 # test suite on that device, then `irad bench rays`, `bench scan`, `bench env` and
 # `bench lightfield` at 1024x768 and the standard suite at 1024 wide, everything written under
 # out/gpu-check/<device>/ (one log per step, the benches' own outputs beside them).

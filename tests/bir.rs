@@ -1,4 +1,4 @@
-//! Bidirectional instant radiosity (issue 6): each strategy's estimator against the reference.
+//! Bidirectional instant radiosity (Segovia 06): each strategy's estimator against the reference.
 
 mod common;
 

@@ -48,9 +48,9 @@ fn a_buffer_over_max_storage_buffer_range_is_an_error_naming_it_and_the_sizes() 
     });
 }
 
-/// Forced staging (issue 22 item 2; IRAD_FORCE_STAGING=1): device buffers stay unmapped, as on a
-/// discrete GPU, and uploads, zeroing and readbacks go through staging copies with no
-/// validation message; without it lavapipe's buffers are mapped.
+/// Forced staging (IRAD_FORCE_STAGING=1, docs/DESIGN.md "Staging"): device buffers stay
+/// unmapped, as on a discrete GPU, and uploads, zeroing and readbacks go through staging copies
+/// with no validation message; without it lavapipe's buffers are mapped.
 #[test]
 fn forced_staging_keeps_device_buffers_unmapped_and_still_round_trips() {
     use irad::gpu::{Context, ContextOptions, Validation};

@@ -1,4 +1,4 @@
-//! Real-time bidirectional path tracing (issue 7): each strategy of `bundles` against the
+//! Real-time bidirectional path tracing (Tokuyoshi 12): each strategy of `bundles` against the
 //! reference path tracer limited to the same path length.
 
 mod common;

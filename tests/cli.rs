@@ -365,7 +365,7 @@ fn bench_lightfield_prints_the_breakdown() {
     assert_clean_error(&o, &["--strategies", "nope", "restricted"]);
 }
 
-/// Issue 22 items 1f-1h: a missing file's OS error once; an unwritable luminaire folder named;
+/// A missing file's OS error said once; an unwritable luminaire folder named;
 /// a negative seed one clear message (not clap's tip to write `-- -1`).
 #[test]
 fn file_and_seed_errors_say_it_once_and_name_the_path() {
@@ -391,7 +391,7 @@ fn file_and_seed_errors_say_it_once_and_name_the_path() {
     );
     assert_clean_error(&o, &["/proc/irad-lumx", "cannot create the folder"]);
 
-    // Issue 22 item 1d: an 824 GB atlas is refused at once, with its size.
+    // An 824 GB atlas is refused at once, with its size, before any work.
     let o = irad(
         &[
             "luminaire",
@@ -439,8 +439,8 @@ fn file_and_seed_errors_say_it_once_and_name_the_path() {
     }
 }
 
-/// IRAD_FORCE_STAGING=1 (issue 22 item 2): `irad info` and the render JSON say staging is forced,
-/// and the image is the one rendered without it.
+/// IRAD_FORCE_STAGING=1 (docs/DESIGN.md "Staging"): `irad info` and the render JSON say staging
+/// is forced, and the image is the one rendered without it.
 #[test]
 fn forced_staging_is_reported_and_changes_no_pixel() {
     let o = irad(&["info"], &[("IRAD_FORCE_STAGING", "1")]);
@@ -671,8 +671,8 @@ fn screen_of_render(name: &str, args: &str) -> Option<String> {
     Some(String::from_utf8_lossy(&o.stdout).into_owned())
 }
 
-/// A long render shows a progress bar with its time left (issue 22 item 1i: `--spp 2000000000`
-/// printed nothing for minutes). The bar draws only on a terminal, so the render runs under
+/// A long render shows a progress bar with its time left (without one, `--spp 2000000000`
+/// would print nothing for minutes). The bar draws only on a terminal, so the render runs under
 /// `script` (util-linux), stopped after a few seconds.
 #[test]
 fn a_long_render_shows_its_time_left() {
@@ -713,7 +713,7 @@ fn common_under_ci() -> bool {
     std::env::var("CI").is_ok_and(|v| !v.is_empty() && v != "false" && v != "0")
 }
 
-/// Issue 23: `irad render --help` groups the method flags by method, a flag the chosen method
+/// `irad render --help` groups the method flags by method, a flag the chosen method
 /// does not take is one line naming the flag and the method, `irad methods NAME` lists a
 /// method's settings with their defaults, and `irad export mitsuba` writes a scene or refuses
 /// luminaires by name.

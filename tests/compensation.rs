@@ -1,4 +1,4 @@
-//! Bias-compensated clamping of the VPL gather (issue 21 item 1; Kollig and Keller 2004):
+//! Bias-compensated clamping of the VPL gather (Kollig and Keller 2004):
 //! on Tokuyoshi 12's corner light, where the plain clamp loses a quarter of the image and the
 //! unclamped gather is all spikes, ir and bir at their defaults (b from the scene, compensated)
 //! keep the reference's mean, and no pixel is a spike.

@@ -1,5 +1,6 @@
-//! Issue 3 item 7: the same seed gives bit-identical EXRs on one device; different seeds give
-//! different noise around the same mean (within the standard error measured from the images).
+//! docs/DESIGN.md "Determinism": the same seed gives bit-identical EXRs on one device;
+//! different seeds give different noise around the same mean (within the standard error
+//! measured from the images).
 
 mod common;
 

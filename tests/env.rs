@@ -1,4 +1,4 @@
-//! Dynamic environment-map sampling (issue 8, Lu 14 ch. 3): every strategy of `env` against
+//! Dynamic environment-map sampling (Lu 14 ch. 3): every strategy of `env` against
 //! the path tracer's direct light, and the cube-map sampler against its own pdf.
 
 mod common;
@@ -880,12 +880,12 @@ fn alpha_names_the_better_strategy_in_the_extreme_cases() {
 /// the balance heuristic's half and half (dynamic) at the same samples per pixel (32, over two
 /// frames; the thesis, without visibility: 20 to 26% lower).
 ///
-/// Doubtful (issue 21): under shared samples every pixel's error moves with the frame's one
+/// Doubtful: under shared samples every pixel's error moves with the frame's one
 /// sample set, so averaging the per-pixel variance over pixels does not average its noise down:
 /// seeds 500/700/900.. measured -21%, -26%, +28%. With the default decorrelated samples, whose
 /// estimate is far steadier, the same seeds gave -5.0%, -2.7%, -0.6%: alpha's gain with
 /// visibility on this scene is a few percent, and this test passes at these seeds by the shared
-/// sets' luck. Kept as measured for issue 8; to be revisited.
+/// sets' luck. Kept as measured; to be revisited.
 #[test]
 fn alpha_lowers_the_variance_under_a_high_frequency_map() {
     with_gpu(|ctx| {
@@ -1014,7 +1014,7 @@ fn dynamic_maps_change_every_frame() {
 /// setting): the relMSE of dynamic at N_s = 16 against uniform-faces at 16 to 48 (8 frames,
 /// averaged over 6 seeds, against a split reference), and the samples uniform-faces needs to
 /// reach dynamic's error, interpolated in log-log between the two budgets that bracket it.
-/// The issue asks for at least 2x (the thesis: 3x, 60 against 180); measured here 2.05x at
+/// The target is at least 2x (the thesis: 3x, 60 against 180); measured here 2.05x at
 /// N_s = 16 with decorrelated samples and 6 seeds (1.99x with the shared samples and 12 seeds,
 /// about 1.75x at 24, over 2x at 32: the quasi-random samples' error falls faster than 1/N
 /// and unevenly), so the test guards 1.5x, below which the dynamic face shares would have lost
@@ -1309,14 +1309,14 @@ fn brdf_and_cosine_samples_follow_their_pdf() {
     });
 }
 
-/// Light samples decorrelated across pixels (issue 21 item 3): by default each pixel reads its
-/// own window of independently scrambled samples per face and frame, so the image's error no
-/// longer moves as one: on the sun-behind scene the image mean's standard error over seeds is
-/// well below that of Lu's one set shared by every pixel (`shared_samples`; measured at 48x36,
-/// N_s 64 x 32 frames, 16 seeds: 0.0002 against 0.0008), and the mean lands within three of
-/// its standard errors (the reference's own included) of the path tracer's. Here (24x18, N_s
-/// 32 x 8 frames, 16 seeds): 0.99878 +- 0.00068 decorrelated, 0.99805 +- 0.00325 shared,
-/// the reference (4 x 8192 samples) +- 0.00034.
+/// Light samples decorrelated across pixels: by default each pixel reads its own window of
+/// independently scrambled samples per face and frame, so the image's error does not move as
+/// one: on the sun-behind scene the image mean's standard error over seeds is well below that
+/// of Lu's one set shared by every pixel (`shared_samples`; measured at 48x36, N_s 64 x 32
+/// frames, 16 seeds: 0.0002 against 0.0008), and the mean lands within three of its standard
+/// errors (the reference's own included) of the path tracer's. Here (24x18, N_s 32 x 8 frames,
+/// 16 seeds): 0.99878 +- 0.00068 decorrelated, 0.99805 +- 0.00325 shared, the reference (4 x
+/// 8192 samples) +- 0.00034.
 #[test]
 fn decorrelated_light_samples_keep_the_image_mean_within_its_standard_error() {
     with_gpu(|ctx| {

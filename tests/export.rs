@@ -1,4 +1,4 @@
-//! `irad::export::write_mitsuba` on every shipped scene (issue 23 item 4), CPU only: each scene
+//! `irad::export::write_mitsuba` on every shipped scene, CPU only: each scene
 //! with no light-field luminaire is exported and its XML read back and checked against the
 //! scene (one sensor with the camera's field of view, size and view, not mirrored; one shape
 //! per material in use, whose PLY files hold the scene's triangles; one emitter per emissive

@@ -1,4 +1,4 @@
-//! Instant radiosity (issue 4 item 5): the walk's survivor counts, and the estimator against
+//! Instant radiosity (Keller 97): the walk's survivor counts, and the estimator against
 //! the reference.
 
 mod common;

@@ -1,4 +1,4 @@
-//! Light-field luminaires (Lu 14 ch. 4, issue 9): the GPU sampling tables and sampler against
+//! Light-field luminaires (Lu 14 ch. 4): the GPU sampling tables and sampler against
 //! the f64 mirror, every strategy's mean against the brute force, the strategies at equal
 //! error, the closed-form disk, where samples go, and the estimator near the image plane.
 
@@ -635,7 +635,7 @@ fn near_the_image_plane_the_filter_plane_estimator_takes_over() {
     });
 }
 
-/// A luminaire whose atlases change (issue 9 item 3: the tables rebuilt per frame): a sequence
+/// A luminaire whose atlases change (the tables rebuilt per frame): a sequence
 /// of three (the faceted headlight lowered 0, 10 and 20 degrees). At frames 1, 2 and 4 the
 /// GPU's tables are those of atlas f mod 3 (against the f64 mirror, 1e-5 of the total); and a
 /// render of the two-atlas sequence [A, black] over 2 frames is half a 1-frame render of A

@@ -1,6 +1,6 @@
 //! The GPU prefix sum against an f64 CPU scan: random non-negative rows (zeros and spikes
 //! included, never constant) of many lengths, single and batched, within 1e-5 relative error
-//! per element and per row total (issue 2).
+//! per element and per row total (src/gpu/prefix_sum.rs bounds it).
 
 mod common;
 
@@ -121,8 +121,8 @@ fn empty_rows_total_zero() {
     });
 }
 
-/// The device numbers subgroup lanes in invocation order, as the scans need (issue 22 item 3;
-/// src/gpu/subgroup_layout.rs). scripts/test.sh runs this at 8 and at 4 lanes.
+/// The device numbers subgroup lanes in invocation order, as the scans need (docs/DESIGN.md
+/// "Subgroup widths"; src/gpu/subgroup_layout.rs). scripts/test.sh runs this at 8 and at 4 lanes.
 #[test]
 fn the_device_numbers_subgroup_lanes_in_invocation_order() {
     common::with_gpu(|ctx| {

@@ -1,6 +1,6 @@
-//! The reference path tracer against analytic answers (issue 3 item 6). Each tolerance is the
-//! issue's 1%; each test also checks that its own Monte Carlo standard error is well below
-//! that, so a pass is not luck and a wrong estimator (a missing cos, pi or MIS weight) fails.
+//! The reference path tracer against analytic answers. Each tolerance is 1%; each test also
+//! checks that its own Monte Carlo standard error is well below that, so a pass is not luck and
+//! a wrong estimator (a missing cos, pi or MIS weight) fails.
 
 mod common;
 
@@ -472,7 +472,8 @@ fn kernels_specialized_to_a_scene_give_the_general_kernels_bits() {
 
 /// A scene at the loader's coordinate limit (1e8, src/scene/obj.rs MAX_COORDINATE) renders as
 /// the same scene at unit scale does: radiance does not change when lengths scale by s and the
-/// point light's intensity by s^2 (issue 22 item 1b: at 1e10 the image came out black).
+/// point light's intensity by s^2 (beyond it f32 rays and the BVH fail: at 1e10 the image came
+/// out black).
 #[test]
 fn a_scene_at_the_coordinate_limit_renders_as_at_unit_scale() {
     with_gpu(|ctx| {

@@ -1,4 +1,4 @@
-//! Fuzz test of the scene loader (issue 22 item 5), CPU only: random mutations of the shipped
+//! Fuzz test of the scene loader, CPU only: random mutations of the shipped
 //! scenes' TOML, OBJ and MTL files must each load to `Ok` or to a clean `SceneError` (a
 //! non-empty message that names a file of the scene and has no "panicked" in it), never a
 //! panic; a scene that loads must keep the loader's promises (`broken_invariant`).

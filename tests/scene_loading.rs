@@ -976,8 +976,8 @@ fn regenerate_glossy_env_sky() {
     exr::write(&scenes_dir().join("glossy-env/sky.exr"), &image).unwrap();
 }
 
-/// Degeneracy is judged per triangle (issue 22 item 1c): a 4 x 4 quad beside a triangle 1e7
-/// across is kept (the old threshold, relative to the scene's extent, dropped it).
+/// Degeneracy is judged per triangle: a 4 x 4 quad beside a triangle 1e7 across is kept (a
+/// threshold relative to the scene's extent would drop it).
 #[test]
 fn a_small_triangle_beside_a_huge_one_is_kept() {
     let obj = "mtllib m.mtl\nv -2 0 -2\nv 2 0 -2\nv 2 0 2\nv -2 0 2\nusemtl grey\nf 1 4 3 2\n\
@@ -989,8 +989,8 @@ fn a_small_triangle_beside_a_huge_one_is_kept() {
 }
 
 /// Coordinates beyond what f32 rays and the BVH handle are refused, naming the file, the line,
-/// the vertex and the limit (issue 22 items 1a and 1b: 1e19 and 1e30 panicked in obvhs, 1e10
-/// rendered black).
+/// the vertex and the limit (beyond it, 1e19 and 1e30 panic in obvhs and 1e10 renders
+/// black).
 #[test]
 fn coordinates_beyond_the_limit_are_refused() {
     for value in ["1e9", "-1e30", "1e19", "1e10"] {

@@ -1,6 +1,6 @@
-//! Sampling tables rebuilt only when their input changes (issue 21 item 4): a still map's cube
-//! map, CDFs, latitude-longitude table, pyramid and bundle-direction table are built once per
-//! render, a sequence's every frame, and `TableRebuild::EveryFrame` (`--rebuild-tables
+//! Sampling tables rebuilt only when their input changes (docs/DESIGN.md principle 9): a still
+//! map's cube map, CDFs, latitude-longitude table, pyramid and bundle-direction table are built
+//! once per render, a sequence's every frame, and `TableRebuild::EveryFrame` (`--rebuild-tables
 //! every-frame`) rebuilds a still map's every frame with the same image bits. The counts are
 //! the ones a render's JSON records per pass.
 

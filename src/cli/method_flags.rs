@@ -311,9 +311,9 @@ mod tests {
         }
     }
 
-    /// Issue 23 item 1: every method's settings, walked through the CLI and a suite file, have
-    /// the same names, defaults and ranges: each flag and key gives the same method or the
-    /// same problem, and another method's settings are refused by both.
+    /// Every method's settings, walked through the CLI and a suite file, have the same names,
+    /// defaults and ranges (docs/DESIGN.md "Settings tables"): each flag and key gives the same
+    /// method or the same problem, and another method's settings are refused by both.
     #[test]
     fn cli_flags_and_suite_keys_are_the_same_settings() {
         let all_keys: Vec<&str> = keys().into_iter().map(|(k, _)| k).collect();

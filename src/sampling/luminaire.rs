@@ -1,6 +1,6 @@
-//! Sampling the two-plane light-field luminaire of Lu 14 Chapter 4 (issue 9; the model is
-//! src/scene/luminaire/) in f64: the CPU mirror of what method `lightfield` will do on the
-//! GPU, and its tests.
+//! Sampling the two-plane light-field luminaire of Lu 14 Chapter 4 (the model is
+//! src/scene/luminaire/) in f64: the CPU mirror of what method `lightfield` does on the GPU,
+//! and its tests.
 //!
 //! In the luminaire's frame the filter plane U is z = 0 and the image plane S is z = delta;
 //! light leaves toward +z. W x H basis functions Phi_m sit on a grid of pitch (du, dv)

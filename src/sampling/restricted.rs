@@ -1,6 +1,6 @@
-//! Restricted-CDF sampling of a light-field image (Lu 14 Section 4.3.3-4.3.5, issue 9), in f64:
-//! the CPU mirror the GPU kernels of method `lightfield` will follow, and the place where the
-//! pdf each sampler actually realises is derived and tested.
+//! Restricted-CDF sampling of a light-field image (Lu 14 Section 4.3.3-4.3.5), in f64: the CPU
+//! mirror the GPU kernels of method `lightfield` follow, and the place where the pdf each
+//! sampler actually realises is derived and tested.
 //!
 //! An image C is piecewise constant over W x H texels, texel (i, j) covering s in [i, i + 1)
 //! and t in [j, j + 1) (texel units). A window [s0, s1] x [t0, t1] (Eq. 4.11's restricted
@@ -499,7 +499,7 @@ mod tests {
         }
     }
 
-    /// Issue 9 item 4(a): with the affine (whole-image) marginal, dividing by Eq. 4.14's
+    /// Lu's Eq. 4.12 as written: with the affine (whole-image) marginal, dividing by Eq. 4.14's
     /// C / A is biased: the estimate of the integral of C g over the window (g a smooth
     /// weight, as the |s - p|^-3 and Psi factors of Eq. 4.6 are) misses the truth, while
     /// dividing by the realised pdf hits it. The windowed marginal is unbiased with C / A.

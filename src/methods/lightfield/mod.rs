@@ -1,4 +1,4 @@
-//! Light-field luminaires (Lu 14 Chapter 4, issue 9), method `lightfield`: per frame the
+//! Light-field luminaires (Lu 14 Chapter 4), method `lightfield`: per frame the
 //! G-buffer and the direct light of the scene's other lights (the reference's direct-light
 //! pass), then per placed luminaire Lu's two steps (Section 4.5.1):
 //! glsl/estimate_luminaire_areas.comp (A(p), pass "A estimation") and

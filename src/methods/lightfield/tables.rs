@@ -1,5 +1,5 @@
 //! The light-field luminaire's sampling tables, built on the GPU with the scan kernels (Lu 14
-//! Section 4.5; issue 9 item 3), and rebuilt whenever the images change:
+//! Section 4.5), and rebuilt whenever the images change:
 //! glsl/weigh_luminaire_columns.comp (each texel's luminance, column by column), the prefix sum
 //! over every column (the conditional CDFs in t, Eq. 4.10, and the column totals), the prefix
 //! sum over each image's column totals (the marginal CDF in s, and the image totals),

@@ -184,9 +184,10 @@ impl GenerateOptions {
         {
             return Err(GenerateError::TooLarge);
         }
-        // Sizes up front (issue 22 item 1d): the renderer holds each atlas as one storage buffer of
-        // 16 bytes a texel (at most 4 GiB on any device, 128 MiB guaranteed), and generation holds
-        // every frame's images in memory at 12 bytes a texel, twice while writing.
+        // Sizes checked before any work, so a luminaire too large is refused at once with its
+        // size: the renderer holds each atlas as one storage buffer of 16 bytes a texel (at most
+        // 4 GiB on any device, 128 MiB guaranteed), and generation holds every frame's images in
+        // memory at 12 bytes a texel, twice while writing.
         let texels = u64::from(grid.0 * grid.1) * u64::from(resolution.0) * u64::from(resolution.1);
         // A sequence's atlases share one buffer (lightfield/tables.rs), beside the current frame's;
         // generation holds every frame's images, the first twice for a sequence, and one atlas.

@@ -1,4 +1,4 @@
-//! Light-field luminaires (Lu 14 Chapter 4, issue 9): the two-plane model of Eq. 4.1, its
+//! Light-field luminaires (Lu 14 Chapter 4): the two-plane model of Eq. 4.1, its
 //! on-disk format, and luminaires generated from analytic emitters.
 //!
 //! In the luminaire's frame the filter plane U is z = 0 and the image plane S is z = delta;
