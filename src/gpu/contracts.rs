@@ -73,9 +73,10 @@ macro_rules! gpu_layout {
         )
     };
     (@layout $ty:ident, $glsl:expr, $($field:ident $(=> $target:tt $(+ $within:literal)?)?),+ $(,)?) => {{
-        // Every Rust field is listed: this pattern has no `..`.
+        // Every Rust field is listed: this pattern has no `..`, so a field missing from the
+        // list does not compile (rustc says "pattern requires `..` due to inaccessible fields").
         const _: fn($ty) = |v: $ty| {
-            let $ty { $($field: _),+ } = v;
+            let $ty { $($field: _),+ } = v; // error here: the list misses a Rust field
         };
         $crate::gpu::contracts::GpuLayout {
             rust: concat!(module_path!(), "::", stringify!($ty)),
@@ -350,13 +351,19 @@ mod tests {
         member.starts_with("_pad") || member.starts_with("pad")
     }
 
-    /// Compares `layout` with the GLSL struct `ty` of `kernel`, appending each mismatch.
-    fn compare(layout: &GpuLayout, kernel: &Kernel, ty: Handle<Type>, errors: &mut Vec<String>) {
-        let module = &kernel.module;
+    /// Compares `layout` with the GLSL struct `ty` of `module`, declared in the kernels `k`
+    /// names, appending each mismatch.
+    fn compare(
+        layout: &GpuLayout,
+        module: &Module,
+        ty: Handle<Type>,
+        k: &str,
+        errors: &mut Vec<String>,
+    ) {
         let TypeInner::Struct { members, span } = &module.types[ty].inner else {
             unreachable!()
         };
-        let (rust, glsl, k) = (layout.rust, name(module, ty), kernel.name);
+        let (rust, glsl) = (layout.rust, name(module, ty));
         if layout.size != *span as usize {
             errors.push(format!(
                 "{rust} is {} bytes, but GLSL {glsl} (in {k}) is {span} (its last member ends \
@@ -466,8 +473,32 @@ mod tests {
                         ));
                         continue;
                     };
+                    // Once per distinct declaration (layout and member names), naming the
+                    // kernels that share it.
+                    let mut declarations: BTreeMap<String, Vec<(&Kernel, Handle<Type>)>> =
+                        BTreeMap::new();
                     for &(kernel, ty) in uses {
-                        compare(layout, kernel, ty, &mut errors);
+                        let m = &kernel.module;
+                        let TypeInner::Struct { members, .. } = &m.types[ty].inner else {
+                            unreachable!()
+                        };
+                        let names: Vec<&str> =
+                            members.iter().filter_map(|x| x.name.as_deref()).collect();
+                        let key = format!("{} {}", signature(m, ty), names.join(","));
+                        declarations.entry(key).or_default().push((kernel, ty));
+                    }
+                    for same in declarations.values() {
+                        let mut ks: Vec<&str> = same.iter().map(|(k, _)| k.name).collect();
+                        ks.dedup();
+                        let k = match ks.as_slice() {
+                            [one] => one.to_string(),
+                            [first, rest @ ..] => {
+                                format!("{first} and {} other kernels", rest.len())
+                            }
+                            [] => unreachable!(),
+                        };
+                        let (kernel, ty) = same[0];
+                        compare(layout, &kernel.module, ty, &k, &mut errors);
                     }
                     // Arrays of it stride by the Rust size.
                     for kernel in &kernels {
@@ -504,7 +535,7 @@ mod tests {
                                 layout.rust
                             ));
                         }
-                        compare(layout, kernel, ty, &mut errors);
+                        compare(layout, &kernel.module, ty, k, &mut errors);
                     }
                 }
             }
