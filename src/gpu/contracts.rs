@@ -254,9 +254,10 @@ mod tests {
     /// mirrors. Other blocks count themselves (`buffer ResampleStats { uint a; uint b; }`).
     fn interface_structs(module: &Module) -> Vec<(Handle<Type>, Use)> {
         let mut out = Vec::new();
+        // `ty` used as `kind`, and the structs inside it as shared structs.
         let push = |ty: Handle<Type>, kind: Use, out: &mut Vec<_>| {
-            let mut stack = vec![ty];
-            while let Some(ty) = stack.pop() {
+            let mut stack = vec![(ty, kind)];
+            while let Some((ty, kind)) = stack.pop() {
                 let TypeInner::Struct { members, .. } = &module.types[ty].inner else {
                     continue;
                 };
@@ -264,7 +265,7 @@ mod tests {
                     out.push((ty, kind));
                 }
                 for m in members {
-                    stack.push(element(module, m.ty));
+                    stack.push((element(module, m.ty), Use::Shared));
                 }
             }
         };
