@@ -84,6 +84,40 @@ pub struct BvhNode {
     pub data: [u32; 20],
 }
 
+/// The GLSL layouts of the structs above (src/gpu/contracts.rs checks them). `BvhNode`'s one
+/// Rust field holds bvh.glsl's five uvec4 members, written out by hand.
+#[cfg(test)]
+pub(crate) const GPU_LAYOUTS: &[crate::gpu::contracts::GpuLayout] = {
+    use crate::gpu::contracts::{gpu_layout, Glsl, GpuField, GpuLayout};
+    use core::mem::{offset_of, size_of};
+    const fn node_member(rust: &'static str, member: &'static str, word: usize) -> GpuField {
+        GpuField {
+            rust,
+            member: Some(member),
+            offset: offset_of!(BvhNode, data) + 4 * word,
+            within: 0,
+        }
+    }
+    const _: fn(BvhNode) = |v: BvhNode| {
+        let BvhNode { data: _ } = v;
+    };
+    &[
+        gpu_layout!(BvhTriangle as "BvhTriangle" { v0, e1, e2 }),
+        GpuLayout {
+            rust: concat!(module_path!(), "::BvhNode"),
+            glsl: Glsl::Struct("BvhNode"),
+            size: size_of::<BvhNode>(),
+            fields: &[
+                node_member("data[0..4]", "origin_exponents", 0),
+                node_member("data[4..8]", "bases_meta", 4),
+                node_member("data[8..12]", "quantized_x", 8),
+                node_member("data[12..16]", "quantized_y", 12),
+                node_member("data[16..20]", "quantized_z", 16),
+            ],
+        },
+    ]
+};
+
 impl From<&CwBvhNode> for BvhNode {
     fn from(node: &CwBvhNode) -> Self {
         bytemuck::cast(*node)

@@ -76,6 +76,22 @@ struct TraceParams {
     _pad: u32,
 }
 
+/// The GLSL layouts the structs above mirror (src/gpu/contracts.rs checks them).
+#[cfg(test)]
+pub(crate) const GPU_LAYOUTS: &[crate::gpu::contracts::GpuLayout] = {
+    use crate::gpu::contracts::gpu_layout;
+    &[
+        gpu_layout!(TraceRay as "TraceRay" {
+            origin => "origin_t_max",
+            t_max => "origin_t_max" + 12,
+            direction,
+            _pad => pad,
+        }),
+        gpu_layout!(TraceHit as "TraceHit" { t, triangle, barycentrics }),
+        gpu_layout!(TraceParams in ["trace_rays"] { ray_count, mode, repeat, _pad => "_pad1" }),
+    ]
+};
+
 pub struct TraceRays(Kernel);
 
 impl TraceRays {

@@ -13,6 +13,13 @@ struct CopyParams {
     _pad: [u32; 3],
 }
 
+/// The GLSL layouts the structs above mirror (src/gpu/contracts.rs checks them).
+#[cfg(test)]
+pub(crate) const GPU_LAYOUTS: &[crate::gpu::contracts::GpuLayout] = {
+    use crate::gpu::contracts::gpu_layout;
+    &[gpu_layout!(CopyParams in ["copy_values"] { vec4_count, _pad => "_pad0" })]
+};
+
 pub struct CopyValues(Kernel);
 
 impl CopyValues {

@@ -5,6 +5,8 @@
 pub mod buffer;
 pub mod commands;
 pub mod context;
+#[cfg(test)]
+pub(crate) mod contracts;
 pub mod copy;
 pub mod device_info;
 pub mod env_switch;

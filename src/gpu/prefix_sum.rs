@@ -35,6 +35,18 @@ struct ScanParams {
     _pad: u32,
 }
 
+/// The GLSL layouts the structs above mirror (src/gpu/contracts.rs checks them).
+#[cfg(test)]
+pub(crate) const GPU_LAYOUTS: &[crate::gpu::contracts::GpuLayout] = {
+    use crate::gpu::contracts::gpu_layout;
+    &[gpu_layout!(ScanParams in ["scan_blocks", "reduce_blocks"] {
+        row_length,
+        row_count,
+        blocks_per_row,
+        _pad,
+    })]
+};
+
 /// glsl/reduce_blocks.comp: the sum of every block of every row.
 pub struct ReduceBlocks(Kernel);
 

@@ -22,6 +22,13 @@ struct DrawParams {
     pad: [u32; 2],
 }
 
+/// The GLSL layouts the structs above mirror (src/gpu/contracts.rs checks them).
+#[cfg(test)]
+pub(crate) const GPU_LAYOUTS: &[crate::gpu::contracts::GpuLayout] = {
+    use crate::gpu::contracts::gpu_layout;
+    &[gpu_layout!(DrawParams in ["draw_bsdf_samples"] { kd, ks, n, wo, count, seed, pad => pad })]
+};
+
 pub struct BsdfDraws {
     kernel: Kernel,
     /// (direction, bsdf_pdf) per draw; all zero where the material reflects nothing.

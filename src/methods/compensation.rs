@@ -164,6 +164,29 @@ struct GatherParams {
     weight: f32,
 }
 
+/// The GLSL layouts the structs above mirror (src/gpu/contracts.rs checks them).
+#[cfg(test)]
+pub(crate) const GPU_LAYOUTS: &[crate::gpu::contracts::GpuLayout] = {
+    use crate::gpu::contracts::gpu_layout;
+    &[
+        gpu_layout!(CompensationVertex as "CompensationVertex" { position, normal, side, wo, beta }),
+        gpu_layout!(TraceParams in ["trace_compensation_paths"] {
+            level,
+            frame,
+            seed,
+            g_clamp,
+            direct_weight,
+        }),
+        gpu_layout!(GatherParams in ["gather_compensation_vpls"] {
+            level,
+            vpl_begin,
+            vpl_end,
+            g_clamp,
+            weight,
+        }),
+    ]
+};
+
 /// A set of VPLs a frame gathers: slots of a buffer, each contribution times a weight.
 pub struct VplSource<'a> {
     pub vpls: &'a Buffer<Vpl>,

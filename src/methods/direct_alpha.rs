@@ -19,6 +19,13 @@ struct AlphaParams {
     estimation_frames: u32,
 }
 
+/// The GLSL layouts the structs above mirror (src/gpu/contracts.rs checks them).
+#[cfg(test)]
+pub(crate) const GPU_LAYOUTS: &[crate::gpu::contracts::GpuLayout] = {
+    use crate::gpu::contracts::gpu_layout;
+    &[gpu_layout!(AlphaParams in ["shade_direct_alpha"] { frame, seed, estimation_frames })]
+};
+
 pub struct ShadeDirectAlpha(Kernel);
 
 /// Per pixel: Eq. 5.5's two sums (x, y), the frames from M on that saw a surface (z) and

@@ -16,6 +16,13 @@ struct WeighParams {
     offset: f32,
 }
 
+/// The GLSL layouts the structs above mirror (src/gpu/contracts.rs checks them).
+#[cfg(test)]
+pub(crate) const GPU_LAYOUTS: &[crate::gpu::contracts::GpuLayout] = {
+    use crate::gpu::contracts::gpu_layout;
+    &[gpu_layout!(WeighParams in ["weigh_equirect_texels"] { offset })]
+};
+
 /// The kernel and the two scans that build the table.
 struct Builder {
     weigh: Kernel,

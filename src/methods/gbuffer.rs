@@ -28,6 +28,21 @@ struct FrameParams {
     _pad: u32,
 }
 
+/// The GLSL layouts the structs above mirror (src/gpu/contracts.rs checks them).
+#[cfg(test)]
+pub(crate) const GPU_LAYOUTS: &[crate::gpu::contracts::GpuLayout] = {
+    use crate::gpu::contracts::gpu_layout;
+    &[
+        gpu_layout!(GBufferTexel as "GBufferTexel" {
+            position,
+            shading_normal,
+            geometric_normal,
+            direction,
+        }),
+        gpu_layout!(FrameParams in ["write_gbuffer"] { frame, seed, centred, _pad }),
+    ]
+};
+
 /// Where in each pixel the camera rays go.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum PixelSampling {

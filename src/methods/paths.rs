@@ -28,6 +28,23 @@ struct PathParams {
     centred: u32,
 }
 
+/// The GLSL layouts the structs above mirror (src/gpu/contracts.rs checks them).
+#[cfg(test)]
+pub(crate) const GPU_LAYOUTS: &[crate::gpu::contracts::GpuLayout] = {
+    use crate::gpu::contracts::gpu_layout;
+    &[gpu_layout!(PathParams in ["trace_reference_paths"] {
+        frame,
+        seed,
+        max_depth,
+        roulette_depth,
+        environment,
+        camera_samples,
+        first_sample,
+        sample_count,
+        centred,
+    })]
+};
+
 /// Where a frame's paths start.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum PathStarts {

@@ -80,6 +80,29 @@ pub struct SceneConstants {
     pub bounds: Vec4,
 }
 
+/// The GLSL layouts the structs above mirror (src/gpu/contracts.rs checks them).
+#[cfg(test)]
+pub(crate) const GPU_LAYOUTS: &[crate::gpu::contracts::GpuLayout] = {
+    use crate::gpu::contracts::gpu_layout;
+    &[
+        gpu_layout!(ShadingTriangle as "ShadingTriangle" { n0, n1, n2, geometric_normal }),
+        gpu_layout!(GpuMaterial as "Material" { kd, ks, ke }),
+        gpu_layout!(LightEntry as "LightEntry" { kind, index, probability, upper }),
+        gpu_layout!(GpuLight as "Light" { position, intensity, direction, cone }),
+        gpu_layout!(EmitterTriangle as "EmitterTriangle" { p0, e1, e2, normal }),
+        gpu_layout!(SceneConstants as "SceneConstants" {
+            camera_position,
+            camera_forward,
+            camera_right,
+            camera_up,
+            size,
+            env_size,
+            env,
+            bounds,
+        }),
+    ]
+};
+
 /// What the light table holds, for reports and tests.
 #[derive(Clone, Debug)]
 pub struct LightTable {

@@ -34,6 +34,21 @@ struct CdfParams {
     phase: u32,
 }
 
+/// The GLSL layouts the structs above mirror (src/gpu/contracts.rs checks them).
+#[cfg(test)]
+pub(crate) const GPU_LAYOUTS: &[crate::gpu::contracts::GpuLayout] = {
+    use crate::gpu::contracts::gpu_layout;
+    &[
+        gpu_layout!(ContributionParams in ["estimate_light_contributions"] {
+            samples,
+            entries,
+            seed,
+            pixels,
+        }),
+        gpu_layout!(CdfParams in ["build_light_cdf"] { entries, floor_fraction, first, count, phase }),
+    ]
+};
+
 /// Lights one build_light_cdf dispatch walks: half lavapipe's loop budget of 65535 iterations
 /// an invocation.
 const LIGHTS_PER_DISPATCH: u32 = 32768;

@@ -50,6 +50,37 @@ struct SideParams {
     min_weight: f32,
 }
 
+/// The GLSL layouts the structs above mirror (src/gpu/contracts.rs checks them).
+#[cfg(test)]
+pub(crate) const GPU_LAYOUTS: &[crate::gpu::contracts::GpuLayout] = {
+    use crate::gpu::contracts::gpu_layout;
+    &[
+        gpu_layout!(PowerParams in ["estimate_vpl_power"] {
+            count,
+            source_begin,
+            offset,
+            row_length,
+            samples,
+            seed,
+            pixels,
+            scale,
+            sample_begin,
+            sample_end,
+        }),
+        gpu_layout!(ResampleParams in ["resample_vpls"] {
+            draws,
+            kept_offset,
+            candidates,
+            standard,
+            standard_begin,
+            unused,
+            floor_fraction,
+            seed,
+        }),
+        gpu_layout!(SideParams in ["update_side_weights"] { candidates, standard, min_weight }),
+    ]
+};
+
 /// The per-batch buffers of the resampling: weights and their scan, two rows of `candidates`.
 pub struct ResampleBuffers {
     pub candidates: u32,

@@ -67,6 +67,46 @@ struct CoverParams {
     pool_end: u32,
 }
 
+/// The GLSL layouts the structs above mirror (src/gpu/contracts.rs checks them).
+#[cfg(test)]
+pub(crate) const GPU_LAYOUTS: &[crate::gpu::contracts::GpuLayout] = {
+    use crate::gpu::contracts::gpu_layout;
+    &[
+        gpu_layout!(ReverseParams in ["trace_reverse_vpls"] {
+            count,
+            pool,
+            seed,
+            pixels,
+            pool_begin,
+            pool_end,
+        }),
+        gpu_layout!(ShadeParams in ["shade_reverse_vpls"] {
+            count,
+            light_samples,
+            vpl_begin,
+            vpl_end,
+            seed,
+            weight,
+            connections,
+            depth,
+            sample_begin,
+            sample_end,
+            connection_begin,
+            connection_end,
+        }),
+        gpu_layout!(CoverParams in ["find_uncovered_vpls"] {
+            vpl_begin,
+            vpl_end,
+            pool,
+            seed,
+            pixels,
+            uncovered_scale,
+            pool_begin,
+            pool_end,
+        }),
+    ]
+};
+
 pub struct TraceReverseVpls(Kernel);
 
 impl TraceReverseVpls {

@@ -94,6 +94,23 @@ struct LightVertexParams {
     directions: u32,
 }
 
+/// The GLSL layouts the structs above mirror (src/gpu/contracts.rs checks them).
+#[cfg(test)]
+pub(crate) const GPU_LAYOUTS: &[crate::gpu::contracts::GpuLayout] = {
+    use crate::gpu::contracts::gpu_layout;
+    &[
+        gpu_layout!(LightVertex as "LightVertex" { light, power, position, normal, side, bundle }),
+        gpu_layout!(LightVertexParams in ["trace_light_vertices"] {
+            first_iteration,
+            count,
+            seed,
+            lights,
+            slots,
+            directions,
+        }),
+    ]
+};
+
 pub struct TraceLightVertices(SceneKernel);
 
 impl TraceLightVertices {

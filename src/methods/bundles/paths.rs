@@ -37,6 +37,31 @@ struct ShadeParams {
     hit_first: u32,
 }
 
+/// The GLSL layouts the structs above mirror (src/gpu/contracts.rs checks them).
+#[cfg(test)]
+pub(crate) const GPU_LAYOUTS: &[crate::gpu::contracts::GpuLayout] = {
+    use crate::gpu::contracts::gpu_layout;
+    &[gpu_layout!(ShadeParams in ["shade_bundle_paths"] {
+        first_index,
+        count,
+        per_frame,
+        strategy,
+        beta,
+        two_bounce,
+        samples,
+        suppression,
+        suppression_parameter,
+        slots,
+        directions,
+        environment,
+        trace_bundles,
+        frame_first,
+        seed,
+        compensate,
+        hit_first,
+    })]
+};
+
 /// Shadow rays per invocation in one dispatch: lavapipe stops an invocation's loops silently
 /// after 65535 iterations in all (docs/DESIGN.md "The loop budget"), and a ray's traversal loop
 /// runs tens of iterations in the shipped scenes (as ir's gather, 512 VPL slots per dispatch).

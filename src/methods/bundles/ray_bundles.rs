@@ -28,6 +28,16 @@ struct BundleParams {
     slots: u32,
 }
 
+/// The GLSL layouts the structs above mirror (src/gpu/contracts.rs checks them).
+#[cfg(test)]
+pub(crate) const GPU_LAYOUTS: &[crate::gpu::contracts::GpuLayout] = {
+    use crate::gpu::contracts::gpu_layout;
+    &[
+        gpu_layout!(BundleHit as "BundleHit" { position, triangle }),
+        gpu_layout!(BundleParams in ["trace_ray_bundles"] { first_index, slots }),
+    ]
+};
+
 pub struct TraceRayBundles(Kernel);
 
 impl TraceRayBundles {

@@ -36,6 +36,23 @@ struct SampleParams {
     window: u32,
 }
 
+/// The GLSL layouts the structs above mirror (src/gpu/contracts.rs checks them).
+#[cfg(test)]
+pub(crate) const GPU_LAYOUTS: &[crate::gpu::contracts::GpuLayout] = {
+    use crate::gpu::contracts::gpu_layout;
+    &[
+        gpu_layout!(CubeParams in ["weigh_env_cube"] { resolution, first, count, planned }),
+        gpu_layout!(SampleParams in ["generate_env_samples"] {
+            resolution,
+            per_face,
+            first,
+            seed,
+            set,
+            window,
+        }),
+    ]
+};
+
 pub struct CubeTable {
     weigh: Kernel,
     generate: Kernel,

@@ -21,6 +21,16 @@ struct DrawParams {
     seed: u32,
 }
 
+/// The GLSL layouts the structs above mirror (src/gpu/contracts.rs checks them).
+#[cfg(test)]
+pub(crate) const GPU_LAYOUTS: &[crate::gpu::contracts::GpuLayout] = {
+    use crate::gpu::contracts::gpu_layout;
+    &[
+        gpu_layout!(ReduceParams in ["reduce_env_pyramid"] { level }),
+        gpu_layout!(DrawParams in ["draw_env_pyramid_samples"] { count, seed }),
+    ]
+};
+
 /// H', the pyramid's leaf rows for a map `height` texels high (the power of two at or
 /// above); the leaves are 2 H' wide.
 pub fn leaf_rows(height: u32) -> u32 {

@@ -32,6 +32,28 @@ struct ShadeParams {
     alpha_step: u32,
 }
 
+/// The GLSL layouts the structs above mirror (src/gpu/contracts.rs checks them).
+#[cfg(test)]
+pub(crate) const GPU_LAYOUTS: &[crate::gpu::contracts::GpuLayout] = {
+    use crate::gpu::contracts::gpu_layout;
+    &[gpu_layout!(ShadeParams in ["shade_env"] {
+        resolution,
+        per_face,
+        strategy,
+        spp,
+        frame,
+        seed,
+        light_share,
+        integer_counts,
+        alpha_samples,
+        shadows,
+        windows,
+        item_begin,
+        item_end,
+        alpha_step,
+    })]
+};
+
 /// Samples per pixel in one dispatch. lavapipe stops an invocation's loops silently after 65535
 /// iterations in all (docs/DESIGN.md "The loop budget"); a sample costs one shadow ray (a
 /// traversal loop: tens of iterations in the shipped scenes) and at most about 25 iterations of

@@ -23,6 +23,18 @@ struct FilterParams {
     _pad: u32,
 }
 
+/// The GLSL layouts the structs above mirror (src/gpu/contracts.rs checks them).
+#[cfg(test)]
+pub(crate) const GPU_LAYOUTS: &[crate::gpu::contracts::GpuLayout] = {
+    use crate::gpu::contracts::gpu_layout;
+    &[gpu_layout!(FilterParams in ["filter_interleaved"] {
+        interleave,
+        plane_tolerance,
+        normal_tolerance,
+        _pad,
+    })]
+};
+
 pub struct FilterInterleaved(Kernel);
 
 impl FilterInterleaved {

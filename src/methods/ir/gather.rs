@@ -28,6 +28,19 @@ struct GatherParams {
     weight: f32,
 }
 
+/// The GLSL layouts the structs above mirror (src/gpu/contracts.rs checks them).
+#[cfg(test)]
+pub(crate) const GPU_LAYOUTS: &[crate::gpu::contracts::GpuLayout] = {
+    use crate::gpu::contracts::gpu_layout;
+    &[gpu_layout!(GatherParams in ["accumulate_vpls_tiled"] {
+        vpl_begin,
+        vpl_end,
+        g_clamp,
+        interleave,
+        weight,
+    })]
+};
+
 pub struct AccumulateVpls(SceneKernel);
 
 impl AccumulateVpls {

@@ -39,6 +39,16 @@ struct WalkParams {
     survival: f32,
 }
 
+/// The GLSL layouts the structs above mirror (src/gpu/contracts.rs checks them).
+#[cfg(test)]
+pub(crate) const GPU_LAYOUTS: &[crate::gpu::contracts::GpuLayout] = {
+    use crate::gpu::contracts::gpu_layout;
+    &[
+        gpu_layout!(Vpl as "Vpl" { position, normal, power, incident }),
+        gpu_layout!(WalkParams in ["trace_vpls"] { path_count, vertex_count, seed, survival }),
+    ]
+};
+
 /// The VPL slots of one frame and the schedule that lays them out.
 pub struct VplBuffers {
     pub vpls: Buffer<Vpl>,

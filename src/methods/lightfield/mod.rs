@@ -218,6 +218,34 @@ struct ShadeParams {
     sample_end: u32,
 }
 
+/// The GLSL layouts the structs above mirror (src/gpu/contracts.rs checks them).
+#[cfg(test)]
+pub(crate) const GPU_LAYOUTS: &[crate::gpu::contracts::GpuLayout] = {
+    use crate::gpu::contracts::gpu_layout;
+    &[
+        gpu_layout!(LuminaireFrame as "LuminaireFrame" {
+            position,
+            x,
+            y,
+            z,
+            plane,
+            image_size,
+            grid,
+            options,
+        }),
+        gpu_layout!(ShadeParams in ["shade_lightfield"] {
+            frame,
+            seed,
+            search,
+            shared_samples,
+            visibility,
+            sampling_only,
+            sample_begin,
+            sample_end,
+        }),
+    ]
+};
+
 /// Most samples one invocation of shade_lightfield.comp draws in one dispatch. lavapipe's
 /// LLVM back end (gallivm) breaks out of every loop of an invocation once they have run
 /// 65535 iterations together (LP_MAX_TGSI_LOOP_ITERATIONS, shared by every loop), silently:

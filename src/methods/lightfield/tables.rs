@@ -175,6 +175,29 @@ struct DrawParams {
     pad: [u32; 2],
 }
 
+/// The GLSL layouts the structs above mirror (src/gpu/contracts.rs checks them).
+#[cfg(test)]
+pub(crate) const GPU_LAYOUTS: &[crate::gpu::contracts::GpuLayout] = {
+    use crate::gpu::contracts::gpu_layout;
+    &[
+        gpu_layout!(TableParams in ["weigh_luminaire_columns", "transpose_luminaire_columns"] {
+            width,
+            height,
+            images,
+        }),
+        gpu_layout!(DrawParams in ["draw_luminaire_samples"] {
+            window,
+            m,
+            width,
+            height,
+            count,
+            seed,
+            search,
+            pad => pad,
+        }),
+    ]
+};
+
 /// glsl/draw_luminaire_samples.comp: the restricted sampler of glsl/include/
 /// luminaire_tables.glsl on its own, for its tests: `count` draws in one image's window, each
 /// (s, t, realised pdf, search steps).
