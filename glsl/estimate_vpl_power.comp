@@ -8,7 +8,7 @@
 // Numbers: pixel m of candidate c is pcg(seed, c, m) mod the pixel count.
 //
 // The M camera points are split over dispatches, [sample_begin, sample_end) each (a shadow
-// ray per point; lavapipe's loop budget, README "Kernels"): the first writes its share of
+// ray per point; lavapipe's loop budget, docs/DESIGN.md "The loop budget"): the first writes its share of
 // the estimate, the others add theirs.
 
 #extension GL_GOOGLE_include_directive : require

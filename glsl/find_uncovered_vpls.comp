@@ -14,7 +14,7 @@
 // rays per VPL, fewer where a pool point sees it (the test stops at the first).
 //
 // The pool is split over dispatches, points [pool_begin, pool_end) each (lavapipe's loop
-// budget, README "Kernels"). incident.w carries "no pool point so far reaches it" between
+// budget, docs/DESIGN.md "The loop budget"). incident.w carries "no pool point so far reaches it" between
 // them: the first dispatch sets it where its points miss, a later one clears it where its
 // points reach, and the last scales the power of those still marked.
 

@@ -24,7 +24,7 @@
 // A chunk is shaded in dispatches of a few iterations (`hit_first` the first's place among the
 // chunk's bundle hits): each iteration casts about four shadow rays per light vertex, each a
 // traversal loop, and lavapipe stops an invocation's loops silently after 65535 iterations in
-// all (README "Kernels").
+// all (docs/DESIGN.md "The loop budget").
 
 #extension GL_GOOGLE_include_directive : require
 

@@ -36,7 +36,7 @@
 // order (the light samples face by face, then the BRDF samples; alpha numbers each step's on
 // its own), and a dispatch takes those in [item_begin, item_end) and adds their share of the
 // estimate. lavapipe stops an invocation's loops silently after 65535 iterations in all
-// (README "Kernels"), and each sample's shadow ray is a traversal loop: unsplit, 16384 samples
+// (docs/DESIGN.md "The loop budget"), and each sample's shadow ray is a traversal loop: unsplit, 16384 samples
 // per pixel on glossy-env came out 10% dark and 65536 up to 80%. Every sample keeps its
 // random numbers, so the split changes only the order of the sums.
 

@@ -23,7 +23,7 @@
 // connection_end); the next-event terms are taken where connection_begin is 0, and the path
 // is traced again for each later range of its connections (the same random numbers, the same
 // vertices). The first dispatch writes the power, the others add theirs. lavapipe stops an
-// invocation's loops silently after 65535 iterations in all (README "Kernels"), and each
+// invocation's loops silently after 65535 iterations in all (docs/DESIGN.md "The loop budget"), and each
 // next event and connection is a shadow ray's traversal loop: unsplit, 1024 light samples
 // came out 8.5% dark under --strategy reverse on the Cornell box (32x32, 4 frames), and a
 // frame of 2^20 VPLs connected each path to half a million slots in one invocation.

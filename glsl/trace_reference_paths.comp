@@ -5,7 +5,7 @@
 // the power heuristic (Veach 1997 Section 9.2), Russian roulette from bounce 3 on. Delta
 // lights are reached by next-event estimation only, with weight 1.
 //
-// Speed on lavapipe (issue 21 item 5). gallivm runs every instruction of a kernel under
+// Speed on lavapipe (docs/DESIGN.md "gallivm runs every lane under masks"). gallivm runs every instruction of a kernel under
 // lane masks: both sides of every branch whether any lane takes it, every loop body to its end
 // before it tests for live lanes, every storage-buffer load as a loop over the lanes. So the
 // time is the code run per loop iteration, and it is won by running less code, not by keeping

@@ -17,7 +17,7 @@
 // reverse_pool.glsl.
 //
 // Eq. 7's M shadow rays are split over dispatches, pool points [pool_begin, pool_end) each
-// (lavapipe's loop budget, README "Kernels"): every dispatch traces x2 again (the same ray),
+// (lavapipe's loop budget, docs/DESIGN.md "The loop budget"): every dispatch traces x2 again (the same ray),
 // the first writes the VPL and its share of the density, the others add theirs, and the last
 // empties the VPL where the density is 0.
 

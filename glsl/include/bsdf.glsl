@@ -1,4 +1,4 @@
-// The one BSDF irad models (DESIGN.md "Conventions"): Lambert plus a normalized modified
+// The one BSDF irad models (docs/DESIGN.md "Conventions"): Lambert plus a normalized modified
 // Phong lobe (Lafortune and Willems 1994), f = Kd / pi + Ks (n + 2) / (2 pi) cos^n(alpha),
 // alpha between wi and the mirror direction of wo. Sampled as a mixture: the cosine lobe with
 // probability 1 - p, the Phong lobe (pdf (n + 1) / (2 pi) cos^n(alpha)) with probability p,

@@ -43,7 +43,7 @@ layout(set = 0, binding = 1, std430) readonly buffer BvhTriangles { BvhTriangle 
 // Set to 1 by a traversal that the device's loop limit cut short, or by a search that found
 // its trip count past the bound its dispatches were planned by (weigh_env_cube.comp) (lavapipe:
 // 65535 loop iterations a group of lanes, all loops together, then every loop breaks out
-// silently; README "Kernels"). The host zeroes it before a render and refuses the render when it reads 1
+// silently; docs/DESIGN.md "The loop budget"). The host zeroes it before a render and refuses the render when it reads 1
 // (src/bvh.rs GpuBvh::check_loop_cuts). Binding 63: far above the numbers kernels give their
 // own bindings (2..36 now), so a kernel's next binding does not run into it (reflection
 // refuses two bindings of one number: src/gpu/reflect.rs).

@@ -1,4 +1,4 @@
-// Cube maps for environment sampling (DESIGN.md "Conventions"; Lu 14 Section 3.3): faces
+// Cube maps for environment sampling (docs/DESIGN.md "Conventions"; Lu 14 Section 3.3): faces
 // +X, -X, +Y, -Y, +Z, -Z (0..5), face coordinates (u, v) in [-1, 1], a face of R x R texels,
 // texel (i, j) covering u in [-1 + 2i/R, -1 + 2(i+1)/R] and v likewise in j, index
 // face R^2 + j R + i. src/sampling/cubemap.rs mirrors every function here.

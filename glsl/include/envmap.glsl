@@ -1,4 +1,4 @@
-// The environment map (DESIGN.md "Conventions"): equirectangular, piecewise constant over
+// The environment map (docs/DESIGN.md "Conventions"): equirectangular, piecewise constant over
 // texels, u = frac(atan2(x, -z) / 2 pi), v = acos(y) / pi, row 0 at +Y. Importance sampled
 // by texel in proportion to luminance times solid angle (EnvCdf, an integer CDF built on the
 // CPU, src/sampling/distribution.rs), then uniformly in solid angle within the texel, so the

@@ -4,7 +4,8 @@
 // shifts are a random permutation of the digits, so every point stays uniform (the estimators
 // stay unbiased) and a segment of the sequence keeps its low discrepancy, while the
 // correlations between high-dimensional Halton components (IR slides: "degradation after 14
-// dimensions") are broken up. src/sampling/halton.rs mirrors it.
+// dimensions") are broken up. No CPU mirror: tests judge its points by the distributions
+// they draw (tests/env.rs, tests/lightfield.rs).
 #ifndef HALTON_GLSL
 #define HALTON_GLSL
 

@@ -1,4 +1,4 @@
-// A placed light-field luminaire (Lu 14 Section 4.3; src/scene/luminaire.rs is the model,
+// A placed light-field luminaire (Lu 14 Section 4.3; src/scene/luminaire/mod.rs is the model,
 // src/sampling/luminaire.rs the f64 mirror): its frame, the bases Phi_m, the windows of
 // Eq. 4.11 and each image's share of a point's samples (Eq. 4.14, 4.16). In the luminaire's
 // frame the filter plane U is z = 0 and the image plane S is z = delta; light leaves toward

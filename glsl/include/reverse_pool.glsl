@@ -20,7 +20,7 @@ bool pool_point(uint seed, uint pixels, uint m, out vec3 x, out vec3 n, out vec3
 // cos(theta_2) / d^2 * V(x1, x2), for x2 on a surface with geometric normal ng2 whose emitting
 // side is side2 (only pool points on that side count) and origin2 = x2 off that side: the
 // share of pool points [begin, end) in it (a shadow ray each, so kernels split the pool over
-// dispatches: README "Kernels"). With `first`, returns at the first pool point that reaches x2
+// dispatches: docs/DESIGN.md "The loop budget"). With `first`, returns at the first pool point that reaches x2
 // (a positive value, not the density).
 float pool_density(uint seed, uint pixels, uint pool, uint begin, uint end, vec3 x2, vec3 ng2,
                    vec3 side2, vec3 origin2, bool first) {

@@ -2,7 +2,7 @@
 //
 // Subgroup arithmetic first (8 lanes on lavapipe, 32 on NVIDIA, 64 on AMD wave64), then each
 // invocation adds the totals of the subgroups before its own, read from shared memory: one
-// barrier in all (DESIGN.md: barriers are what costs on lavapipe). The sums form a tree, so the
+// barrier in all (docs/DESIGN.md "gallivm runs every lane under masks": barriers are what costs on lavapipe). The sums form a tree, so the
 // rounding error grows with log2(workgroup size), not with the workgroup size.
 //
 // Requires: GL_KHR_shader_subgroup_arithmetic, a 1D workgroup of at most WORKGROUP_SUM_SLOTS
