@@ -42,7 +42,7 @@ use std::path::{Path, PathBuf};
 use glam::Vec3;
 
 use super::ply::{self, PlyTriangle};
-use crate::scene::{Light, Material, Scene};
+use crate::scene::{Environment, Light, Material, Scene};
 
 pub mod bsdf;
 pub mod envmap;
@@ -114,158 +114,21 @@ pub fn write_mitsuba(scene: &Scene, dir: &Path) -> Result<MitsubaExport, ExportE
     })?;
 
     let mut xml = Xml::default();
-    let mut files = Vec::new();
-    let mut approximations = Vec::new();
-    xml.line(r#"<?xml version="1.0" encoding="utf-8"?>"#);
-    xml.comment(&format!(
-        "Exported by irad (irad export mitsuba) from {label}. Render with an RGB variant \
-         (scalar_rgb, llvm_ad_rgb, cuda_ad_rgb). Override the defaults with -D spp=N or \
-         -D max_depth=N (Mitsuba's max_depth N is irad's N - 1 scattering events; -1: \
-         unbounded, like irad's reference at its default 1024)."
-    ));
-    xml.open("scene", &[("version", "3.0.0")]);
-    xml.leaf("default", &[("name", "spp"), ("value", "256")]);
-    xml.leaf("default", &[("name", "max_depth"), ("value", "-1")]);
-    xml.open("integrator", &[("type", "path")]);
-    xml.leaf("integer", &[("name", "max_depth"), ("value", "$max_depth")]);
-    xml.close("integrator");
+    write_header(&mut xml, &label);
     write_sensor(&mut xml, scene);
-
-    let groups = material_groups(scene);
-    let mut flat_only = Vec::new();
-    let mut smooth = Vec::new();
-    for (index, triangles) in groups.iter().enumerate() {
-        if triangles.is_empty() {
-            continue;
-        }
-        let m = &scene.materials[index];
-        let name = format!("mesh-{index:03}-{}", file_stem(&m.name));
-        let file = format!("{name}.ply");
-        let normals = choose_normals(m, triangles);
-        match normals {
-            Normals::Shading { smooth: true } => smooth.push(format!("`{}`", m.name)),
-            Normals::Face => flat_only.push(format!("`{}`", m.name)),
-            Normals::Shading { smooth: false } => {}
-        }
-        let mesh: Vec<PlyTriangle> = triangles
-            .iter()
-            .map(|t| {
-                let normals = match normals {
-                    Normals::Face => [geometric_normal(t.positions); 3],
-                    Normals::Shading { .. } => t.normals,
-                };
-                PlyTriangle {
-                    positions: t.positions,
-                    normals,
-                }
-            })
-            .collect();
-        let path = dir.join(&file);
-        let comment = format!("irad material {}", m.name);
-        ply::write(&path, &comment, &mesh).map_err(|error| ExportError::Write {
-            path: path.display().to_string(),
-            what: format!("mesh of material `{}`", m.name),
-            error,
-        })?;
-        files.push(path);
-
-        xml.comment(&format!(
-            "material `{}`: {} triangles{}",
-            m.name,
-            mesh.len(),
-            match normals {
-                Normals::Face => ", face normals (see the emitter)",
-                Normals::Shading { smooth: true } => ", irad's interpolated shading normals",
-                Normals::Shading { smooth: false } => "",
-            }
-        ));
-        xml.open("shape", &[("type", "ply"), ("id", &name)]);
-        xml.string("filename", &file);
-        if let Some(note) = write_bsdf(&mut xml, m) {
-            approximations.push(note);
-        }
-        if m.is_emissive() {
-            if matches!(normals, Normals::Face) {
-                xml.comment(
-                    "Mitsuba emits on the side of the interpolated shading normal, irad on \
-                     the geometric normal's: some corner normal here points to the other \
-                     side, so the mesh has face normals",
-                );
-            }
-            xml.open("emitter", &[("type", "area")]);
-            xml.rgb("radiance", m.ke);
-            xml.close("emitter");
-        }
-        xml.close("shape");
-    }
-    if !smooth.is_empty() {
-        let note = format!(
-            "materials {}: interpolated shading normals; irad also needs the incident and \
-             outgoing directions on one side of the geometric normal, Mitsuba checks the \
-             shading normal only (differs where the two disagree, near silhouettes)",
-            smooth.join(", ")
-        );
-        xml.comment(&note);
-        approximations.push(note);
-    }
-    if !flat_only.is_empty() {
-        let note = format!(
-            "emissive materials {}: face normals instead of irad's shading normals (some \
-             point away from the geometric normal, and Mitsuba would emit on their side)",
-            flat_only.join(", ")
-        );
-        xml.comment(&note);
-        approximations.push(note);
-    }
-
+    let Written {
+        mut files,
+        mut approximations,
+    } = write_meshes(&mut xml, scene, dir)?;
     for (k, light) in scene.lights.iter().enumerate() {
         if let Some(note) = write_light(&mut xml, k, light) {
             approximations.push(note);
         }
     }
-
     if let Some(env) = &scene.environment {
-        let file = "environment.exr";
-        let path = dir.join(file);
-        let k = environment_factor(env.width, env.height);
-        let map = resample_environment(env, k);
-        crate::image::exr::write(&path, &map).map_err(|e| ExportError::Exr {
-            path: path.display().to_string(),
-            message: format!("{e:#}"),
-        })?;
+        let (path, notes) = write_environment(&mut xml, scene, env, dir)?;
         files.push(path);
-        let note = format!(
-            "environment map {}x{}: Mitsuba interpolates bilinearly, irad is piecewise \
-             constant; written upsampled {k}x to {}x{} (each texel a block, rows on texel \
-             edges weighted so every texel keeps its power), so the radiance is irad's \
-             except within {:.4} of a texel width of its left and right edges and {:.4} of a \
-             texel height of its top and bottom edges, where it ramps linearly between the \
-             two texels",
-            env.width,
-            env.height,
-            map.width,
-            map.height,
-            0.5 / k as f64,
-            1.0 / k as f64,
-        );
-        xml.comment(&note);
-        approximations.push(note);
-        if !scene.environment_sequence.is_empty() {
-            let note = format!(
-                "the environment is a sequence of {} maps (an exr glob or a procedural sky): \
-                 Mitsuba gets frame 0 only",
-                scene.environment_sequence.len()
-            );
-            xml.comment(&note);
-            approximations.push(note);
-        }
-        xml.comment(
-            "Identity to_world: Mitsuba's (u, v) = (atan2(x, -z) / 2 pi, acos(y) / pi) is \
-             irad's. Radiance already times the scene's environment.scale.",
-        );
-        xml.open("emitter", &[("type", "envmap")]);
-        xml.string("filename", file);
-        xml.close("emitter");
+        approximations.extend(notes);
     }
     xml.close("scene");
 
@@ -280,6 +143,202 @@ pub fn write_mitsuba(scene: &Scene, dir: &Path) -> Result<MitsubaExport, ExportE
         files,
         approximations,
     })
+}
+
+/// Files a part of the export wrote and its approximation notes, in order.
+struct Written {
+    files: Vec<PathBuf>,
+    approximations: Vec<String>,
+}
+
+/// The XML declaration, the comment on how to render, and `<scene>` opened with the `spp`
+/// and `max_depth` defaults and the `path` integrator.
+fn write_header(xml: &mut Xml, label: &str) {
+    xml.line(r#"<?xml version="1.0" encoding="utf-8"?>"#);
+    xml.comment(&format!(
+        "Exported by irad (irad export mitsuba) from {label}. Render with an RGB variant \
+         (scalar_rgb, llvm_ad_rgb, cuda_ad_rgb). Override the defaults with -D spp=N or \
+         -D max_depth=N (Mitsuba's max_depth N is irad's N - 1 scattering events; -1: \
+         unbounded, like irad's reference at its default 1024)."
+    ));
+    xml.open("scene", &[("version", "3.0.0")]);
+    xml.leaf("default", &[("name", "spp"), ("value", "256")]);
+    xml.leaf("default", &[("name", "max_depth"), ("value", "-1")]);
+    xml.open("integrator", &[("type", "path")]);
+    xml.leaf("integer", &[("name", "max_depth"), ("value", "$max_depth")]);
+    xml.close("integrator");
+}
+
+/// One PLY mesh and `<shape>` per material with triangles, in material order; the notes of
+/// their BSDFs, then those on their normals.
+fn write_meshes(xml: &mut Xml, scene: &Scene, dir: &Path) -> Result<Written, ExportError> {
+    let mut files = Vec::new();
+    let mut approximations = Vec::new();
+    let mut flat_only = Vec::new();
+    let mut smooth = Vec::new();
+    for (index, triangles) in material_groups(scene).iter().enumerate() {
+        if triangles.is_empty() {
+            continue;
+        }
+        let m = &scene.materials[index];
+        let normals = choose_normals(m, triangles);
+        match normals {
+            Normals::Shading { smooth: true } => smooth.push(format!("`{}`", m.name)),
+            Normals::Face => flat_only.push(format!("`{}`", m.name)),
+            Normals::Shading { smooth: false } => {}
+        }
+        let (path, note) = write_mesh(xml, dir, index, m, triangles, normals)?;
+        files.push(path);
+        approximations.extend(note);
+    }
+    for note in normals_notes(&smooth, &flat_only) {
+        xml.comment(&note);
+        approximations.push(note);
+    }
+    Ok(Written {
+        files,
+        approximations,
+    })
+}
+
+/// Material `index`'s triangles as `DIR/mesh-NNN-name.ply` with `normals`, and its
+/// `<shape>` with its BSDF and, when emissive, its area emitter. Returns the PLY's path and
+/// the BSDF's approximation note.
+fn write_mesh(
+    xml: &mut Xml,
+    dir: &Path,
+    index: usize,
+    m: &Material,
+    triangles: &[&crate::scene::Triangle],
+    normals: Normals,
+) -> Result<(PathBuf, Option<String>), ExportError> {
+    let name = format!("mesh-{index:03}-{}", file_stem(&m.name));
+    let file = format!("{name}.ply");
+    let mesh = ply_triangles(triangles, normals);
+    let path = dir.join(&file);
+    let comment = format!("irad material {}", m.name);
+    ply::write(&path, &comment, &mesh).map_err(|error| ExportError::Write {
+        path: path.display().to_string(),
+        what: format!("mesh of material `{}`", m.name),
+        error,
+    })?;
+
+    xml.comment(&format!(
+        "material `{}`: {} triangles{}",
+        m.name,
+        mesh.len(),
+        match normals {
+            Normals::Face => ", face normals (see the emitter)",
+            Normals::Shading { smooth: true } => ", irad's interpolated shading normals",
+            Normals::Shading { smooth: false } => "",
+        }
+    ));
+    xml.open("shape", &[("type", "ply"), ("id", &name)]);
+    xml.string("filename", &file);
+    let note = write_bsdf(xml, m);
+    if m.is_emissive() {
+        if matches!(normals, Normals::Face) {
+            xml.comment(
+                "Mitsuba emits on the side of the interpolated shading normal, irad on \
+                 the geometric normal's: some corner normal here points to the other \
+                 side, so the mesh has face normals",
+            );
+        }
+        xml.open("emitter", &[("type", "area")]);
+        xml.rgb("radiance", m.ke);
+        xml.close("emitter");
+    }
+    xml.close("shape");
+    Ok((path, note))
+}
+
+/// The triangles with the corner normals `normals` chose.
+fn ply_triangles(triangles: &[&crate::scene::Triangle], normals: Normals) -> Vec<PlyTriangle> {
+    triangles
+        .iter()
+        .map(|t| {
+            let normals = match normals {
+                Normals::Face => [geometric_normal(t.positions); 3],
+                Normals::Shading { .. } => t.normals,
+            };
+            PlyTriangle {
+                positions: t.positions,
+                normals,
+            }
+        })
+        .collect()
+}
+
+/// The approximation notes on normals: the materials with interpolated shading normals,
+/// then the emissive ones given face normals (none for an empty list).
+fn normals_notes(smooth: &[String], flat_only: &[String]) -> Vec<String> {
+    let mut notes = Vec::new();
+    if !smooth.is_empty() {
+        notes.push(format!(
+            "materials {}: interpolated shading normals; irad also needs the incident and \
+             outgoing directions on one side of the geometric normal, Mitsuba checks the \
+             shading normal only (differs where the two disagree, near silhouettes)",
+            smooth.join(", ")
+        ));
+    }
+    if !flat_only.is_empty() {
+        notes.push(format!(
+            "emissive materials {}: face normals instead of irad's shading normals (some \
+             point away from the geometric normal, and Mitsuba would emit on their side)",
+            flat_only.join(", ")
+        ));
+    }
+    notes
+}
+
+/// The environment map upsampled (envmap.rs) as `DIR/environment.exr`, and its `envmap`
+/// emitter. Returns the EXR's path and the notes: the upsampling, and a sequence's frame 0.
+fn write_environment(
+    xml: &mut Xml,
+    scene: &Scene,
+    env: &Environment,
+    dir: &Path,
+) -> Result<(PathBuf, Vec<String>), ExportError> {
+    let file = "environment.exr";
+    let path = dir.join(file);
+    let k = environment_factor(env.width, env.height);
+    let map = resample_environment(env, k);
+    crate::image::exr::write(&path, &map).map_err(|e| ExportError::Exr {
+        path: path.display().to_string(),
+        message: format!("{e:#}"),
+    })?;
+    let mut notes = vec![format!(
+        "environment map {}x{}: Mitsuba interpolates bilinearly, irad is piecewise \
+         constant; written upsampled {k}x to {}x{} (each texel a block, rows on texel \
+         edges weighted so every texel keeps its power), so the radiance is irad's \
+         except within {:.4} of a texel width of its left and right edges and {:.4} of a \
+         texel height of its top and bottom edges, where it ramps linearly between the \
+         two texels",
+        env.width,
+        env.height,
+        map.width,
+        map.height,
+        0.5 / k as f64,
+        1.0 / k as f64,
+    )];
+    if !scene.environment_sequence.is_empty() {
+        notes.push(format!(
+            "the environment is a sequence of {} maps (an exr glob or a procedural sky): \
+             Mitsuba gets frame 0 only",
+            scene.environment_sequence.len()
+        ));
+    }
+    for note in &notes {
+        xml.comment(note);
+    }
+    xml.comment(
+        "Identity to_world: Mitsuba's (u, v) = (atan2(x, -z) / 2 pi, acos(y) / pi) is \
+         irad's. Radiance already times the scene's environment.scale.",
+    );
+    xml.open("emitter", &[("type", "envmap")]);
+    xml.string("filename", file);
+    xml.close("emitter");
+    Ok((path, notes))
 }
 
 /// Refuses values Mitsuba cannot parse (non-finite) and material indices out of range: a

@@ -256,7 +256,249 @@ fn light_power(light: &Light) -> f64 {
     }
 }
 
+/// A light's entry before selection: (kind, index, power), kind one of LIGHT_*.
+type LightPower = (u32, u32, f64);
+
+/// Shading data per triangle and the emissive triangles, in the BVH's triangle order.
+struct TriangleData {
+    shading: Vec<ShadingTriangle>,
+    emitters: Vec<EmitterTriangle>,
+    /// Each emitter's index in `shading`.
+    emitter_gpu_index: Vec<usize>,
+    /// Each emitter's power: (LIGHT_TRIANGLE, its index in `emitters`, power).
+    powers: Vec<LightPower>,
+}
+
+/// The environment as uploaded: the live texels and CDF (a one-element placeholder without
+/// a map, frame 0's for a sequence), a sequence's frames, SceneConstants.env_size and the
+/// power for light selection (none for a black map).
+struct EnvironmentData {
+    texels: Vec<Vec4>,
+    cdf: Vec<u32>,
+    frames: Option<EnvironmentFrames>,
+    size: [u32; 4],
+    power: Option<f64>,
+}
+
+/// The light table over `powers`, in their order (those not positive and finite dropped):
+/// each entry's realised probability and range of random integers.
+fn selection_table(mut powers: Vec<LightPower>) -> LightTable {
+    powers.retain(|p| p.2 > 0.0 && p.2.is_finite());
+    let mut entries = Vec::new();
+    let mut environment_probability = 0.0;
+    if let Some(d) = Distribution1D::new(&powers.iter().map(|p| p.2).collect::<Vec<_>>()) {
+        for (i, &(kind, index, _)) in powers.iter().enumerate() {
+            let probability = d.probabilities[i];
+            entries.push(LightEntry {
+                kind,
+                index,
+                probability: probability as f32,
+                upper: d.upper[i],
+            });
+            if kind == LIGHT_ENVIRONMENT {
+                environment_probability = probability;
+            }
+        }
+    }
+    LightTable {
+        entries,
+        environment_probability,
+    }
+}
+
+/// Shading data and emitters, in the BVH's triangle order. ShadingTriangle.n1.w (the
+/// emitter's selection probability) is left 0: `with_emitter_probabilities` sets it.
+fn shading_triangles(scene: &Scene, bvh: &Bvh) -> TriangleData {
+    let mut shading = Vec::with_capacity(scene.triangles.len());
+    let mut emitters = Vec::new();
+    let mut emitter_gpu_index = Vec::new();
+    let mut powers = Vec::new();
+    for (gpu_index, &original) in bvh.triangle_order.iter().enumerate() {
+        let t = &scene.triangles[original as usize];
+        let [p0, p1, p2] = t.positions;
+        let cross = (p1 - p0).cross(p2 - p0);
+        let area = 0.5 * cross.length();
+        let ng = cross.normalize_or_zero();
+        let material = t.material;
+        shading.push(ShadingTriangle {
+            n0: t.normals[0].extend(f32::from_bits(material)),
+            n1: t.normals[1].extend(0.0),
+            n2: t.normals[2].extend(area),
+            geometric_normal: ng.extend(0.0),
+        });
+        let m = &scene.materials[material as usize];
+        let power = PI * area as f64 * luminance(m.ke);
+        if m.is_emissive() && power > 0.0 {
+            powers.push((LIGHT_TRIANGLE, emitters.len() as u32, power));
+            emitter_gpu_index.push(gpu_index);
+            emitters.push(EmitterTriangle {
+                p0: p0.extend(0.0),
+                e1: (p1 - p0).extend(0.0),
+                e2: (p2 - p0).extend(area),
+                normal: ng.extend(f32::from_bits(material)),
+            });
+        }
+    }
+    TriangleData {
+        shading,
+        emitters,
+        emitter_gpu_index,
+        powers,
+    }
+}
+
+/// `shading` with each emissive triangle's selection probability (the light table's) in n1.w.
+fn with_emitter_probabilities(
+    mut shading: Vec<ShadingTriangle>,
+    emitter_gpu_index: &[usize],
+    table: &LightTable,
+) -> Vec<ShadingTriangle> {
+    for entry in &table.entries {
+        if entry.kind == LIGHT_TRIANGLE {
+            shading[emitter_gpu_index[entry.index as usize]].n1.w = entry.probability;
+        }
+    }
+    shading
+}
+
+/// The point and spot lights, and their powers, in the scene's order.
+fn analytic_lights(scene: &Scene) -> (Vec<GpuLight>, Vec<LightPower>) {
+    let mut lights = Vec::new();
+    let mut powers = Vec::new();
+    for (i, light) in scene.lights.iter().enumerate() {
+        let power = light_power(light);
+        let gpu = match light {
+            Light::Point {
+                position,
+                intensity,
+            } => {
+                powers.push((LIGHT_POINT, i as u32, power));
+                GpuLight {
+                    position: position.extend(LIGHT_POINT as f32),
+                    intensity: intensity.extend(0.0),
+                    direction: Vec4::ZERO,
+                    cone: Vec4::ZERO,
+                }
+            }
+            Light::Spot {
+                position,
+                intensity,
+                direction,
+                cone_angle,
+                falloff_angle,
+            } => {
+                powers.push((LIGHT_SPOT, i as u32, power));
+                let (cos_cone, cos_falloff) = spot_cosines(*cone_angle, *falloff_angle);
+                GpuLight {
+                    position: position.extend(LIGHT_SPOT as f32),
+                    intensity: intensity.extend(0.0),
+                    direction: direction.normalize().extend(cos_falloff),
+                    cone: Vec4::new(cos_cone, 0.0, 0.0, 0.0),
+                }
+            }
+        };
+        lights.push(gpu);
+    }
+    (lights, powers)
+}
+
+/// The environment: texels, their CDF, and its power for light selection (pi r^2 times the
+/// sampling weights' total, r the scene radius). Texel .w is the solid-angle pdf of
+/// env_sample there: realised probability / solid angle. Uploads a sequence's frames.
+fn environment_buffers(ctx: &Context, scene: &Scene, radius: f32) -> GpuResult<EnvironmentData> {
+    let mut data = EnvironmentData {
+        texels: vec![Vec4::ZERO],
+        cdf: vec![1u32 << 31],
+        frames: None,
+        size: [0u32; 4],
+        power: None,
+    };
+    let Some(env) = &scene.environment else {
+        return Ok(data);
+    };
+    data.size = [env.width, env.height, 1, 0];
+    if scene.environment_sequence.is_empty() {
+        let (mut texels, cdf, total) = environment_tables(env);
+        if total == 0.0 {
+            // A black still map is no light: nothing samples it.
+            texels.iter_mut().for_each(|t| t.w = 0.0);
+        }
+        data.texels = texels;
+        if total > 0.0 {
+            data.cdf = cdf;
+            data.power = Some(PI * (radius as f64).powi(2) * total);
+        }
+    } else {
+        // A sequence: every frame's tables, one after another; frame 0's are live
+        // until record_environment_frame copies another's over them. Light selection
+        // weighs the map by its mean power over the frames.
+        let (mut texels, mut cdfs, mut power) = (vec![], vec![], 0.0);
+        for map in &scene.environment_sequence {
+            let (t, c, total) = environment_tables(map);
+            texels.extend(t);
+            cdfs.extend(c);
+            power += total / scene.environment_sequence.len() as f64;
+        }
+        let texel_count = (env.width * env.height) as usize;
+        data.texels = texels[..texel_count].to_vec();
+        data.cdf = cdfs[..texel_count].to_vec();
+        if power > 0.0 {
+            data.power = Some(PI * (radius as f64).powi(2) * power);
+        }
+        data.frames = Some(EnvironmentFrames {
+            count: scene.environment_sequence.len() as u32,
+            texels: Buffer::from_slice(ctx, "environment frames' texels", &texels)?,
+            cdf: Buffer::from_slice(ctx, "environment frames' CDFs", &cdfs)?,
+        });
+    }
+    Ok(data)
+}
+
+/// Each material as bsdf.glsl reads it: Kd with the Phong lobe's probability, Ks with Ns,
+/// Ke with 1 when emissive.
+fn gpu_materials(scene: &Scene) -> Vec<GpuMaterial> {
+    scene
+        .materials
+        .iter()
+        .map(|m| GpuMaterial {
+            kd: m.kd.extend(phong_probability(m)),
+            ks: m.ks.extend(m.ns),
+            ke: m.ke.extend(if m.is_emissive() { 1.0 } else { 0.0 }),
+        })
+        .collect()
+}
+
+/// SceneConstants: the camera, the frame size, the light table's and the triangles' counts,
+/// the environment's size and selection probability, and the scene's bounding sphere.
+fn scene_constants(
+    scene: &Scene,
+    table: &LightTable,
+    triangle_count: usize,
+    env_size: [u32; 4],
+    (centre, radius): (Vec3, f32),
+) -> SceneConstants {
+    let cam = &scene.camera;
+    let (forward, right, up) = cam.basis();
+    SceneConstants {
+        camera_position: cam.position.extend((cam.fov_y.to_radians() * 0.5).tan()),
+        camera_forward: forward.extend(cam.width as f32 / cam.height as f32),
+        camera_right: right.extend(0.0),
+        camera_up: up.extend(0.0),
+        size: [
+            cam.width,
+            cam.height,
+            table.entries.len() as u32,
+            triangle_count as u32,
+        ],
+        env_size,
+        env: Vec4::new(table.environment_probability as f32, 0.0, 0.0, 0.0),
+        bounds: centre.extend(radius),
+    }
+}
+
 impl GpuScene {
+    /// Builds the BVH and uploads the scene; DoesNotFit when the image or the environment
+    /// maps would exceed the device's maxStorageBufferRange (methods/device_fit.rs).
     pub fn upload(ctx: &Context, scene: &Scene) -> GpuResult<GpuScene> {
         crate::methods::device_fit::check_scene(scene, ctx.info().max_storage_buffer_range)
             .map_err(GpuError::DoesNotFit)?;
@@ -264,168 +506,32 @@ impl GpuScene {
         let bvh = Bvh::build(&positions);
         let (centre, radius) = bounds(scene);
 
-        // Shading data and emitters, in the BVH's triangle order.
-        let mut shading = Vec::with_capacity(scene.triangles.len());
-        let mut emitters = Vec::new();
-        let mut emitter_gpu_index = Vec::new();
-        let mut powers: Vec<(u32, u32, f64)> = Vec::new(); // (kind, index, power)
-        for (gpu_index, &original) in bvh.triangle_order.iter().enumerate() {
-            let t = &scene.triangles[original as usize];
-            let [p0, p1, p2] = t.positions;
-            let cross = (p1 - p0).cross(p2 - p0);
-            let area = 0.5 * cross.length();
-            let ng = cross.normalize_or_zero();
-            let material = t.material;
-            shading.push(ShadingTriangle {
-                n0: t.normals[0].extend(f32::from_bits(material)),
-                n1: t.normals[1].extend(0.0),
-                n2: t.normals[2].extend(area),
-                geometric_normal: ng.extend(0.0),
-            });
-            let m = &scene.materials[material as usize];
-            let power = PI * area as f64 * luminance(m.ke);
-            if m.is_emissive() && power > 0.0 {
-                powers.push((LIGHT_TRIANGLE, emitters.len() as u32, power));
-                emitter_gpu_index.push(gpu_index);
-                emitters.push(EmitterTriangle {
-                    p0: p0.extend(0.0),
-                    e1: (p1 - p0).extend(0.0),
-                    e2: (p2 - p0).extend(area),
-                    normal: ng.extend(f32::from_bits(material)),
-                });
-            }
-        }
-
-        let mut lights = Vec::new();
-        for (i, light) in scene.lights.iter().enumerate() {
-            let power = light_power(light);
-            let gpu = match light {
-                Light::Point {
-                    position,
-                    intensity,
-                } => {
-                    powers.push((LIGHT_POINT, i as u32, power));
-                    GpuLight {
-                        position: position.extend(LIGHT_POINT as f32),
-                        intensity: intensity.extend(0.0),
-                        direction: Vec4::ZERO,
-                        cone: Vec4::ZERO,
-                    }
-                }
-                Light::Spot {
-                    position,
-                    intensity,
-                    direction,
-                    cone_angle,
-                    falloff_angle,
-                } => {
-                    powers.push((LIGHT_SPOT, i as u32, power));
-                    let (cos_cone, cos_falloff) = spot_cosines(*cone_angle, *falloff_angle);
-                    GpuLight {
-                        position: position.extend(LIGHT_SPOT as f32),
-                        intensity: intensity.extend(0.0),
-                        direction: direction.normalize().extend(cos_falloff),
-                        cone: Vec4::new(cos_cone, 0.0, 0.0, 0.0),
-                    }
-                }
-            };
-            lights.push(gpu);
-        }
-
-        // The environment: texels, their CDF, and its power for light selection.
-        // Texel .w is the solid-angle pdf of env_sample there: realised probability / solid angle.
-        let mut env_texels = vec![Vec4::ZERO];
-        let mut env_cdf = vec![1u32 << 31];
-        let mut env_size = [0u32; 4];
-        let mut env_frames = None;
-        if let Some(env) = &scene.environment {
-            env_size = [env.width, env.height, 1, 0];
-            if scene.environment_sequence.is_empty() {
-                let (mut texels, cdf, total) = environment_tables(env);
-                if total == 0.0 {
-                    // A black still map is no light: nothing samples it.
-                    texels.iter_mut().for_each(|t| t.w = 0.0);
-                }
-                env_texels = texels;
-                if total > 0.0 {
-                    env_cdf = cdf;
-                    powers.push((LIGHT_ENVIRONMENT, 0, PI * (radius as f64).powi(2) * total));
-                }
-            } else {
-                // A sequence: every frame's tables, one after another; frame 0's are live
-                // until record_environment_frame copies another's over them. Light selection
-                // weighs the map by its mean power over the frames.
-                let (mut texels, mut cdfs, mut power) = (vec![], vec![], 0.0);
-                for map in &scene.environment_sequence {
-                    let (t, c, total) = environment_tables(map);
-                    texels.extend(t);
-                    cdfs.extend(c);
-                    power += total / scene.environment_sequence.len() as f64;
-                }
-                let texel_count = (env.width * env.height) as usize;
-                env_texels = texels[..texel_count].to_vec();
-                env_cdf = cdfs[..texel_count].to_vec();
-                if power > 0.0 {
-                    powers.push((LIGHT_ENVIRONMENT, 0, PI * (radius as f64).powi(2) * power));
-                }
-                env_frames = Some(EnvironmentFrames {
-                    count: scene.environment_sequence.len() as u32,
-                    texels: Buffer::from_slice(ctx, "environment frames' texels", &texels)?,
-                    cdf: Buffer::from_slice(ctx, "environment frames' CDFs", &cdfs)?,
-                });
-            }
-        }
-
-        powers.retain(|p| p.2 > 0.0 && p.2.is_finite());
-        let mut entries = Vec::new();
-        let mut environment_probability = 0.0;
-        if let Some(d) = Distribution1D::new(&powers.iter().map(|p| p.2).collect::<Vec<_>>()) {
-            for (i, &(kind, index, _)) in powers.iter().enumerate() {
-                let probability = d.probabilities[i];
-                entries.push(LightEntry {
-                    kind,
-                    index,
-                    probability: probability as f32,
-                    upper: d.upper[i],
-                });
-                match kind {
-                    LIGHT_TRIANGLE => {
-                        shading[emitter_gpu_index[index as usize]].n1.w = probability as f32
-                    }
-                    LIGHT_ENVIRONMENT => environment_probability = probability,
-                    _ => {}
-                }
-            }
-        }
-
-        let materials: Vec<GpuMaterial> = scene
-            .materials
-            .iter()
-            .map(|m| GpuMaterial {
-                kd: m.kd.extend(phong_probability(m)),
-                ks: m.ks.extend(m.ns),
-                ke: m.ke.extend(if m.is_emissive() { 1.0 } else { 0.0 }),
-            })
+        let triangles = shading_triangles(scene, &bvh);
+        let (lights, light_powers) = analytic_lights(scene);
+        let env = environment_buffers(ctx, scene, radius)?;
+        // Selection order: emissive triangles, point and spot lights, the environment.
+        let powers = triangles
+            .powers
+            .into_iter()
+            .chain(light_powers)
+            .chain(env.power.map(|power| (LIGHT_ENVIRONMENT, 0, power)))
             .collect();
+        let light_table = selection_table(powers);
+        let shading = with_emitter_probabilities(
+            triangles.shading,
+            &triangles.emitter_gpu_index,
+            &light_table,
+        );
+        let materials = gpu_materials(scene);
+        let constants = scene_constants(
+            scene,
+            &light_table,
+            shading.len(),
+            env.size,
+            (centre, radius),
+        );
 
         let cam = &scene.camera;
-        let (forward, right, up) = cam.basis();
-        let constants = SceneConstants {
-            camera_position: cam.position.extend((cam.fov_y.to_radians() * 0.5).tan()),
-            camera_forward: forward.extend(cam.width as f32 / cam.height as f32),
-            camera_right: right.extend(0.0),
-            camera_up: up.extend(0.0),
-            size: [
-                cam.width,
-                cam.height,
-                entries.len() as u32,
-                shading.len() as u32,
-            ],
-            env_size,
-            env: Vec4::new(environment_probability as f32, 0.0, 0.0, 0.0),
-            bounds: centre.extend(radius),
-        };
-
         Ok(GpuScene {
             bvh: GpuBvh::upload(ctx, &bvh)?,
             shading_triangles: Buffer::from_slice(ctx, "ShadingTriangles", &shading)?,
@@ -434,27 +540,24 @@ impl GpuScene {
             light_entries: Buffer::from_slice(
                 ctx,
                 "LightEntries",
-                &or_placeholder(entries.clone(), LightEntry::zeroed()),
+                &or_placeholder(light_table.entries.clone(), LightEntry::zeroed()),
             )?,
             emitter_triangles: Buffer::from_slice(
                 ctx,
                 "EmitterTriangles",
-                &or_placeholder(emitters, EmitterTriangle::zeroed()),
+                &or_placeholder(triangles.emitters, EmitterTriangle::zeroed()),
             )?,
-            env_texels: Buffer::from_slice(ctx, "EnvTexels", &env_texels)?,
-            env_cdf: Buffer::from_slice(ctx, "EnvCdf", &env_cdf)?,
-            env_frames,
+            env_texels: Buffer::from_slice(ctx, "EnvTexels", &env.texels)?,
+            env_cdf: Buffer::from_slice(ctx, "EnvCdf", &env.cdf)?,
+            env_frames: env.frames,
             constants: Buffer::from_slice(ctx, "SceneParams", &[constants])?,
-            light_table: LightTable {
-                entries,
-                environment_probability,
-            },
-            environment_size: (env_size[2] != 0).then_some([env_size[0], env_size[1]]),
+            light_table,
+            environment_size: (env.size[2] != 0).then_some([env.size[0], env.size[1]]),
             width: cam.width,
             height: cam.height,
             triangle_count: scene.triangles.len(),
             features: SceneFeatures {
-                environment: env_size[2] != 0,
+                environment: env.size[2] != 0,
                 delta_lights: !scene.lights.is_empty(),
                 glossy: scene.materials.iter().any(|m| m.ks.max_element() > 0.0),
             },
