@@ -167,24 +167,7 @@ fn parse_case(s: &str) -> Result<scan_bench::ScanCase, String> {
 /// Runs one benchmark.
 pub fn run(options: &ContextOptions, bench: Bench) -> Result<()> {
     match bench {
-        Bench::Scan { repeats, sizes } => {
-            let ctx = Context::new(options)?;
-            let cases = if sizes.is_empty() {
-                scan_bench::DEFAULT_CASES.to_vec()
-            } else {
-                sizes
-            };
-            let bar = progress(cases.len() as u64, "bench scan");
-            let mut results = Vec::new();
-            for case in cases {
-                bar.set_message(format!("{} x {}", case.row_length, case.row_count));
-                results.push(scan_bench::run_case(&ctx, case, 3, repeats.max(1))?);
-                bar.inc(1);
-            }
-            bar.finish_and_clear();
-            scan_bench::print_table(&device_line(ctx.info()), &results);
-            Ok(())
-        }
+        Bench::Scan { repeats, sizes } => run_scan(options, repeats, sizes),
         Bench::Env {
             scene,
             map,
@@ -196,69 +179,8 @@ pub fn run(options: &ContextOptions, bench: Bench) -> Result<()> {
             resolution,
             frames,
         } => {
-            let path = scene.unwrap_or_else(|| {
-                PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes/glossy-env/scene.toml")
-            });
-            let mut scene = scene::load(&path)?;
-            if let Some((w, h)) = map {
-                scene.environment = Some(irad::bench::env::synthetic_sky(w, h));
-            }
-            anyhow::ensure!(
-                faces.iter().all(|&r| (1..=4096).contains(&r)),
-                "--faces: each resolution must be in 1..=4096"
-            );
-            let ctx = Context::new(options)?;
-            let bar = progress(faces.len() as u64, "bench env");
-            let results = irad::bench::env::run(
-                &ctx,
-                &scene,
-                &faces,
-                samples.max(1),
-                2,
-                repeats.max(1),
-                |r| {
-                    bar.set_message(format!("R = {r}"));
-                    bar.inc(1);
-                },
-            )?;
-            bar.finish_and_clear();
-            let map = scene.environment.as_ref().expect("checked by run");
-            irad::bench::env::print_table(&device_line(ctx.info()), map, samples.max(1), &results);
-            let spp: Vec<u32> = spp.into_iter().filter(|&n| n > 0).collect();
-            if spp.is_empty() {
-                return Ok(());
-            }
-            let strategies =
-                strategies_by_name(&strategies, &EnvStrategy::ALL, |s| s.name(), "env")?;
-            if let Some((w, h)) = resolution {
-                scene.camera.width = w;
-                scene.camera.height = h;
-            }
-            let bar = progress(
-                (strategies.len() * spp.len() * 2) as u64,
-                "bench env shading",
-            );
-            let face_resolution = 256;
-            let shading = irad::bench::env::run_shading(
-                &ctx,
-                &scene,
-                &strategies,
-                &spp,
-                face_resolution,
-                frames,
-                |s, n, shadows| {
-                    bar.set_message(format!(
-                        "{} N_s {n}{}",
-                        s.name(),
-                        if shadows { "" } else { " no shadows" }
-                    ));
-                    bar.inc(1);
-                },
-            )?;
-            bar.finish_and_clear();
-            println!();
-            irad::bench::env::print_shading(&device_line(ctx.info()), &scene, &shading);
-            Ok(())
+            let (ctx, scene) = run_env_tables(options, scene, map, &faces, samples, repeats)?;
+            run_env_shading(&ctx, scene, spp, &strategies, resolution, frames)
         }
         Bench::Ir {
             scene,
@@ -266,28 +188,7 @@ pub fn run(options: &ContextOptions, bench: Bench) -> Result<()> {
             frames,
             interleave,
             rays,
-        } => {
-            let scene = match scene {
-                Some(path) => scene::load(&path)?,
-                None => scene::default_scene(),
-            };
-            let ctx = Context::new(options)?;
-            let bar = progress(vpls.len() as u64 + 2, "bench ir");
-            let report =
-                irad::bench::ir::run(&ctx, &scene, &vpls, frames, interleave, rays, |what| {
-                    bar.set_message(what.to_string());
-                    bar.inc(1);
-                })?;
-            bar.finish_and_clear();
-            irad::bench::ir::print_table(
-                &device_line(ctx.info()),
-                &render::scene_label(&scene),
-                scene.camera.width,
-                scene.camera.height,
-                &report,
-            );
-            Ok(())
-        }
+        } => run_ir(options, scene, &vpls, frames, interleave, rays),
         Bench::Lightfield {
             scene,
             spp,
@@ -297,106 +198,275 @@ pub fn run(options: &ContextOptions, bench: Bench) -> Result<()> {
             frames,
             repeats,
         } => {
-            let path = scene.unwrap_or_else(|| {
-                PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes/car-headlights/scene.toml")
-            });
-            let mut scene = scene::load(&path)?;
-            if let Some((w, h)) = resolution {
-                scene.camera.width = w;
-                scene.camera.height = h;
-            }
-            anyhow::ensure!(
-                !spp.is_empty() && spp.iter().all(|&k| (1..=65536).contains(&k)),
-                "--spp: each K must be in 1..=65536"
-            );
-            let strategies = strategies_by_name(
-                &strategies,
-                &LightfieldStrategy::ALL,
-                |s| s.name(),
-                "lightfield",
-            )?;
-            let ctx = Context::new(options)?;
-            let bar = progress((strategies.len() * spp.len()) as u64, "bench lightfield");
-            let results = irad::bench::lightfield::run(
-                &ctx,
-                &scene,
-                &strategies,
-                &spp,
-                k_max,
-                frames,
-                repeats as usize,
-                |s, k| {
-                    bar.set_message(format!("{} K {k}", s.name()));
-                    bar.inc(1);
-                },
-            )?;
-            bar.finish_and_clear();
-            irad::bench::lightfield::print(
-                &device_line(ctx.info()),
-                &scene,
-                k_max,
-                frames,
-                &results,
-            );
-            Ok(())
+            let scene = lightfield_scene(scene, resolution)?;
+            run_lightfield(options, &scene, &spp, &strategies, k_max, frames, repeats)
         }
         Bench::Suite(args) => super::suite::run(options, args),
         Bench::Merge {
             parts,
             out,
             allow_mixed_devices,
-        } => {
-            let merged = irad::bench::suite::merge::merge(&parts, &out, allow_mixed_devices)?;
-            println!(
-                "merged {} parts: {} of {} runs of suite {}{}",
-                parts.len(),
-                merged.runs.len(),
-                merged.runs_in_suite,
-                merged.suite,
-                if merged.complete {
-                    ""
-                } else {
-                    " (incomplete: some runs are missing)"
-                }
-            );
-            println!("wrote {}", out.join("report.md").display());
-            Ok(())
-        }
+        } => run_merge(&parts, &out, allow_mixed_devices),
         Bench::Rays {
             scene,
             repeats,
             rays,
-        } => {
-            use irad::bvh::procedural;
-            // A scene's own camera at 1024x768, or a camera framing the procedural mesh.
-            let (triangles, camera) = match scene {
-                Some(path) => {
-                    let scene = scene::load(&path)?;
-                    let triangles: Vec<_> = scene.triangles.iter().map(|t| t.positions).collect();
-                    let camera = irad::scene::Camera {
-                        width: 1024,
-                        height: 768,
-                        ..scene.camera
-                    };
-                    (triangles, camera)
-                }
-                None => {
-                    let triangles = procedural::noisy_sphere(1, 128, 1024);
-                    let camera =
-                        procedural::camera_for_bounds(procedural::bounds(&triangles), 1024, 768);
-                    (triangles, camera)
-                }
-            };
-            let bounds = procedural::bounds(&triangles);
-            let ctx = Context::new(options)?;
-            let camera_rays = procedural::camera_rays(&camera);
-            let random_rays = procedural::random_rays(2, bounds, rays);
-            let report =
-                irad::bench::rays::run(&ctx, &triangles, &camera_rays, &random_rays, repeats)?;
-            irad::bench::rays::print_table(&device_line(ctx.info()), &report);
-            Ok(())
-        }
+        } => run_rays(options, scene, repeats, rays),
     }
+}
+
+/// `bench scan`: times each size (the defaults when none is given) and prints the table.
+fn run_scan(
+    options: &ContextOptions,
+    repeats: usize,
+    sizes: Vec<scan_bench::ScanCase>,
+) -> Result<()> {
+    let ctx = Context::new(options)?;
+    let cases = if sizes.is_empty() {
+        scan_bench::DEFAULT_CASES.to_vec()
+    } else {
+        sizes
+    };
+    let bar = progress(cases.len() as u64, "bench scan");
+    let mut results = Vec::new();
+    for case in cases {
+        bar.set_message(format!("{} x {}", case.row_length, case.row_count));
+        results.push(scan_bench::run_case(&ctx, case, 3, repeats.max(1))?);
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    scan_bench::print_table(&device_line(ctx.info()), &results);
+    Ok(())
+}
+
+/// `bench env`, first step: loads the scene (with `--map`'s synthetic sky), times the
+/// sampling table at each face resolution and prints it; returns the context and the scene
+/// for the shading table.
+fn run_env_tables(
+    options: &ContextOptions,
+    scene: Option<PathBuf>,
+    map: Option<(u32, u32)>,
+    faces: &[u32],
+    samples: u32,
+    repeats: usize,
+) -> Result<(Context, scene::Scene)> {
+    let path = scene.unwrap_or_else(|| {
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes/glossy-env/scene.toml")
+    });
+    let mut scene = scene::load(&path)?;
+    if let Some((w, h)) = map {
+        scene.environment = Some(irad::bench::env::synthetic_sky(w, h));
+    }
+    anyhow::ensure!(
+        faces.iter().all(|&r| (1..=4096).contains(&r)),
+        "--faces: each resolution must be in 1..=4096"
+    );
+    let ctx = Context::new(options)?;
+    let bar = progress(faces.len() as u64, "bench env");
+    let results = irad::bench::env::run(
+        &ctx,
+        &scene,
+        faces,
+        samples.max(1),
+        2,
+        repeats.max(1),
+        |r| {
+            bar.set_message(format!("R = {r}"));
+            bar.inc(1);
+        },
+    )?;
+    bar.finish_and_clear();
+    let map = scene.environment.as_ref().expect("checked by run");
+    irad::bench::env::print_table(&device_line(ctx.info()), map, samples.max(1), &results);
+    Ok((ctx, scene))
+}
+
+/// `bench env`, second step: the shading table, env's frame time per strategy and N_s with
+/// and without shadow rays (nothing when every `--spp` is 0).
+fn run_env_shading(
+    ctx: &Context,
+    mut scene: scene::Scene,
+    spp: Vec<u32>,
+    strategies: &[String],
+    resolution: Option<(u32, u32)>,
+    frames: u32,
+) -> Result<()> {
+    let spp: Vec<u32> = spp.into_iter().filter(|&n| n > 0).collect();
+    if spp.is_empty() {
+        return Ok(());
+    }
+    let strategies = strategies_by_name(strategies, &EnvStrategy::ALL, |s| s.name(), "env")?;
+    if let Some((w, h)) = resolution {
+        scene.camera.width = w;
+        scene.camera.height = h;
+    }
+    let bar = progress(
+        (strategies.len() * spp.len() * 2) as u64,
+        "bench env shading",
+    );
+    let face_resolution = 256;
+    let shading = irad::bench::env::run_shading(
+        ctx,
+        &scene,
+        &strategies,
+        &spp,
+        face_resolution,
+        frames,
+        |s, n, shadows| {
+            bar.set_message(format!(
+                "{} N_s {n}{}",
+                s.name(),
+                if shadows { "" } else { " no shadows" }
+            ));
+            bar.inc(1);
+        },
+    )?;
+    bar.finish_and_clear();
+    println!();
+    irad::bench::env::print_shading(&device_line(ctx.info()), &scene, &shading);
+    Ok(())
+}
+
+/// `bench ir`: instant radiosity's per-pass times per VPL budget and the any-hit ray rate.
+fn run_ir(
+    options: &ContextOptions,
+    scene: Option<PathBuf>,
+    vpls: &[u32],
+    frames: u32,
+    interleave: u32,
+    rays: usize,
+) -> Result<()> {
+    let scene = match scene {
+        Some(path) => scene::load(&path)?,
+        None => scene::default_scene(),
+    };
+    let ctx = Context::new(options)?;
+    let bar = progress(vpls.len() as u64 + 2, "bench ir");
+    let report = irad::bench::ir::run(&ctx, &scene, vpls, frames, interleave, rays, |what| {
+        bar.set_message(what.to_string());
+        bar.inc(1);
+    })?;
+    bar.finish_and_clear();
+    irad::bench::ir::print_table(
+        &device_line(ctx.info()),
+        &render::scene_label(&scene),
+        scene.camera.width,
+        scene.camera.height,
+        &report,
+    );
+    Ok(())
+}
+
+/// `bench lightfield`, first step: loads the scene (default: the car headlights) at
+/// `--resolution`.
+fn lightfield_scene(
+    scene: Option<PathBuf>,
+    resolution: Option<(u32, u32)>,
+) -> Result<scene::Scene> {
+    let path = scene.unwrap_or_else(|| {
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes/car-headlights/scene.toml")
+    });
+    let mut scene = scene::load(&path)?;
+    if let Some((w, h)) = resolution {
+        scene.camera.width = w;
+        scene.camera.height = h;
+    }
+    Ok(scene)
+}
+
+/// `bench lightfield`, second step: checks `--spp` and `--strategies`, times each strategy
+/// at each K and prints the breakdown.
+fn run_lightfield(
+    options: &ContextOptions,
+    scene: &scene::Scene,
+    spp: &[u32],
+    strategies: &[String],
+    k_max: u32,
+    frames: u32,
+    repeats: u32,
+) -> Result<()> {
+    anyhow::ensure!(
+        !spp.is_empty() && spp.iter().all(|&k| (1..=65536).contains(&k)),
+        "--spp: each K must be in 1..=65536"
+    );
+    let strategies = strategies_by_name(
+        strategies,
+        &LightfieldStrategy::ALL,
+        |s| s.name(),
+        "lightfield",
+    )?;
+    let ctx = Context::new(options)?;
+    let bar = progress((strategies.len() * spp.len()) as u64, "bench lightfield");
+    let results = irad::bench::lightfield::run(
+        &ctx,
+        scene,
+        &strategies,
+        spp,
+        k_max,
+        frames,
+        repeats as usize,
+        |s, k| {
+            bar.set_message(format!("{} K {k}", s.name()));
+            bar.inc(1);
+        },
+    )?;
+    bar.finish_and_clear();
+    irad::bench::lightfield::print(&device_line(ctx.info()), scene, k_max, frames, &results);
+    Ok(())
+}
+
+/// `bench merge`: merges shard folders into `out` and says what it wrote.
+fn run_merge(parts: &[PathBuf], out: &std::path::Path, allow_mixed_devices: bool) -> Result<()> {
+    let merged = irad::bench::suite::merge::merge(parts, out, allow_mixed_devices)?;
+    println!(
+        "merged {} parts: {} of {} runs of suite {}{}",
+        parts.len(),
+        merged.runs.len(),
+        merged.runs_in_suite,
+        merged.suite,
+        if merged.complete {
+            ""
+        } else {
+            " (incomplete: some runs are missing)"
+        }
+    );
+    println!("wrote {}", out.join("report.md").display());
+    Ok(())
+}
+
+/// `bench rays`: GPU and CPU BVH traversal rates on a scene's triangles or a procedural mesh.
+fn run_rays(
+    options: &ContextOptions,
+    scene: Option<PathBuf>,
+    repeats: usize,
+    rays: usize,
+) -> Result<()> {
+    use irad::bvh::procedural;
+    // A scene's own camera at 1024x768, or a camera framing the procedural mesh.
+    let (triangles, camera) = match scene {
+        Some(path) => {
+            let scene = scene::load(&path)?;
+            let triangles: Vec<_> = scene.triangles.iter().map(|t| t.positions).collect();
+            let camera = irad::scene::Camera {
+                width: 1024,
+                height: 768,
+                ..scene.camera
+            };
+            (triangles, camera)
+        }
+        None => {
+            let triangles = procedural::noisy_sphere(1, 128, 1024);
+            let camera = procedural::camera_for_bounds(procedural::bounds(&triangles), 1024, 768);
+            (triangles, camera)
+        }
+    };
+    let bounds = procedural::bounds(&triangles);
+    let ctx = Context::new(options)?;
+    let camera_rays = procedural::camera_rays(&camera);
+    let random_rays = procedural::random_rays(2, bounds, rays);
+    let report = irad::bench::rays::run(&ctx, &triangles, &camera_rays, &random_rays, repeats)?;
+    irad::bench::rays::print_table(&device_line(ctx.info()), &report);
+    Ok(())
 }
 
 /// `--strategies` of a bench: each name one of `all`'s, or an error listing them.

@@ -1,10 +1,17 @@
 //! `irad bench suite`: runs a suite with its progress bars, Ctrl-C handling and run lines.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Instant;
 
 use anyhow::{bail, Context as _, Result};
-use indicatif::{ProgressBar, ProgressStyle};
+use indicatif::{MultiProgress, ProgressBar, ProgressStyle};
 
+use irad::bench::suite::eta::Eta;
+use irad::bench::suite::file::RunSpec;
+use irad::bench::suite::{
+    self, Event, RunRecord, Shard, Status, Suite, SuiteOptions, SuiteResults,
+};
 use irad::gpu::{Context, ContextOptions};
 use irad::methods::Method;
 
@@ -43,7 +50,6 @@ pub struct SuiteArgs {
 
 /// Runs (or lists) a suite.
 pub fn run(options: &ContextOptions, args: SuiteArgs) -> Result<()> {
-    use irad::bench::suite::{self, Event, Shard, Status, Suite, SuiteOptions};
     let SuiteArgs {
         suite,
         quick,
@@ -53,7 +59,49 @@ pub fn run(options: &ContextOptions, args: SuiteArgs) -> Result<()> {
         list,
         references_only,
     } = args;
-    let path = match suite {
+    let path = suite_path(suite, quick)?;
+    let suite = Suite::load(&path)?;
+    let shard = shard.unwrap_or(Shard::WHOLE);
+    let out = out.unwrap_or_else(|| suite::default_out(&suite, shard));
+    if list {
+        print_list(&suite, &path, shard);
+        return Ok(());
+    }
+    let ctx = Context::new(options)?;
+    let planned = suite.shard(shard).len();
+    println!(
+        "suite {} ({}): {} of {} runs on {} scenes{}, {} warm-up + {} timed renders each, on {}",
+        suite.name,
+        path.display(),
+        planned,
+        suite.runs.len(),
+        suite.scenes.len(),
+        shard_note(shard),
+        suite.warmup,
+        suite.repeats,
+        device_line(ctx.info())
+    );
+    let mut progress = Progress::new(&suite, shard, &out);
+    // Ctrl-C: stop after the run under way, with everything written; a second Ctrl-C quits
+    // at once, but never in the middle of writing the outputs.
+    static STOP: AtomicBool = AtomicBool::new(false);
+    stop_on_interrupt(&STOP, progress.overall.clone())?;
+    let options = SuiteOptions {
+        out: out.clone(),
+        cache,
+        shard,
+        stop: Some(&STOP),
+        references_only,
+    };
+    let results = suite::run(&ctx, &suite, &options, |event| progress.show(event))?;
+    progress.close();
+    report_end(&results, &out, &STOP)
+}
+
+/// Picks the suite file: the one named, or with `--quick` the built-in quick suite, which
+/// must be there.
+fn suite_path(suite: Option<PathBuf>, quick: bool) -> Result<PathBuf> {
+    Ok(match suite {
         Some(p) => p,
         None if quick => {
             let path = suite::file::quick_suite_path();
@@ -66,210 +114,247 @@ pub fn run(options: &ContextOptions, args: SuiteArgs) -> Result<()> {
             path
         }
         None => bail!("name a suite file or pass --quick"),
-    };
-    let suite = Suite::load(&path)?;
-    let shard = shard.unwrap_or(Shard::WHOLE);
-    let out = out.unwrap_or_else(|| suite::default_out(&suite, shard));
-    if list {
-        let runs = suite.shard(shard);
-        println!(
-            "suite {} ({}): {} of {} runs{}",
-            suite.name,
-            path.display(),
-            runs.len(),
-            suite.runs.len(),
-            if shard == Shard::WHOLE {
-                String::new()
-            } else {
-                format!(" (shard {shard})")
-            }
-        );
-        for s in &suite.scenes {
-            let cam = &s.scene.camera;
-            let failing = s
-                .scene
-                .failure
-                .as_ref()
-                .map(|f| format!(", expected to fail: {}", f.methods.join(", ")))
-                .unwrap_or_default();
-            let depth = match &s.reference {
-                Method::Reference(r) if r.max_depth < 64 => format!(" (max_depth {})", r.max_depth),
-                _ => String::new(),
-            };
-            let home = if s.home.is_empty() {
-                String::new()
-            } else {
-                format!(", home of: {}", s.home.join(", "))
-            };
-            println!(
-                "  scene {} {}x{}, reference {} spp{depth}{failing}{home}",
-                s.scene.name,
-                cam.width,
-                cam.height,
-                s.reference.samples()
-            );
-        }
-        for r in runs {
-            let declined = r
-                .method
-                .declines(&suite.scenes[r.scene].scene)
-                .map(|_| " (declines this scene)")
-                .unwrap_or_default();
-            println!("  {:>4} {}{declined}", r.index, r.id);
-        }
-        return Ok(());
+    })
+}
+
+/// ` (shard I/N)` after a suite's run count, or nothing for the whole suite.
+fn shard_note(shard: Shard) -> String {
+    if shard == Shard::WHOLE {
+        String::new()
+    } else {
+        format!(" (shard {shard})")
     }
-    let ctx = Context::new(options)?;
-    let planned = suite.shard(shard).len();
+}
+
+/// `--list`: prints the suite's scenes and the runs of this shard, rendering nothing.
+fn print_list(suite: &Suite, path: &Path, shard: Shard) {
+    let runs = suite.shard(shard);
     println!(
-        "suite {} ({}): {} of {} runs on {} scenes{}, {} warm-up + {} timed renders each, on {}",
+        "suite {} ({}): {} of {} runs{}",
         suite.name,
         path.display(),
-        planned,
+        runs.len(),
         suite.runs.len(),
-        suite.scenes.len(),
-        if shard == Shard::WHOLE {
+        shard_note(shard)
+    );
+    for s in &suite.scenes {
+        let cam = &s.scene.camera;
+        let failing = s
+            .scene
+            .failure
+            .as_ref()
+            .map(|f| format!(", expected to fail: {}", f.methods.join(", ")))
+            .unwrap_or_default();
+        let depth = match &s.reference {
+            Method::Reference(r) if r.max_depth < 64 => format!(" (max_depth {})", r.max_depth),
+            _ => String::new(),
+        };
+        let home = if s.home.is_empty() {
             String::new()
         } else {
-            format!(" (shard {shard})")
-        },
-        suite.warmup,
-        suite.repeats,
-        device_line(ctx.info())
-    );
-    let bars = indicatif::MultiProgress::new();
-    super::logger::on_screen(Some(super::logger::Bars::Several(bars.clone())));
-    let overall = bars.add(ProgressBar::new(planned as u64));
-    overall.set_style(
-        ProgressStyle::with_template("suite [{bar:30}] {pos}/{len} runs, {elapsed} elapsed{msg}")
-            .expect("static template")
-            .progress_chars("=> "),
-    );
-    let current = bars.add(ProgressBar::new(1));
-    current.set_style(
-        ProgressStyle::with_template("  {msg} [{bar:20}] {pos}/{len}")
-            .expect("static template")
-            .progress_chars("=> "),
-    );
-    // Ctrl-C: stop after the run under way, with everything written; a second Ctrl-C quits
-    // at once, but never in the middle of writing the outputs.
-    static STOP: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
-    let stop_bar = overall.clone();
+            format!(", home of: {}", s.home.join(", "))
+        };
+        println!(
+            "  scene {} {}x{}, reference {} spp{depth}{failing}{home}",
+            s.scene.name,
+            cam.width,
+            cam.height,
+            s.reference.samples()
+        );
+    }
+    for r in runs {
+        let declined = r
+            .method
+            .declines(&suite.scenes[r.scene].scene)
+            .map(|_| " (declines this scene)")
+            .unwrap_or_default();
+        println!("  {:>4} {}{declined}", r.index, r.id);
+    }
+}
+
+/// Installs the Ctrl-C handler: the first sets `stop` and says so above `bar`, a second
+/// exits (once the outputs are written).
+fn stop_on_interrupt(stop: &'static AtomicBool, bar: ProgressBar) -> Result<()> {
     ctrlc::set_handler(move || {
-        if STOP.swap(true, std::sync::atomic::Ordering::SeqCst) {
+        if stop.swap(true, Ordering::SeqCst) {
             suite::output::exit_after_writing(130);
         }
-        stop_bar
-            .println("interrupted: stopping after the run under way (Ctrl-C again to quit now)");
+        bar.println("interrupted: stopping after the run under way (Ctrl-C again to quit now)");
     })
-    .context("installing the Ctrl-C handler")?;
-    let options = SuiteOptions {
-        out: out.clone(),
-        cache,
-        shard,
-        stop: Some(&STOP),
-        references_only,
-    };
-    let plan = suite.shard(shard);
-    let mut eta = suite::eta::Eta::default();
-    let mut run_start: Option<std::time::Instant> = None;
-    // Runs recorded so far, kept ones included: what is left is the plan less these.
-    let mut recorded: Vec<usize> = Vec::new();
-    let results = suite::run(&ctx, &suite, &options, |event| match event {
-        Event::StaleLock { holder } => {
-            bars.suspend(|| {
-                eprintln!(
-                    "note: {} was locked by {holder}, which is no longer running (interrupted?): taking it over",
-                    out.display()
-                )
-            });
+    .context("installing the Ctrl-C handler")
+}
+
+/// What the screen shows while a suite runs: the bars, the time-left estimate and the runs
+/// recorded so far.
+struct Progress<'a> {
+    suite: &'a Suite,
+    out: &'a Path,
+    /// This shard's runs.
+    plan: Vec<&'a RunSpec>,
+    bars: MultiProgress,
+    overall: ProgressBar,
+    current: ProgressBar,
+    eta: Eta,
+    /// When the run under way rendered its first frame.
+    run_start: Option<Instant>,
+    /// Runs recorded so far, kept ones included: what is left is the plan less these.
+    recorded: Vec<usize>,
+}
+
+impl<'a> Progress<'a> {
+    /// Sets up the bars (the suite's runs, the step under way) and sends log lines above them.
+    fn new(suite: &'a Suite, shard: Shard, out: &'a Path) -> Self {
+        let plan = suite.shard(shard);
+        let bars = MultiProgress::new();
+        super::logger::on_screen(Some(super::logger::Bars::Several(bars.clone())));
+        let overall = bars.add(ProgressBar::new(plan.len() as u64));
+        overall.set_style(
+            ProgressStyle::with_template(
+                "suite [{bar:30}] {pos}/{len} runs, {elapsed} elapsed{msg}",
+            )
+            .expect("static template")
+            .progress_chars("=> "),
+        );
+        let current = bars.add(ProgressBar::new(1));
+        current.set_style(
+            ProgressStyle::with_template("  {msg} [{bar:20}] {pos}/{len}")
+                .expect("static template")
+                .progress_chars("=> "),
+        );
+        Progress {
+            suite,
+            out,
+            plan,
+            bars,
+            overall,
+            current,
+            eta: Eta::default(),
+            run_start: None,
+            recorded: Vec::new(),
         }
-        Event::Resumed { kept, of } => {
-            overall.set_position(kept.len() as u64);
-            bars.suspend(|| {
-                println!(
-                    "resuming the interrupted run in {}: {} of {of} runs recorded there are kept (remove the folder to start over)",
-                    out.display(),
-                    kept.len()
-                )
-            });
-            recorded = kept;
-        }
-        Event::Reference {
-            scene,
-            done,
-            total,
-            cached,
-        } => {
-            current.set_length(total as u64);
-            current.set_position(done as u64);
-            current.set_message(format!(
-                "{scene}: reference{}",
-                if cached { " (cached)" } else { "" }
-            ));
-        }
-        Event::Render {
-            id,
-            render,
-            renders,
-            done,
-            total,
-            ..
-        } => {
-            if run_start.is_none() {
-                run_start = Some(std::time::Instant::now());
-            }
-            current.set_length(total as u64);
-            current.set_position(done as u64);
-            current.set_message(match renders {
-                0 => format!("{id}: calibration render {}", render + 1),
-                _ => format!("{id}: render {}/{renders}", render + 1),
-            });
-        }
-        Event::Finished { run, record, .. } => {
-            overall.set_position(run as u64);
-            recorded.push(record.index);
-            // Only rendered runs teach the estimate, from their first render on (a
-            // scene's reference comes before it).
-            let spec = plan.iter().find(|s| s.index == record.index);
-            if let (Status::Ok, Some(start), Some(spec)) = (record.status, run_start.take(), spec) {
-                eta.finished(&suite, spec, start.elapsed().as_secs_f64());
-            }
-            run_start = None;
-            let left: Vec<_> = plan
-                .iter()
-                .filter(|s| !recorded.contains(&s.index))
-                .copied()
-                .collect();
-            if let Some(left) = eta.left(&suite, &left) {
-                overall.set_message(format!(", about {} left", indicatif::HumanDuration(left)));
-            }
-            let line =
-                match record.status {
-                    Status::Ok => {
-                        let m = record.metrics.expect("ok runs are scored");
-                        format!(
-                        "{:<48} GPU {:>9} ms  relMSE {:.3e}  bias {:>6.2}%  outliers {:.3}%{}{}",
-                        record.id,
-                        record.gpu_ms.map(|t| format!("{t:.2}")).unwrap_or("-".into()),
-                        m.rel_mse,
-                        100.0 * m.bias,
-                        100.0 * m.outliers,
-                        if record.pareto { "  *" } else { "" },
-                        match (record.budget_missed, record.time_ms) {
-                            (true, Some(t)) => format!("  time budget of {t} ms missed"),
-                            _ => String::new(),
-                        }
+    }
+
+    /// Shows one event of the suite run.
+    fn show(&mut self, event: Event) {
+        match event {
+            Event::StaleLock { holder } => {
+                self.bars.suspend(|| {
+                    eprintln!(
+                        "note: {} was locked by {holder}, which is no longer running (interrupted?): taking it over",
+                        self.out.display()
                     )
-                    }
-                    s => format!("{:<48} {}: {}", record.id, s.as_str(), record.note),
-                };
-            bars.suspend(|| println!("{line}"));
+                });
+            }
+            Event::Resumed { kept, of } => {
+                self.overall.set_position(kept.len() as u64);
+                self.bars.suspend(|| {
+                    println!(
+                        "resuming the interrupted run in {}: {} of {of} runs recorded there are kept (remove the folder to start over)",
+                        self.out.display(),
+                        kept.len()
+                    )
+                });
+                self.recorded = kept;
+            }
+            Event::Reference {
+                scene,
+                done,
+                total,
+                cached,
+            } => {
+                self.current.set_length(total as u64);
+                self.current.set_position(done as u64);
+                self.current.set_message(format!(
+                    "{scene}: reference{}",
+                    if cached { " (cached)" } else { "" }
+                ));
+            }
+            Event::Render {
+                id,
+                render,
+                renders,
+                done,
+                total,
+                ..
+            } => {
+                if self.run_start.is_none() {
+                    self.run_start = Some(Instant::now());
+                }
+                self.current.set_length(total as u64);
+                self.current.set_position(done as u64);
+                self.current.set_message(match renders {
+                    0 => format!("{id}: calibration render {}", render + 1),
+                    _ => format!("{id}: render {}/{renders}", render + 1),
+                });
+            }
+            Event::Finished { run, record, .. } => self.finished(run, record),
         }
-    })?;
-    overall.finish_and_clear();
-    current.finish_and_clear();
-    super::logger::on_screen(None);
+    }
+
+    /// A run is recorded: moves the bar, updates the time-left estimate and prints its line.
+    fn finished(&mut self, run: usize, record: &RunRecord) {
+        self.overall.set_position(run as u64);
+        self.recorded.push(record.index);
+        // Only rendered runs teach the estimate, from their first render on (a
+        // scene's reference comes before it).
+        let spec = self.plan.iter().find(|s| s.index == record.index);
+        if let (Status::Ok, Some(start), Some(spec)) = (record.status, self.run_start.take(), spec)
+        {
+            self.eta
+                .finished(self.suite, spec, start.elapsed().as_secs_f64());
+        }
+        self.run_start = None;
+        let left: Vec<_> = self
+            .plan
+            .iter()
+            .filter(|s| !self.recorded.contains(&s.index))
+            .copied()
+            .collect();
+        if let Some(left) = self.eta.left(self.suite, &left) {
+            self.overall
+                .set_message(format!(", about {} left", indicatif::HumanDuration(left)));
+        }
+        let line = run_line(record);
+        self.bars.suspend(|| println!("{line}"));
+    }
+
+    /// Clears the bars and gives the log its plain lines back.
+    fn close(self) {
+        self.overall.finish_and_clear();
+        self.current.finish_and_clear();
+        super::logger::on_screen(None);
+    }
+}
+
+/// The line printed for a recorded run: its times and errors, or its status and note.
+fn run_line(record: &RunRecord) -> String {
+    match record.status {
+        Status::Ok => {
+            let m = record.metrics.expect("ok runs are scored");
+            format!(
+                "{:<48} GPU {:>9} ms  relMSE {:.3e}  bias {:>6.2}%  outliers {:.3}%{}{}",
+                record.id,
+                record
+                    .gpu_ms
+                    .map(|t| format!("{t:.2}"))
+                    .unwrap_or("-".into()),
+                m.rel_mse,
+                100.0 * m.bias,
+                100.0 * m.outliers,
+                if record.pareto { "  *" } else { "" },
+                match (record.budget_missed, record.time_ms) {
+                    (true, Some(t)) => format!("  time budget of {t} ms missed"),
+                    _ => String::new(),
+                }
+            )
+        }
+        s => format!("{:<48} {}: {}", record.id, s.as_str(), record.note),
+    }
+}
+
+/// After the suite: says where the outputs are, exits 130 when interrupted, and fails when
+/// a run failed.
+fn report_end(results: &SuiteResults, out: &Path, stop: &AtomicBool) -> Result<()> {
     let errors = results
         .runs
         .iter()
@@ -279,7 +364,7 @@ pub fn run(options: &ContextOptions, args: SuiteArgs) -> Result<()> {
         "wrote {} (results.csv, results.json, charts/, images/)",
         out.join("report.md").display()
     );
-    if STOP.load(std::sync::atomic::Ordering::SeqCst) {
+    if stop.load(Ordering::SeqCst) {
         eprintln!(
             "interrupted: {} of {} runs recorded; the outputs hold them, marked incomplete (the same command resumes)",
             results.runs.len(),

@@ -203,80 +203,9 @@ impl Suite {
             file: file.into(),
             message: e.to_string().trim_end().to_string(),
         })?;
-        let field = |field: &str, value: String, problem: &str| SuiteError::Field {
-            file: file.into(),
-            field: field.into(),
-            value,
-            problem: problem.into(),
-        };
-        if f.name.trim().is_empty()
-            || file_safe(&f.name) != f.name
-            || f.name.chars().all(|c| c == '.')
-        {
-            return Err(field(
-                "name",
-                format!("{:?}", f.name),
-                "must use only letters, digits, '.', '_', '=' and '-', and not only dots",
-            ));
-        }
-        let count = |name: &str, v: i64, min: i64| {
-            if v < min || v > u32::MAX as i64 {
-                Err(field(
-                    name,
-                    v.to_string(),
-                    &format!("must be an integer >= {min}"),
-                ))
-            } else {
-                Ok(v as u32)
-            }
-        };
-        let seed = count("seed", f.seed, 0)?;
-        let warmup = count("warmup", f.warmup, 0)?;
-        let repeats = count("repeats", f.repeats, 1)?;
-        let flicker_frames = count("flicker_frames", f.flicker_frames, 0)?;
-        if flicker_frames == 1 {
-            return Err(field(
-                "flicker_frames",
-                "1".into(),
-                "flicker needs 2 or more frames (0 turns it off)",
-            ));
-        }
-        // The scene files' limit on a width or height.
-        let sizes = 1..=i64::from(MAX_RESOLUTION);
-        if let Some(w) = f.width {
-            if !sizes.contains(&w) {
-                return Err(field(
-                    "width",
-                    w.to_string(),
-                    &format!("must be in 1..={MAX_RESOLUTION}"),
-                ));
-            }
-        }
-        let check_resolution = |name: &str, r: Option<[i64; 2]>| match r {
-            None => Ok(None),
-            Some([w, h]) if sizes.contains(&w) && sizes.contains(&h) => {
-                Ok(Some((w as u32, h as u32)))
-            }
-            Some([w, h]) => Err(field(
-                name,
-                format!("[{w}, {h}]"),
-                &format!("width and height must be in 1..={MAX_RESOLUTION}"),
-            )),
-        };
-
-        // A suite may pin its references' seed; otherwise REFERENCE_SEED.
-        let mut reference_params = f.reference.clone();
-        reference_params
-            .entry("seed")
-            .or_insert(toml::Value::Integer(REFERENCE_SEED as i64));
-        let param_error = |field: String, source: ParamError| SuiteError::Param {
-            file: file.into(),
-            field,
-            cause: Box::new(source),
-        };
-        let reference = Method::from_params("reference", &reference_params)
-            .map_err(|e| param_error("reference".into(), e))?;
-
+        check_name(file, &f.name)?;
+        let counts = parse_counts(file, &f)?;
+        let (reference_params, reference) = parse_reference(file, &f.reference)?;
         if f.scene.is_empty() {
             return Err(SuiteError::File {
                 file: file.into(),
@@ -289,296 +218,20 @@ impl Suite {
                 message: "no [[method]]: a suite needs at least one".into(),
             });
         }
-
-        let mut hash = Fnv1a64::default();
-        hash.write(text.as_bytes());
-        let mut scenes: Vec<SuiteScene> = Vec::new();
-        for (i, entry) in f.scene.iter().enumerate() {
-            let mut scene = if let Some(name) = entry.path.strip_prefix("embedded:") {
-                if name != "cornell-box" {
-                    return Err(field(
-                        &format!("scene[{i}].path"),
-                        format!("{:?}", entry.path),
-                        "the only embedded scene is embedded:cornell-box",
-                    ));
-                }
-                scene::default_scene()
-            } else {
-                scene::load(&base.join(&entry.path)).map_err(|source| SuiteError::Scene {
-                    file: file.into(),
-                    field: format!("scene[{i}].path = {:?}", entry.path),
-                    cause: Box::new(source),
-                })?
-            };
-            let own = check_resolution(&format!("scene[{i}].resolution"), entry.resolution)?;
-            if let Some((w, h)) = own {
-                scene.camera.width = w;
-                scene.camera.height = h;
-            } else if let Some(w) = f.width {
-                // The scene's own aspect ratio, so the framing is the scene's.
-                let cam = &mut scene.camera;
-                let h = (w as f64 * cam.height as f64 / cam.width as f64)
-                    .round()
-                    .max(1.0);
-                if h > f64::from(MAX_RESOLUTION) {
-                    return Err(field(
-                        "width",
-                        w.to_string(),
-                        &format!(
-                            "gives {} ({}x{h} at its aspect ratio) a height over {MAX_RESOLUTION}",
-                            entry.path, w
-                        ),
-                    ));
-                }
-                cam.width = w as u32;
-                cam.height = h as u32;
-            }
-            let key = |name: &str| file_safe(name).to_lowercase();
-            if let Some(prev) = scenes
-                .iter()
-                .find(|s| key(&s.scene.name) == key(&scene.name))
-            {
-                return Err(field(
-                    &format!("scene[{i}].path"),
-                    format!("{:?}", entry.path),
-                    &format!(
-                        "a second scene named {:?} (scene names key charts and files, compared as file names, ignoring case)",
-                        prev.scene.name
-                    ),
-                ));
-            }
-            if let Some(note) = &scene.failure {
-                if let Some(unknown) = note
-                    .methods
-                    .iter()
-                    .find(|m| !METHOD_NAMES.contains(&m.as_str()))
-                {
-                    return Err(field(
-                        &format!("scene[{i}] ({}) failure.methods", entry.path),
-                        format!("{unknown:?}"),
-                        &format!("not a method irad has ({})", METHOD_NAMES.join(", ")),
-                    ));
-                }
-            }
-            let mut reference = reference.clone();
-            if entry.reference_spp.is_some() || entry.reference_max_depth.is_some() {
-                let mut p = reference_params.clone();
-                let mut fields = vec![];
-                for (key, value) in [
-                    ("spp", entry.reference_spp),
-                    ("max_depth", entry.reference_max_depth),
-                ] {
-                    if let Some(v) = value {
-                        p.insert(key.into(), toml::Value::Integer(v));
-                        fields.push(format!("scene[{i}].reference_{key}"));
-                    }
-                }
-                reference = Method::from_params("reference", &p)
-                    .map_err(|e| param_error(fields.join(", "), e))?;
-            }
-            hash.write(&scene.content_hash.to_le_bytes());
-            scenes.push(SuiteScene {
-                scene,
-                path: entry.path.clone(),
-                reference,
-                home: entry.home.clone(),
-            });
-        }
-
-        let renders = warmup as u64 + repeats.max(flicker_frames) as u64;
-        let run_seed = |s: u32| (s.wrapping_sub(seed) as u64) < renders;
-        for (i, s) in scenes.iter().enumerate() {
-            // The reference is two halves, seeds r and r + 1 (references.rs).
-            let r = s.reference.seed();
-            if run_seed(r) || run_seed(r.wrapping_add(1)) {
-                return Err(field(
-                    "reference.seed",
-                    r.to_string(),
-                    &format!(
-                        "the reference of scene[{i}] would share random numbers with the runs, which use seeds {seed}..{} (seed + warm-up + repeats or flicker frames): pick a seed far from them",
-                        seed as u64 + renders
-                    ),
-                ));
-            }
-        }
-
-        let scene_names: BTreeSet<&str> = scenes.iter().map(|s| s.scene.name.as_str()).collect();
-        let mut entries = Vec::new();
-        let mut labels = BTreeSet::new();
-        // Per entry, per budget: the method, its budget label and time budget, checked whatever
-        // scenes apply.
-        let mut budgets: Vec<Vec<(Method, String, Option<f64>)>> = Vec::new();
-        for (i, m) in f.method.iter().enumerate() {
-            let label = m.label.clone().unwrap_or_else(|| m.method.clone());
-            if label.is_empty() || file_safe(&label) != label {
-                return Err(field(
-                    &format!("method[{i}].label"),
-                    format!("{label:?}"),
-                    "must be non-empty and use only letters, digits, '.', '_', '=' and '-'",
-                ));
-            }
-            if !labels.insert(label.clone()) {
-                return Err(field(
-                    &format!("method[{i}].label"),
-                    format!("{label:?}"),
-                    "used by an earlier [[method]]: give each a distinct label",
-                ));
-            }
-            if let Some(names) = &m.scenes {
-                if names.is_empty() {
-                    return Err(field(
-                        &format!("method[{i}].scenes"),
-                        "[]".into(),
-                        "names no scene: leave it out to run on every scene",
-                    ));
-                }
-                if let Some(unknown) = names.iter().find(|n| !scene_names.contains(n.as_str())) {
-                    return Err(field(
-                        &format!("method[{i}].scenes"),
-                        format!("{unknown:?}"),
-                        "not the name of a [[scene]] in this suite",
-                    ));
-                }
-            }
-            if m.params.contains_key("seed") {
-                return Err(field(
-                    &format!("method[{i}].params.seed"),
-                    m.params["seed"].to_string(),
-                    "the suite sets seeds (its `seed`, plus one per repeat)",
-                ));
-            }
-            if m.budgets.is_empty() {
-                return Err(field(
-                    &format!("method[{i}].budgets"),
-                    "[]".into(),
-                    "needs at least one budget ({} for the defaults)",
-                ));
-            }
-            let mut methods: Vec<(Method, String, Option<f64>)> = Vec::new();
-            for (b, budget) in m.budgets.iter().enumerate() {
-                let mut params = m.params.clone();
-                if let Some(v) = m.params.get("time_ms") {
-                    return Err(field(
-                        &format!("method[{i}].params.time_ms"),
-                        v.to_string(),
-                        "a time budget belongs in budgets, one per budget",
-                    ));
-                }
-                let time_ms = match budget.get("time_ms") {
-                    None => None,
-                    Some(v) => match v.as_float().or(v.as_integer().map(|i| i as f64)) {
-                        Some(t) if t > 0.0 && t <= MAX_TIME_MS => Some(t),
-                        _ => {
-                            return Err(field(
-                                &format!("method[{i}].budgets[{b}].time_ms"),
-                                v.to_string(),
-                                &format!(
-                                    "must be GPU milliseconds, a number in (0, {MAX_TIME_MS}]"
-                                ),
-                            ))
-                        }
-                    },
-                };
-                for (k, v) in budget.iter().filter(|(k, _)| *k != "time_ms") {
-                    if k == "seed" || params.contains_key(k) {
-                        return Err(field(
-                            &format!("method[{i}].budgets[{b}].{k}"),
-                            v.to_string(),
-                            "also set in params (or a seed): a budget adds keys, it does not override",
-                        ));
-                    }
-                    params.insert(k.clone(), v.clone());
-                }
-                params.insert("seed".into(), toml::Value::Integer(seed as i64));
-                let method = Method::from_params(&m.method, &params)
-                    .map_err(|e| param_error(format!("method[{i}].budgets[{b}]"), e))?;
-                if let (Some(_), Some(v)) = (time_ms, params.get(method.count_key())) {
-                    let place = match m.params.contains_key(method.count_key()) {
-                        true => "params".to_string(),
-                        false => format!("budgets[{b}]"),
-                    };
-                    return Err(field(
-                        &format!("method[{i}].{place}.{}", method.count_key()),
-                        v.to_string(),
-                        &format!(
-                            "a time_ms budget calibrates {} itself: leave it out",
-                            method.count_key()
-                        ),
-                    ));
-                }
-                let text = budget
-                    .iter()
-                    .map(|(k, v)| format!("{k}={}", plain(v)))
-                    .collect::<Vec<_>>()
-                    .join(" ");
-                let text = if text.is_empty() {
-                    "defaults".into()
-                } else {
-                    text
-                };
-                if let Some((_, same, _)) = methods
-                    .iter()
-                    .find(|(other, _, t)| *other == method && *t == time_ms)
-                {
-                    return Err(field(
-                        &format!("method[{i}].budgets[{b}]"),
-                        format!("{{ {text} }}"),
-                        &format!("the same settings as budget {{ {same} }}"),
-                    ));
-                }
-                methods.push((method, text, time_ms));
-            }
-            budgets.push(methods);
-            entries.push(SuiteMethod {
-                method: m.method.clone(),
-                label,
-            });
-        }
-
-        for (i, s) in scenes.iter().enumerate() {
-            if let Some(unknown) = s.home.iter().find(|h| !labels.contains(h.as_str())) {
-                return Err(field(
-                    &format!("scene[{i}].home"),
-                    format!("{unknown:?}"),
-                    "not the label of a [[method]] in this suite",
-                ));
-            }
-        }
-
-        let mut runs = Vec::new();
-        for (s, suite_scene) in scenes.iter().enumerate() {
-            for (e, m) in f.method.iter().enumerate() {
-                let applies = m
-                    .scenes
-                    .as_ref()
-                    .is_none_or(|names| names.contains(&suite_scene.scene.name));
-                if !applies {
-                    continue;
-                }
-                for (method, budget, time_ms) in &budgets[e] {
-                    let id = format!("{}/{}/{}", suite_scene.scene.name, entries[e].label, budget);
-                    runs.push(RunSpec {
-                        index: runs.len(),
-                        scene: s,
-                        entry: e,
-                        method: method.clone(),
-                        budget: budget.clone(),
-                        time_ms: *time_ms,
-                        id,
-                    });
-                }
-            }
-        }
-
+        let scenes = parse_scenes(file, &f, base, &reference_params, &reference)?;
+        check_reference_seeds(file, &scenes, &counts)?;
+        let (entries, budgets) = parse_methods(file, &f.method, &scenes, counts.seed)?;
+        check_homes(file, &scenes, &entries)?;
+        let runs = expand_runs(&scenes, &f.method, &entries, &budgets);
         Ok(Suite {
             name: f.name,
             description: f.description,
             file: file.into(),
-            hash: hash.finish(),
-            seed,
-            warmup,
-            repeats,
-            flicker_frames,
+            hash: suite_hash(text, &scenes),
+            seed: counts.seed,
+            warmup: counts.warmup,
+            repeats: counts.repeats,
+            flicker_frames: counts.flicker_frames,
             scenes,
             entries,
             runs,
@@ -593,6 +246,512 @@ impl Suite {
             .filter(|r| r.index % shard.count == shard.index)
             .collect()
     }
+}
+
+/// A `SuiteError::Field`: `field = value` of `file` has `problem`.
+fn field_error(file: &str, field: &str, value: String, problem: &str) -> SuiteError {
+    SuiteError::Field {
+        file: file.into(),
+        field: field.into(),
+        value,
+        problem: problem.into(),
+    }
+}
+
+/// A `SuiteError::Param`: `Method::from_params` refused the settings at `field`.
+fn param_error(file: &str, field: String, source: ParamError) -> SuiteError {
+    SuiteError::Param {
+        file: file.into(),
+        field,
+        cause: Box::new(source),
+    }
+}
+
+/// The suite's counts, checked.
+struct Counts {
+    seed: u32,
+    warmup: u32,
+    repeats: u32,
+    flicker_frames: u32,
+}
+
+/// The method settings of one budget: the method (seed set to the suite's), the budget's
+/// label (`vpls=64 frames=4`, or `defaults`) and its time budget.
+type Budget = (Method, String, Option<f64>);
+
+/// Checks the suite's name: it names files and folders.
+fn check_name(file: &str, name: &str) -> Result<(), SuiteError> {
+    if name.trim().is_empty() || file_safe(name) != name || name.chars().all(|c| c == '.') {
+        return Err(field_error(
+            file,
+            "name",
+            format!("{name:?}"),
+            "must use only letters, digits, '.', '_', '=' and '-', and not only dots",
+        ));
+    }
+    Ok(())
+}
+
+/// Checks the seed, warm-up, repeats and flicker frames, and the suite's `width`.
+fn parse_counts(file: &str, f: &SuiteFile) -> Result<Counts, SuiteError> {
+    let count = |name: &str, v: i64, min: i64| {
+        if v < min || v > u32::MAX as i64 {
+            Err(field_error(
+                file,
+                name,
+                v.to_string(),
+                &format!("must be an integer >= {min}"),
+            ))
+        } else {
+            Ok(v as u32)
+        }
+    };
+    let seed = count("seed", f.seed, 0)?;
+    let warmup = count("warmup", f.warmup, 0)?;
+    let repeats = count("repeats", f.repeats, 1)?;
+    let flicker_frames = count("flicker_frames", f.flicker_frames, 0)?;
+    if flicker_frames == 1 {
+        return Err(field_error(
+            file,
+            "flicker_frames",
+            "1".into(),
+            "flicker needs 2 or more frames (0 turns it off)",
+        ));
+    }
+    if let Some(w) = f.width {
+        if !SIZES.contains(&w) {
+            return Err(field_error(
+                file,
+                "width",
+                w.to_string(),
+                &format!("must be in 1..={MAX_RESOLUTION}"),
+            ));
+        }
+    }
+    Ok(Counts {
+        seed,
+        warmup,
+        repeats,
+        flicker_frames,
+    })
+}
+
+/// The scene files' limit on a width or height.
+const SIZES: std::ops::RangeInclusive<i64> = 1..=MAX_RESOLUTION as i64;
+
+/// Checks a scene's `resolution`, if it has one.
+fn check_resolution(
+    file: &str,
+    name: &str,
+    r: Option<[i64; 2]>,
+) -> Result<Option<(u32, u32)>, SuiteError> {
+    match r {
+        None => Ok(None),
+        Some([w, h]) if SIZES.contains(&w) && SIZES.contains(&h) => Ok(Some((w as u32, h as u32))),
+        Some([w, h]) => Err(field_error(
+            file,
+            name,
+            format!("[{w}, {h}]"),
+            &format!("width and height must be in 1..={MAX_RESOLUTION}"),
+        )),
+    }
+}
+
+/// Reads `[reference]`: its parameters (the seed REFERENCE_SEED unless the suite pins one)
+/// and the reference method they make.
+fn parse_reference(file: &str, table: &toml::Table) -> Result<(toml::Table, Method), SuiteError> {
+    // A suite may pin its references' seed; otherwise REFERENCE_SEED.
+    let mut reference_params = table.clone();
+    reference_params
+        .entry("seed")
+        .or_insert(toml::Value::Integer(REFERENCE_SEED as i64));
+    let reference = Method::from_params("reference", &reference_params)
+        .map_err(|e| param_error(file, "reference".into(), e))?;
+    Ok((reference_params, reference))
+}
+
+/// Loads and checks every `[[scene]]` in order: its file, resolution, name (unique), failure
+/// note and reference.
+fn parse_scenes(
+    file: &str,
+    f: &SuiteFile,
+    base: &Path,
+    reference_params: &toml::Table,
+    reference: &Method,
+) -> Result<Vec<SuiteScene>, SuiteError> {
+    let mut scenes: Vec<SuiteScene> = Vec::new();
+    for (i, entry) in f.scene.iter().enumerate() {
+        let scene = load_scene(file, i, entry, base, f.width)?;
+        let key = |name: &str| file_safe(name).to_lowercase();
+        if let Some(prev) = scenes
+            .iter()
+            .find(|s| key(&s.scene.name) == key(&scene.name))
+        {
+            return Err(field_error(
+                file,
+                &format!("scene[{i}].path"),
+                format!("{:?}", entry.path),
+                &format!(
+                    "a second scene named {:?} (scene names key charts and files, compared as file names, ignoring case)",
+                    prev.scene.name
+                ),
+            ));
+        }
+        if let Some(note) = &scene.failure {
+            if let Some(unknown) = note
+                .methods
+                .iter()
+                .find(|m| !METHOD_NAMES.contains(&m.as_str()))
+            {
+                return Err(field_error(
+                    file,
+                    &format!("scene[{i}] ({}) failure.methods", entry.path),
+                    format!("{unknown:?}"),
+                    &format!("not a method irad has ({})", METHOD_NAMES.join(", ")),
+                ));
+            }
+        }
+        let reference = scene_reference(file, i, entry, reference_params, reference)?;
+        scenes.push(SuiteScene {
+            scene,
+            path: entry.path.clone(),
+            reference,
+            home: entry.home.clone(),
+        });
+    }
+    Ok(scenes)
+}
+
+/// Loads scene `i` (a file relative to `base`, or the embedded Cornell box) at its own
+/// resolution, or at the suite's `width` and the scene's aspect ratio.
+fn load_scene(
+    file: &str,
+    i: usize,
+    entry: &SceneEntry,
+    base: &Path,
+    width: Option<i64>,
+) -> Result<Scene, SuiteError> {
+    let mut scene = if let Some(name) = entry.path.strip_prefix("embedded:") {
+        if name != "cornell-box" {
+            return Err(field_error(
+                file,
+                &format!("scene[{i}].path"),
+                format!("{:?}", entry.path),
+                "the only embedded scene is embedded:cornell-box",
+            ));
+        }
+        scene::default_scene()
+    } else {
+        scene::load(&base.join(&entry.path)).map_err(|source| SuiteError::Scene {
+            file: file.into(),
+            field: format!("scene[{i}].path = {:?}", entry.path),
+            cause: Box::new(source),
+        })?
+    };
+    let own = check_resolution(file, &format!("scene[{i}].resolution"), entry.resolution)?;
+    if let Some((w, h)) = own {
+        scene.camera.width = w;
+        scene.camera.height = h;
+    } else if let Some(w) = width {
+        // The scene's own aspect ratio, so the framing is the scene's.
+        let cam = &mut scene.camera;
+        let h = (w as f64 * cam.height as f64 / cam.width as f64)
+            .round()
+            .max(1.0);
+        if h > f64::from(MAX_RESOLUTION) {
+            return Err(field_error(
+                file,
+                "width",
+                w.to_string(),
+                &format!(
+                    "gives {} ({}x{h} at its aspect ratio) a height over {MAX_RESOLUTION}",
+                    entry.path, w
+                ),
+            ));
+        }
+        cam.width = w as u32;
+        cam.height = h as u32;
+    }
+    Ok(scene)
+}
+
+/// The reference of scene `i`: the suite's, with the scene's `reference_spp` and
+/// `reference_max_depth` where it sets them.
+fn scene_reference(
+    file: &str,
+    i: usize,
+    entry: &SceneEntry,
+    reference_params: &toml::Table,
+    reference: &Method,
+) -> Result<Method, SuiteError> {
+    if entry.reference_spp.is_none() && entry.reference_max_depth.is_none() {
+        return Ok(reference.clone());
+    }
+    let mut p = reference_params.clone();
+    let mut fields = vec![];
+    for (key, value) in [
+        ("spp", entry.reference_spp),
+        ("max_depth", entry.reference_max_depth),
+    ] {
+        if let Some(v) = value {
+            p.insert(key.into(), toml::Value::Integer(v));
+            fields.push(format!("scene[{i}].reference_{key}"));
+        }
+    }
+    Method::from_params("reference", &p).map_err(|e| param_error(file, fields.join(", "), e))
+}
+
+/// FNV-1a 64 of the suite text, then of every scene's content hash in suite order.
+fn suite_hash(text: &str, scenes: &[SuiteScene]) -> u64 {
+    let mut hash = Fnv1a64::default();
+    hash.write(text.as_bytes());
+    for s in scenes {
+        hash.write(&s.scene.content_hash.to_le_bytes());
+    }
+    hash.finish()
+}
+
+/// Checks that no scene's reference shares seeds with the runs.
+fn check_reference_seeds(
+    file: &str,
+    scenes: &[SuiteScene],
+    counts: &Counts,
+) -> Result<(), SuiteError> {
+    let seed = counts.seed;
+    let renders = counts.warmup as u64 + counts.repeats.max(counts.flicker_frames) as u64;
+    let run_seed = |s: u32| (s.wrapping_sub(seed) as u64) < renders;
+    for (i, s) in scenes.iter().enumerate() {
+        // The reference is two halves, seeds r and r + 1 (references.rs).
+        let r = s.reference.seed();
+        if run_seed(r) || run_seed(r.wrapping_add(1)) {
+            return Err(field_error(
+                file,
+                "reference.seed",
+                r.to_string(),
+                &format!(
+                    "the reference of scene[{i}] would share random numbers with the runs, which use seeds {seed}..{} (seed + warm-up + repeats or flicker frames): pick a seed far from them",
+                    seed as u64 + renders
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Checks every `[[method]]` in order (label, scenes, params) and makes its budgets' methods,
+/// checked whatever scenes apply: the entries, and per entry its budgets.
+fn parse_methods(
+    file: &str,
+    methods: &[MethodEntry],
+    scenes: &[SuiteScene],
+    seed: u32,
+) -> Result<(Vec<SuiteMethod>, Vec<Vec<Budget>>), SuiteError> {
+    let scene_names: BTreeSet<&str> = scenes.iter().map(|s| s.scene.name.as_str()).collect();
+    let mut entries = Vec::new();
+    let mut labels = BTreeSet::new();
+    let mut budgets: Vec<Vec<Budget>> = Vec::new();
+    for (i, m) in methods.iter().enumerate() {
+        let label = m.label.clone().unwrap_or_else(|| m.method.clone());
+        if label.is_empty() || file_safe(&label) != label {
+            return Err(field_error(
+                file,
+                &format!("method[{i}].label"),
+                format!("{label:?}"),
+                "must be non-empty and use only letters, digits, '.', '_', '=' and '-'",
+            ));
+        }
+        if !labels.insert(label.clone()) {
+            return Err(field_error(
+                file,
+                &format!("method[{i}].label"),
+                format!("{label:?}"),
+                "used by an earlier [[method]]: give each a distinct label",
+            ));
+        }
+        if let Some(names) = &m.scenes {
+            if names.is_empty() {
+                return Err(field_error(
+                    file,
+                    &format!("method[{i}].scenes"),
+                    "[]".into(),
+                    "names no scene: leave it out to run on every scene",
+                ));
+            }
+            if let Some(unknown) = names.iter().find(|n| !scene_names.contains(n.as_str())) {
+                return Err(field_error(
+                    file,
+                    &format!("method[{i}].scenes"),
+                    format!("{unknown:?}"),
+                    "not the name of a [[scene]] in this suite",
+                ));
+            }
+        }
+        if m.params.contains_key("seed") {
+            return Err(field_error(
+                file,
+                &format!("method[{i}].params.seed"),
+                m.params["seed"].to_string(),
+                "the suite sets seeds (its `seed`, plus one per repeat)",
+            ));
+        }
+        if m.budgets.is_empty() {
+            return Err(field_error(
+                file,
+                &format!("method[{i}].budgets"),
+                "[]".into(),
+                "needs at least one budget ({} for the defaults)",
+            ));
+        }
+        budgets.push(parse_budgets(file, i, m, seed)?);
+        entries.push(SuiteMethod {
+            method: m.method.clone(),
+            label,
+        });
+    }
+    Ok((entries, budgets))
+}
+
+/// Makes the method of each budget of entry `i` (its params plus the budget's keys, the
+/// suite's seed) and checks it: time budgets, overrides, duplicates.
+fn parse_budgets(
+    file: &str,
+    i: usize,
+    m: &MethodEntry,
+    seed: u32,
+) -> Result<Vec<Budget>, SuiteError> {
+    let field =
+        |field: &str, value: String, problem: &str| field_error(file, field, value, problem);
+    let mut methods: Vec<Budget> = Vec::new();
+    for (b, budget) in m.budgets.iter().enumerate() {
+        let mut params = m.params.clone();
+        if let Some(v) = m.params.get("time_ms") {
+            return Err(field(
+                &format!("method[{i}].params.time_ms"),
+                v.to_string(),
+                "a time budget belongs in budgets, one per budget",
+            ));
+        }
+        let time_ms = match budget.get("time_ms") {
+            None => None,
+            Some(v) => match v.as_float().or(v.as_integer().map(|i| i as f64)) {
+                Some(t) if t > 0.0 && t <= MAX_TIME_MS => Some(t),
+                _ => {
+                    return Err(field(
+                        &format!("method[{i}].budgets[{b}].time_ms"),
+                        v.to_string(),
+                        &format!("must be GPU milliseconds, a number in (0, {MAX_TIME_MS}]"),
+                    ))
+                }
+            },
+        };
+        for (k, v) in budget.iter().filter(|(k, _)| *k != "time_ms") {
+            if k == "seed" || params.contains_key(k) {
+                return Err(field(
+                    &format!("method[{i}].budgets[{b}].{k}"),
+                    v.to_string(),
+                    "also set in params (or a seed): a budget adds keys, it does not override",
+                ));
+            }
+            params.insert(k.clone(), v.clone());
+        }
+        params.insert("seed".into(), toml::Value::Integer(seed as i64));
+        let method = Method::from_params(&m.method, &params)
+            .map_err(|e| param_error(file, format!("method[{i}].budgets[{b}]"), e))?;
+        if let (Some(_), Some(v)) = (time_ms, params.get(method.count_key())) {
+            let place = match m.params.contains_key(method.count_key()) {
+                true => "params".to_string(),
+                false => format!("budgets[{b}]"),
+            };
+            return Err(field(
+                &format!("method[{i}].{place}.{}", method.count_key()),
+                v.to_string(),
+                &format!(
+                    "a time_ms budget calibrates {} itself: leave it out",
+                    method.count_key()
+                ),
+            ));
+        }
+        let text = budget
+            .iter()
+            .map(|(k, v)| format!("{k}={}", plain(v)))
+            .collect::<Vec<_>>()
+            .join(" ");
+        let text = if text.is_empty() {
+            "defaults".into()
+        } else {
+            text
+        };
+        if let Some((_, same, _)) = methods
+            .iter()
+            .find(|(other, _, t)| *other == method && *t == time_ms)
+        {
+            return Err(field(
+                &format!("method[{i}].budgets[{b}]"),
+                format!("{{ {text} }}"),
+                &format!("the same settings as budget {{ {same} }}"),
+            ));
+        }
+        methods.push((method, text, time_ms));
+    }
+    Ok(methods)
+}
+
+/// Checks that every scene's `home` names a method entry's label.
+fn check_homes(
+    file: &str,
+    scenes: &[SuiteScene],
+    entries: &[SuiteMethod],
+) -> Result<(), SuiteError> {
+    for (i, s) in scenes.iter().enumerate() {
+        if let Some(unknown) = s
+            .home
+            .iter()
+            .find(|h| !entries.iter().any(|e| e.label == **h))
+        {
+            return Err(field_error(
+                file,
+                &format!("scene[{i}].home"),
+                format!("{unknown:?}"),
+                "not the label of a [[method]] in this suite",
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Expands the suite into its runs: per scene, per method entry that applies to it, per
+/// budget; `index` is the position in this list.
+fn expand_runs(
+    scenes: &[SuiteScene],
+    methods: &[MethodEntry],
+    entries: &[SuiteMethod],
+    budgets: &[Vec<Budget>],
+) -> Vec<RunSpec> {
+    let mut runs = Vec::new();
+    for (s, suite_scene) in scenes.iter().enumerate() {
+        for (e, m) in methods.iter().enumerate() {
+            let applies = m
+                .scenes
+                .as_ref()
+                .is_none_or(|names| names.contains(&suite_scene.scene.name));
+            if !applies {
+                continue;
+            }
+            for (method, budget, time_ms) in &budgets[e] {
+                let id = format!("{}/{}/{}", suite_scene.scene.name, entries[e].label, budget);
+                runs.push(RunSpec {
+                    index: runs.len(),
+                    scene: s,
+                    entry: e,
+                    method: method.clone(),
+                    budget: budget.clone(),
+                    time_ms: *time_ms,
+                    id,
+                });
+            }
+        }
+    }
+    runs
 }
 
 /// `--shard i/n`: part i (0-based) of n.
