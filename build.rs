@@ -1,4 +1,4 @@
-//! Embeds every committed spv/*.spv module in the binary (src/gpu/spirv.rs), so irad runs
+//! Embeds every committed spv/<group>/*.spv module in the binary (src/gpu/spirv.rs), so irad runs
 //! where glslang is not installed; and hashes the Rust sources a reference image depends on
 //! (IRAD_REFERENCE_CODE_HASH, part of the benchmark harness's reference cache key).
 
@@ -8,22 +8,30 @@ fn main() {
     let root = env::var("CARGO_MANIFEST_DIR").unwrap();
     let spv = Path::new(&root).join("spv");
     println!("cargo:rerun-if-changed=spv");
-    let mut modules: Vec<(String, String)> = fs::read_dir(&spv)
-        .map(|dir| {
-            dir.filter_map(|e| e.ok())
-                .map(|e| e.path())
-                .filter(|p| p.extension().is_some_and(|x| x == "spv"))
-                .map(|p| {
-                    println!("cargo:rerun-if-changed={}", p.display());
-                    (
-                        p.file_stem().unwrap().to_string_lossy().into_owned(),
-                        p.display().to_string(),
-                    )
-                })
-                .collect()
-        })
-        .unwrap_or_default();
+    // spv/<group>/<name>.spv: a kernel is found by its name alone (names are unique).
+    let mut modules: Vec<(String, String)> = Vec::new();
+    let mut folders = vec![spv.clone()];
+    while let Some(folder) = folders.pop() {
+        println!("cargo:rerun-if-changed={}", folder.display());
+        let Ok(dir) = fs::read_dir(&folder) else {
+            continue;
+        };
+        for path in dir.filter_map(|e| e.ok()).map(|e| e.path()) {
+            if path.is_dir() {
+                folders.push(path);
+            } else if path.extension().is_some_and(|x| x == "spv") {
+                println!("cargo:rerun-if-changed={}", path.display());
+                modules.push((
+                    path.file_stem().unwrap().to_string_lossy().into_owned(),
+                    path.display().to_string(),
+                ));
+            }
+        }
+    }
     modules.sort();
+    if let Some(w) = modules.windows(2).find(|w| w[0].0 == w[1].0) {
+        panic!("two kernels named {}: {} and {}", w[0].0, w[0].1, w[1].1);
+    }
     let mut out = String::from("/// Every module of spv/, by kernel name, sorted.\npub static EMBEDDED: &[(&str, &[u8])] = &[\n");
     for (name, path) in &modules {
         out += &format!("    ({name:?}, include_bytes!({path:?})),\n");

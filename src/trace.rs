@@ -1,4 +1,4 @@
-//! glsl/trace_rays.comp: a buffer of rays traced through the BVH (glsl/include/bvh.glsl), closest
+//! glsl/gpu/trace_rays.comp: a buffer of rays traced through the BVH (glsl/include/bvh.glsl), closest
 //! hit or any hit. The kernel the BVH test and `irad bench rays` run.
 //!
 //! The wrapper only records; once the submission has completed, `GpuBvh::check_loop_cuts`

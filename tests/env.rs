@@ -613,7 +613,7 @@ fn luminance(c: Vec3) -> f64 {
     (0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z) as f64
 }
 
-/// The `hierarchical` pyramid's leaves as glsl/weigh_env_pyramid.comp builds them: the
+/// The `hierarchical` pyramid's leaves as glsl/envmap/weigh_env_pyramid.comp builds them: the
 /// largest luminance among the map texels a leaf's footprint touches times its solid angle.
 fn pyramid_leaves(env: &Environment) -> (u32, u32, Vec<f64>) {
     let (w, h) = (env.width, env.height);

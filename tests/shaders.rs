@@ -41,10 +41,10 @@ fn spirv_val_accepts_every_module() {
         return;
     }
     let tree = ShaderTree::source_checkout();
-    let names = tree.kernel_names().unwrap();
-    assert!(!names.is_empty());
-    for name in names {
-        validate(&tree.spv_dir().join(format!("{name}.spv"))).unwrap();
+    let kernels = tree.kernels().unwrap();
+    assert!(!kernels.is_empty());
+    for (_, relative) in kernels {
+        validate(&tree.spv_path(&relative)).unwrap();
     }
 }
 

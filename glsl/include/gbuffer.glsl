@@ -1,4 +1,4 @@
-// The G-buffer every method shades from (glsl/write_gbuffer.comp writes it once per frame):
+// The G-buffer every method shades from (glsl/shared/write_gbuffer.comp writes it once per frame):
 // the first hit of each pixel's camera ray. Binding 10.
 #ifndef GBUFFER_GLSL
 #define GBUFFER_GLSL

@@ -1,4 +1,4 @@
-//! glsl/copy_values.comp: a plain float copy, the memory-bandwidth yardstick for the scans.
+//! glsl/gpu/copy_values.comp: a plain float copy, the memory-bandwidth yardstick for the scans.
 
 use super::buffer::{Buffer, GpuBuffer};
 use super::commands::Commands;

@@ -33,7 +33,7 @@ pub struct Kernel {
     pipeline: vk::Pipeline,
 }
 
-/// The embedded spv/<name>.spv, or the error naming the kernel.
+/// The embedded spv/<group>/<name>.spv, or the error naming the kernel.
 fn embedded(name: &str) -> GpuResult<&'static [u8]> {
     spirv::embedded(name).ok_or_else(|| GpuError::KernelNotEmbedded {
         kernel: name.into(),
@@ -41,7 +41,7 @@ fn embedded(name: &str) -> GpuResult<&'static [u8]> {
 }
 
 impl Kernel {
-    /// The kernel built from the embedded `spv/<name>.spv`.
+    /// The kernel built from the embedded `spv/<group>/<name>.spv`.
     pub fn new(ctx: &Context, name: &str) -> GpuResult<Self> {
         Self::specialized(ctx, name, &[])
     }
@@ -54,7 +54,7 @@ impl Kernel {
         Self::from_spirv(ctx, name, bytes, constants)
     }
 
-    /// Checks that `spv/<name>.spv` is embedded and its layout reflects, building nothing.
+    /// Checks that `spv/<group>/<name>.spv` is embedded and its layout reflects, building nothing.
     pub fn check_embedded(name: &str) -> GpuResult<()> {
         let bytes = embedded(name)?;
         reflect(name, bytes).map(|_| ())

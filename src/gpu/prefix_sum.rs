@@ -47,7 +47,7 @@ pub(crate) const GPU_LAYOUTS: &[crate::gpu::contracts::GpuLayout] = {
     })]
 };
 
-/// glsl/reduce_blocks.comp: the sum of every block of every row.
+/// glsl/gpu/reduce_blocks.comp: the sum of every block of every row.
 pub struct ReduceBlocks(Kernel);
 
 impl ReduceBlocks {
@@ -72,7 +72,7 @@ impl ReduceBlocks {
     }
 }
 
-/// glsl/scan_blocks.comp: the scan of every block, offset by the blocks before it.
+/// glsl/gpu/scan_blocks.comp: the scan of every block, offset by the blocks before it.
 pub struct ScanBlocks(Kernel);
 
 impl ScanBlocks {

@@ -2,7 +2,7 @@
 
 include!(concat!(env!("OUT_DIR"), "/embedded_spv.rs"));
 
-/// The embedded module of kernel `name` (the file stem of `glsl/<name>.comp`).
+/// The embedded module of kernel `name` (the file stem of `glsl/<group>/<name>.comp`).
 pub fn embedded(name: &str) -> Option<&'static [u8]> {
     EMBEDDED
         .iter()

@@ -14,7 +14,7 @@ use super::kernel::{bind, Kernel};
 /// Invocations per workgroup of the probe and of the scan kernels (scan_layout.glsl).
 const WORKGROUP: usize = 64;
 
-/// Runs glsl/probe_subgroup_layout.comp once and checks its records (`Context` caches the
+/// Runs glsl/gpu/probe_subgroup_layout.comp once and checks its records (`Context` caches the
 /// verdict, so this runs once per context).
 pub(crate) fn probe(ctx: &Context) -> GpuResult<()> {
     let kernel = Kernel::new(ctx, "probe_subgroup_layout")?;

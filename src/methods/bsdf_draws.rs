@@ -1,4 +1,4 @@
-//! glsl/draw_bsdf_samples.comp: the BSDF sampler (bsdf.glsl) and the cosine sampler on their
+//! glsl/shared/draw_bsdf_samples.comp: the BSDF sampler (bsdf.glsl) and the cosine sampler on their
 //! own, for one material, shading normal and outgoing direction: `count` draws of each with
 //! their pdfs, and `count` uniform probes of bsdf_pdf, so tests can check them against the
 //! pdf they report (env's `brdf` and `cosine` strategies, and every method's BSDF sampling).

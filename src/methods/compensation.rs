@@ -3,9 +3,9 @@
 //! at b, which removes the spikes next to VPLs; short camera-side paths add back exactly what
 //! the clamp removed (glsl/include/compensation.glsl), so the estimate stays unbiased:
 //!
-//! - glsl/trace_compensation_paths.comp: level l's vertices, BSDF-sampled from level l - 1
+//! - glsl/shared/trace_compensation_paths.comp: level l's vertices, BSDF-sampled from level l - 1
 //!   (the G-buffer for l = 1), kept where G(x, y) > b, with next-event estimation at each;
-//! - glsl/gather_compensation_vpls.comp: the frame's VPLs at level l's vertices, clamped at b
+//! - glsl/shared/gather_compensation_vpls.comp: the frame's VPLs at level l's vertices, clamped at b
 //!   except at the last level, DEPTH, whose gather is unclamped and ends the recursion
 //!   without bias.
 //!

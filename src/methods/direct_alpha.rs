@@ -1,4 +1,4 @@
-//! glsl/shade_direct_alpha.comp: the reference's direct light (`--max-depth 1`) with Lu 14
+//! glsl/shared/shade_direct_alpha.comp: the reference's direct light (`--max-depth 1`) with Lu 14
 //! Chapter 5's per-pixel split between light and BSDF sampling (`--alpha-frames M`): the first
 //! M frames take one sample of each and estimate alpha (Eq. 5.4-5.5) into a per-pixel state;
 //! later frames split two samples by it. The per-pixel state also yields the alpha map.

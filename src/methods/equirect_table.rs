@@ -1,5 +1,5 @@
 //! A sampling table over the scene's environment map, rebuilt on the GPU
-//! (glsl/include/equirect_table.glsl reads it): glsl/weigh_equirect_texels.comp weighs every
+//! (glsl/include/equirect_table.glsl reads it): glsl/shared/weigh_equirect_texels.comp weighs every
 //! texel by (Y(Le) + offset) times its solid angle, then the prefix sums within each row and
 //! over the row totals. Used by bundles (Tokuyoshi 12 Eq. 2's bundle directions, offset Lo)
 //! and env's `latlong` strategy (light sampling, offset 0).

@@ -1,4 +1,4 @@
-//! glsl/write_gbuffer.comp: the first hit of one jittered camera ray per pixel (Keller 97
+//! glsl/shared/write_gbuffer.comp: the first hit of one jittered camera ray per pixel (Keller 97
 //! Section 4.1 low-discrepancy subpixel positions: per-pixel shifted Halton), shared by every method.
 
 use bytemuck::{Pod, Zeroable};

@@ -283,7 +283,7 @@ mod tests {
             .iter()
             .map(|s| (s.name(), s.code()))
             .collect();
-        check("shade_env.comp", &env);
+        check("envmap/shade_env.comp", &env);
         let lf: Vec<_> = lightfield::Strategy::ALL
             .iter()
             .map(|&s| (s.name(), s as u32))
@@ -293,7 +293,7 @@ mod tests {
             .iter()
             .map(|&s| (s.name(), s as u32))
             .collect();
-        check("shade_bundle_paths.comp", &b);
+        check("bundles/shade_bundle_paths.comp", &b);
     }
 
     fn table(text: &str) -> toml::Table {

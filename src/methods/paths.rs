@@ -1,4 +1,4 @@
-//! glsl/trace_reference_paths.comp: one path per pixel from the G-buffer's first hit, adding
+//! glsl/shared/trace_reference_paths.comp: one path per pixel from the G-buffer's first hit, adding
 //! its estimate into the accumulation. The reference runs it with a deep `max_depth`; the
 //! many-light methods run it with `max_depth` 1 for direct light (emission plus next-event
 //! estimation and BSDF sampling, MIS-combined), so they differ only in indirect light, or 0

@@ -1,5 +1,5 @@
 //! The reference path tracer, ground truth for every accuracy figure: per frame, the G-buffer
-//! pass then glsl/trace_reference_paths.comp (one path per pixel: next-event estimation plus
+//! pass then glsl/shared/trace_reference_paths.comp (one path per pixel: next-event estimation plus
 //! BSDF sampling combined by the power heuristic, Russian roulette), accumulated over `spp`
 //! frames. Unbiased up to `max_depth` scattering events (a safety cap; Russian roulette ends
 //! paths long before it unless the scene reflects almost everything).
@@ -28,7 +28,7 @@ pub struct ReferenceSettings {
     /// First bounce at which Russian roulette may end a path.
     pub roulette_depth: u32,
     /// With `max_depth` 1 only: Lu 14 Chapter 5's per-pixel split of the direct light between
-    /// light and BSDF sampling, estimated over the first M frames (glsl/shade_direct_alpha.comp)
+    /// light and BSDF sampling, estimated over the first M frames (glsl/shared/shade_direct_alpha.comp)
     /// instead of the power heuristic's one sample of each.
     pub alpha_frames: Option<u32>,
     pub pixels: PixelSampling,

@@ -1,4 +1,4 @@
-//! glsl/estimate_light_contributions.comp and glsl/build_light_cdf.comp: bir's many-light
+//! glsl/bir/estimate_light_contributions.comp and glsl/bir/build_light_cdf.comp: bir's many-light
 //! sampling (Segovia 06 Section 4.1): each light's contribution to what the camera sees,
 //! measured once per render at `SAMPLES` camera points and one bounce beyond, summed per light by the GPU
 //! prefix sum (one row per light), and the table that starts light paths in proportion to it

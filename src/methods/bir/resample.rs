@@ -1,4 +1,4 @@
-//! glsl/estimate_vpl_power.comp and glsl/resample_vpls.comp: bir's resampling (Segovia 06
+//! glsl/bir/estimate_vpl_power.comp and glsl/bir/resample_vpls.comp: bir's resampling (Segovia 06
 //! Sections 3.2, 4.2): each candidate's power to the camera from M camera points, a CDF over
 //! the candidates by the GPU prefix sum (two rows: the powers and the non-empty flags, for the
 //! uniform floor), and N' systematic draws, each a VPL of power P_c / (N' q_c).
@@ -223,7 +223,7 @@ impl ResampleVpls {
     }
 }
 
-/// glsl/update_side_weights.comp: after a batch, `both`'s standard weight becomes the fraction
+/// glsl/bir/update_side_weights.comp: after a batch, `both`'s standard weight becomes the fraction
 /// of the batches so far in which the standard candidates brought more camera power than the
 /// reverse ones, clamped to [min_weight, 1 - min_weight].
 pub struct UpdateSideWeights(Kernel);

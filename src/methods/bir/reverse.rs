@@ -1,4 +1,4 @@
-//! glsl/trace_reverse_vpls.comp, glsl/shade_reverse_vpls.comp and glsl/find_uncovered_vpls.comp:
+//! glsl/bir/trace_reverse_vpls.comp, glsl/bir/shade_reverse_vpls.comp and glsl/bir/find_uncovered_vpls.comp:
 //! bir's reverse VPLs (the ends of length-2 camera paths, Segovia 06 Section 3.1), their exact
 //! density over the batch's pool of camera points (Eq. 7), their outgoing radiance (diffuse
 //! approximation, lit by the lights and the batch's standard VPLs), and the standard VPLs no

@@ -1,4 +1,4 @@
-//! glsl/trace_light_vertices.comp: each iteration's VPLs from the point and spot lights,
+//! glsl/bundles/trace_light_vertices.comp: each iteration's VPLs from the point and spot lights,
 //! sampled by their emission pdf (Tokuyoshi 12 Section 4.1), one per light or one light by
 //! Russian roulette, and the iteration's bundle direction; and the buffer of one frame's light
 //! vertices.

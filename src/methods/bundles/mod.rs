@@ -50,7 +50,7 @@ pub enum Strategy {
     Mis,
 }
 
-// In the order of glsl/shade_bundle_paths.comp's STRATEGY_* codes (`Strategy as u32`).
+// In the order of glsl/bundles/shade_bundle_paths.comp's STRATEGY_* codes (`Strategy as u32`).
 named_choices!(Strategy {
     Vpl => "vpl",
     Bundle => "bundle",

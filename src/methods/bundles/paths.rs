@@ -1,4 +1,4 @@
-//! glsl/shade_bundle_paths.comp: the environment's direct light through each G-buffer point's
+//! glsl/bundles/shade_bundle_paths.comp: the environment's direct light through each G-buffer point's
 //! bundle rays, and its one- and two-bounce paths through the chunk's VPLs and bundle hits,
 //! MIS-combined (Tokuyoshi 12 Eq. 3-8), added into the accumulation.
 

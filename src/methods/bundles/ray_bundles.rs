@@ -1,4 +1,4 @@
-//! glsl/trace_ray_bundles.comp: global ray bundles (Tokuyoshi 12 Section 3.2) traced through
+//! glsl/bundles/trace_ray_bundles.comp: global ray bundles (Tokuyoshi 12 Section 3.2) traced through
 //! the BVH: for each iteration of a chunk, every G-buffer point's first hit along the shared
 //! direction.
 

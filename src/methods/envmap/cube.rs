@@ -1,7 +1,7 @@
 //! The per-frame cube-map sampling table of method `env` (Lu 14 Section 3.3, Alg. 1 lines
-//! 5-10), all on the GPU: glsl/weigh_env_cube.comp (each cube texel's conservative luminance
+//! 5-10), all on the GPU: glsl/envmap/weigh_env_cube.comp (each cube texel's conservative luminance
 //! times its solid angle), the prefix sums within every face row and over each face's row
-//! totals (glsl/include/env_cube.glsl reads them), and glsl/generate_env_samples.comp (the
+//! totals (glsl/include/env_cube.glsl reads them), and glsl/envmap/generate_env_samples.comp (the
 //! frame's light samples per face, shared by every pixel).
 
 use bytemuck::{Pod, Zeroable};

@@ -54,7 +54,7 @@ pub enum Strategy {
     Alpha,
 }
 
-// In the order of glsl/shade_env.comp's STRATEGY_* codes (`code`).
+// In the order of glsl/envmap/shade_env.comp's STRATEGY_* codes (`code`).
 named_choices!(Strategy {
     Dynamic => "dynamic",
     UniformFaces => "uniform-faces",
@@ -66,7 +66,7 @@ named_choices!(Strategy {
 });
 
 impl Strategy {
-    /// The strategy codes of glsl/shade_env.comp: the declaration order (a unit test checks
+    /// The strategy codes of glsl/envmap/shade_env.comp: the declaration order (a unit test checks
     /// the GLSL's defines).
     pub fn code(self) -> u32 {
         self as u32

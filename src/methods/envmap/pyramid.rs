@@ -1,6 +1,6 @@
 //! The `hierarchical` sampler's luminance pyramid (glsl/include/env_pyramid.glsl reads it),
-//! rebuilt on the GPU from the scene's map: glsl/weigh_env_pyramid.comp (each leaf's
-//! conservative luminance times its solid angle), then glsl/reduce_env_pyramid.comp once per
+//! rebuilt on the GPU from the scene's map: glsl/envmap/weigh_env_pyramid.comp (each leaf's
+//! conservative luminance times its solid angle), then glsl/envmap/reduce_env_pyramid.comp once per
 //! level (2x2 sums) up to the 2 x 1 top. No CDF and no scan: a draw descends the levels.
 
 use bytemuck::{Pod, Zeroable};
@@ -111,7 +111,7 @@ impl EnvPyramid {
     }
 }
 
-/// glsl/draw_env_pyramid_samples.comp: `count` draws from the pyramid (direction, reported
+/// glsl/envmap/draw_env_pyramid_samples.comp: `count` draws from the pyramid (direction, reported
 /// density) and `count` uniform probes of its density (direction, density).
 pub struct PyramidDraws {
     kernel: Kernel,

@@ -1,4 +1,4 @@
-//! glsl/shade_env.comp: the environment map's direct light at every G-buffer point, with a
+//! glsl/envmap/shade_env.comp: the environment map's direct light at every G-buffer point, with a
 //! shadow ray per sample, by the chosen strategy (Lu 14 Eq. 3.4-3.7, Alg. 2, and baselines).
 
 use bytemuck::{Pod, Zeroable};

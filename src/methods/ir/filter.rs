@@ -1,4 +1,4 @@
-//! glsl/filter_interleaved.comp: restores a full estimate per pixel from the k x k block of
+//! glsl/ir/filter_interleaved.comp: restores a full estimate per pixel from the k x k block of
 //! interleaved VPL subsets (Keller and Heidrich 2001), across pixels that see the same surface.
 
 use bytemuck::{Pod, Zeroable};

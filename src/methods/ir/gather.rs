@@ -1,4 +1,4 @@
-//! glsl/accumulate_vpls_tiled.comp: every (pixel, VPL) pair of a frame, tile by tile, with
+//! glsl/ir/accumulate_vpls_tiled.comp: every (pixel, VPL) pair of a frame, tile by tile, with
 //! VPLs streamed through shared memory, added into the accumulation.
 
 use std::ops::Range;

@@ -1,4 +1,4 @@
-//! glsl/trace_vpls.comp: the quasi-random walk from the lights that writes one frame's VPLs
+//! glsl/ir/trace_vpls.comp: the quasi-random walk from the lights that writes one frame's VPLs
 //! (Keller 97 Section 3.2), and the VPL buffer it writes.
 
 use bytemuck::{Pod, Zeroable};

@@ -1,8 +1,8 @@
 //! Light-field luminaires (Lu 14 Chapter 4), method `lightfield`: per frame the
 //! G-buffer and the direct light of the scene's other lights (the reference's direct-light
 //! pass), then per placed luminaire Lu's two steps (Section 4.5.1):
-//! glsl/estimate_luminaire_areas.comp (A(p), pass "A estimation") and
-//! glsl/shade_lightfield.comp (K_m, the samples and their shading with a shadow ray each, by
+//! glsl/lightfield/estimate_luminaire_areas.comp (A(p), pass "A estimation") and
+//! glsl/lightfield/shade_lightfield.comp (K_m, the samples and their shading with a shadow ray each, by
 //! the chosen strategy; pass "shade"). The luminaires' sampling tables are built on the GPU
 //! at the render's start, and every frame for a luminaire whose atlases change (tables.rs).
 //! src/sampling/luminaire.rs is the f64 mirror.

@@ -1,9 +1,9 @@
 //! The light-field luminaire's sampling tables, built on the GPU with the scan kernels (Lu 14
 //! Section 4.5), and rebuilt whenever the images change:
-//! glsl/weigh_luminaire_columns.comp (each texel's luminance, column by column), the prefix sum
+//! glsl/lightfield/weigh_luminaire_columns.comp (each texel's luminance, column by column), the prefix sum
 //! over every column (the conditional CDFs in t, Eq. 4.10, and the column totals), the prefix
 //! sum over each image's column totals (the marginal CDF in s, and the image totals),
-//! glsl/transpose_luminaire_columns.comp, and the prefix sum along every row of the transposed
+//! glsl/lightfield/transpose_luminaire_columns.comp, and the prefix sum along every row of the transposed
 //! column CDFs (the summed-area table). src/sampling/restricted.rs is the f64 mirror. A
 //! luminaire with a sequence of atlases keeps them all on the GPU; frame f copies atlas
 //! f mod n into the live texels and rebuilds every table from them (`record_frame`).
@@ -198,7 +198,7 @@ pub(crate) const GPU_LAYOUTS: &[crate::gpu::contracts::GpuLayout] = {
     ]
 };
 
-/// glsl/draw_luminaire_samples.comp: the restricted sampler of glsl/include/
+/// glsl/lightfield/draw_luminaire_samples.comp: the restricted sampler of glsl/include/
 /// luminaire_tables.glsl on its own, for its tests: `count` draws in one image's window, each
 /// (s, t, realised pdf, search steps).
 pub struct RestrictedDraws {
