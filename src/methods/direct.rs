@@ -27,28 +27,25 @@ impl GBufferAndDirectLight {
         })
     }
 
-    /// Records the passes "gbuffer" and "direct light" of `frame`; `reflected_environment`
-    /// false leaves the environment's direct light out (bundles estimates it). `direct_spp` 0 or 1
-    /// starts the direct-light paths at the G-buffer's hits; K > 1 gives them K camera rays of
-    /// their own per pixel and frame (`--direct-spp`), so direct light and the pixel footprint
-    /// get K samples while the frame's expensive indirect estimate gets one position.
-    #[allow(clippy::too_many_arguments)]
+    /// Records the passes "gbuffer" and "direct light" of `frame`, the direct light as
+    /// `options` says.
     pub fn record<'a>(
         &'a self,
         cmd: &mut Commands<'a>,
         scene: &'a GpuScene,
         gbuffer: &'a GBuffer,
         accumulation: &'a Accumulation,
-        frame: u32,
-        seed: u32,
-        pixels: PixelSampling,
-        max_depth: u32,
-        reflected_environment: bool,
-        direct_spp: u32,
+        frame: FrameKeys,
+        options: DirectLightOptions,
     ) -> GpuResult<()> {
+        let FrameKeys {
+            frame,
+            seed,
+            pixels,
+        } = frame;
         // One sample from its own camera ray would be the G-buffer's (sample index and
         // subpixel position `frame`): the G-buffer's hit saves the ray.
-        let starts = match direct_spp {
+        let starts = match options.spp {
             0 | 1 => PathStarts::GBuffer,
             samples => PathStarts::Camera { samples, pixels },
         };
@@ -64,11 +61,51 @@ impl GBufferAndDirectLight {
                 accumulation,
                 frame,
                 seed,
-                max_depth,
+                options.light.max_depth(),
                 u32::MAX,
-                reflected_environment,
+                options.reflected_environment,
                 starts,
             )
         })
     }
+}
+
+/// Which frame a pass records: its index, the render's seed and how pixels are sampled.
+#[derive(Clone, Copy, Debug)]
+pub struct FrameKeys {
+    pub frame: u32,
+    pub seed: u32,
+    pub pixels: PixelSampling,
+}
+
+/// What the direct-light pass estimates.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DirectLightPaths {
+    /// Emission seen from the camera, next-event estimation and BSDF sampling, MIS-combined
+    /// (the paths kernel at `max_depth` 1).
+    NextEvent,
+    /// Emission seen from the camera only (`max_depth` 0): the method's VPLs carry direct
+    /// light too.
+    EmissionOnly,
+}
+
+impl DirectLightPaths {
+    fn max_depth(self) -> u32 {
+        match self {
+            DirectLightPaths::NextEvent => 1,
+            DirectLightPaths::EmissionOnly => 0,
+        }
+    }
+}
+
+/// The direct-light pass's options.
+#[derive(Clone, Copy, Debug)]
+pub struct DirectLightOptions {
+    pub light: DirectLightPaths,
+    /// false leaves the environment's direct light out (bundles estimates it).
+    pub reflected_environment: bool,
+    /// 0 or 1 starts the paths at the G-buffer's hits; K > 1 gives them K camera rays of
+    /// their own per pixel and frame (`--direct-spp`), so direct light and the pixel footprint
+    /// get K samples while the frame's expensive indirect estimate gets one position.
+    pub spp: u32,
 }

@@ -22,7 +22,9 @@ use thiserror::Error;
 use crate::gpu::{Buffer, Commands, Context, GpuError};
 use crate::methods::accumulation::Accumulation;
 use crate::methods::compensation::{ClampCompensation, ClampSettings, FrameClamp, VplSource};
-use crate::methods::direct::GBufferAndDirectLight;
+use crate::methods::direct::{
+    DirectLightOptions, DirectLightPaths, FrameKeys, GBufferAndDirectLight,
+};
 use crate::methods::gbuffer::{GBuffer, PixelSampling};
 use crate::methods::ir::gather::AccumulateVpls;
 use crate::methods::ir::schedule::{mean_albedo, Absorption, Schedule};
@@ -436,12 +438,16 @@ impl Bir {
                     gpu_scene,
                     &gbuffer,
                     &accumulation,
-                    frame,
-                    settings.seed,
-                    settings.pixels,
-                    1,
-                    true,
-                    settings.direct_spp,
+                    FrameKeys {
+                        frame,
+                        seed: settings.seed,
+                        pixels: settings.pixels,
+                    },
+                    DirectLightOptions {
+                        light: DirectLightPaths::NextEvent,
+                        reflected_environment: true,
+                        spp: settings.direct_spp,
+                    },
                 )?;
                 // Once per render, on the first frame's G-buffer: the table only steers which
                 // lights start paths (each walk divides by the probability it used), so it

@@ -21,7 +21,9 @@ use thiserror::Error;
 use crate::gpu::{Buffer, Context, GpuError};
 use crate::methods::accumulation::Accumulation;
 use crate::methods::compensation::ClampSettings;
-use crate::methods::direct::GBufferAndDirectLight;
+use crate::methods::direct::{
+    DirectLightOptions, DirectLightPaths, FrameKeys, GBufferAndDirectLight,
+};
 use crate::methods::gbuffer::{GBuffer, PixelSampling};
 use crate::methods::progressive;
 use crate::methods::rebuild::TableRebuild;
@@ -429,12 +431,16 @@ impl Bundles {
                     gpu_scene,
                     &gbuffer,
                     &accumulation,
-                    frame,
-                    settings.seed,
-                    settings.pixels,
-                    1,
-                    false,
-                    settings.direct_spp,
+                    FrameKeys {
+                        frame,
+                        seed: settings.seed,
+                        pixels: settings.pixels,
+                    },
+                    DirectLightOptions {
+                        light: DirectLightPaths::NextEvent,
+                        reflected_environment: false,
+                        spp: settings.direct_spp,
+                    },
                 )?;
                 if environment
                     && directions.density() == DirectionDensity::Environment

@@ -14,7 +14,9 @@ use thiserror::Error;
 use crate::gpu::{Buffer, Context, GpuError};
 use crate::image::Image;
 use crate::methods::accumulation::Accumulation;
-use crate::methods::direct::GBufferAndDirectLight;
+use crate::methods::direct::{
+    DirectLightOptions, DirectLightPaths, FrameKeys, GBufferAndDirectLight,
+};
 use crate::methods::gbuffer::{GBuffer, PixelSampling};
 use crate::methods::progressive;
 use crate::methods::rebuild::TableRebuild;
@@ -335,12 +337,16 @@ impl Env {
                     gpu_scene,
                     &gbuffer,
                     &accumulation,
-                    frame,
-                    settings.seed,
-                    settings.pixels,
-                    0,
-                    true,
-                    0,
+                    FrameKeys {
+                        frame,
+                        seed: settings.seed,
+                        pixels: settings.pixels,
+                    },
+                    DirectLightOptions {
+                        light: DirectLightPaths::EmissionOnly,
+                        reflected_environment: true,
+                        spp: 0,
+                    },
                 )?;
                 let rebuild = settings.rebuild.due(frame, sequence);
                 if strategy.uses_cube() {

@@ -15,7 +15,9 @@ use thiserror::Error;
 use crate::gpu::{Buffer, Context, GpuError};
 use crate::methods::accumulation::Accumulation;
 use crate::methods::compensation::{ClampCompensation, ClampSettings, VplSource};
-use crate::methods::direct::GBufferAndDirectLight;
+use crate::methods::direct::{
+    DirectLightOptions, DirectLightPaths, FrameKeys, GBufferAndDirectLight,
+};
 use crate::methods::gbuffer::{GBuffer, PixelSampling};
 use crate::methods::progressive;
 use crate::methods::settings::{
@@ -205,9 +207,9 @@ impl InstantRadiosity {
         let clamp = settings
             .clamp
             .prepare(ctx, scene, gpu_scene, surface.end - surface.start)?;
-        let direct_depth = match settings.direct {
-            DirectLight::NextEvent => 1,
-            DirectLight::Vpl => 0,
+        let direct_light = match settings.direct {
+            DirectLight::NextEvent => DirectLightPaths::NextEvent,
+            DirectLight::Vpl => DirectLightPaths::EmissionOnly,
         };
         let frames = settings.frames.max(1);
         let passes = progressive::run(
@@ -221,12 +223,16 @@ impl InstantRadiosity {
                     gpu_scene,
                     &gbuffer,
                     &accumulation,
-                    frame,
-                    settings.seed,
-                    settings.pixels,
-                    direct_depth,
-                    true,
-                    settings.direct_spp,
+                    FrameKeys {
+                        frame,
+                        seed: settings.seed,
+                        pixels: settings.pixels,
+                    },
+                    DirectLightOptions {
+                        light: direct_light,
+                        reflected_environment: true,
+                        spp: settings.direct_spp,
+                    },
                 )?;
                 let walk_seed = pcg::hash(&[settings.seed, frame, 0x76706c73]);
                 cmd.pass("vpl walk", |cmd| {

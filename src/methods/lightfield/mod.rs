@@ -18,7 +18,9 @@ use thiserror::Error;
 use crate::gpu::{bind, Buffer, Context, GpuError, Kernel};
 use crate::image::Image;
 use crate::methods::accumulation::Accumulation;
-use crate::methods::direct::GBufferAndDirectLight;
+use crate::methods::direct::{
+    DirectLightOptions, DirectLightPaths, FrameKeys, GBufferAndDirectLight,
+};
 use crate::methods::gbuffer::{GBuffer, PixelSampling};
 use crate::methods::progressive;
 use crate::methods::rebuild::TableRebuild;
@@ -397,12 +399,16 @@ impl Lightfield {
                     gpu_scene,
                     &gbuffer,
                     &accumulation,
-                    frame,
-                    settings.seed,
-                    settings.pixels,
-                    1,
-                    true,
-                    0,
+                    FrameKeys {
+                        frame,
+                        seed: settings.seed,
+                        pixels: settings.pixels,
+                    },
+                    DirectLightOptions {
+                        light: DirectLightPaths::NextEvent,
+                        reflected_environment: true,
+                        spp: 0,
+                    },
                 )?;
                 for l in &luminaires {
                     let tables = [
