@@ -28,7 +28,7 @@ impl GBufferAndDirectLight {
     }
 
     /// Records the passes "gbuffer" and "direct light" of `frame`, the direct light as
-    /// `options` says.
+    /// `options` says (none: the G-buffer alone).
     pub fn record<'a>(
         &'a self,
         cmd: &mut Commands<'a>,
@@ -36,23 +36,26 @@ impl GBufferAndDirectLight {
         gbuffer: &'a GBuffer,
         accumulation: &'a Accumulation,
         frame: FrameKeys,
-        options: DirectLightOptions,
+        options: Option<DirectLightOptions>,
     ) -> GpuResult<()> {
         let FrameKeys {
             frame,
             seed,
             pixels,
         } = frame;
+        cmd.pass("gbuffer", |cmd| {
+            self.gbuffer
+                .record(cmd, scene, gbuffer, frame, seed, pixels)
+        })?;
+        let Some(options) = options else {
+            return Ok(());
+        };
         // One sample from its own camera ray would be the G-buffer's (sample index and
         // subpixel position `frame`): the G-buffer's hit saves the ray.
         let starts = match options.spp {
             0 | 1 => PathStarts::GBuffer,
             samples => PathStarts::Camera { samples, pixels },
         };
-        cmd.pass("gbuffer", |cmd| {
-            self.gbuffer
-                .record(cmd, scene, gbuffer, frame, seed, pixels)
-        })?;
         cmd.pass("direct light", |cmd| {
             self.paths.record(
                 cmd,

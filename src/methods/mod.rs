@@ -9,6 +9,7 @@ pub mod compensation;
 pub mod device_fit;
 pub mod direct;
 pub mod direct_alpha;
+pub mod driver;
 pub mod envmap;
 pub mod equirect_table;
 pub mod gbuffer;

@@ -443,11 +443,11 @@ impl Bir {
                         seed: settings.seed,
                         pixels: settings.pixels,
                     },
-                    DirectLightOptions {
+                    Some(DirectLightOptions {
                         light: DirectLightPaths::NextEvent,
                         reflected_environment: true,
                         spp: settings.direct_spp,
-                    },
+                    }),
                 )?;
                 // Once per render, on the first frame's G-buffer: the table only steers which
                 // lights start paths (each walk divides by the probability it used), so it

@@ -436,11 +436,11 @@ impl Bundles {
                         seed: settings.seed,
                         pixels: settings.pixels,
                     },
-                    DirectLightOptions {
+                    Some(DirectLightOptions {
                         light: DirectLightPaths::NextEvent,
                         reflected_environment: false,
                         spp: settings.direct_spp,
-                    },
+                    }),
                 )?;
                 if environment
                     && directions.density() == DirectionDensity::Environment

@@ -342,11 +342,11 @@ impl Env {
                         seed: settings.seed,
                         pixels: settings.pixels,
                     },
-                    DirectLightOptions {
+                    Some(DirectLightOptions {
                         light: DirectLightPaths::EmissionOnly,
                         reflected_environment: true,
                         spp: 0,
-                    },
+                    }),
                 )?;
                 let rebuild = settings.rebuild.due(frame, sequence);
                 if strategy.uses_cube() {

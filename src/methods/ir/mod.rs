@@ -12,14 +12,11 @@ use std::time::Instant;
 
 use thiserror::Error;
 
-use crate::gpu::{Buffer, Context, GpuError};
-use crate::methods::accumulation::Accumulation;
-use crate::methods::compensation::{ClampCompensation, ClampSettings, VplSource};
-use crate::methods::direct::{
-    DirectLightOptions, DirectLightPaths, FrameKeys, GBufferAndDirectLight,
-};
-use crate::methods::gbuffer::{GBuffer, PixelSampling};
-use crate::methods::progressive;
+use crate::gpu::{Buffer, Commands, Context, GpuError, GpuResult};
+use crate::methods::compensation::{ClampCompensation, ClampSettings, FrameClamp, VplSource};
+use crate::methods::direct::{DirectLightOptions, DirectLightPaths, GBufferAndDirectLight};
+use crate::methods::driver::{self, Extras, MethodFrames, Plan, Shared};
+use crate::methods::gbuffer::PixelSampling;
 use crate::methods::settings::{
     common_settings, field_setting, named_choices, Kind, Need, Setting, Value,
 };
@@ -182,9 +179,41 @@ impl InstantRadiosity {
         if scene.environment.is_some() {
             return Err(IrError::Environment);
         }
-        let start = Instant::now();
-        let gbuffer = GBuffer::new(ctx, gpu_scene)?;
-        let accumulation = Accumulation::new(ctx, gpu_scene.width, gpu_scene.height)?;
+        let plan = Plan {
+            frames: settings.frames.max(1),
+            seed: settings.seed,
+            pixels: settings.pixels,
+            direct: Some(DirectLightOptions {
+                light: match settings.direct {
+                    DirectLight::NextEvent => DirectLightPaths::NextEvent,
+                    DirectLight::Vpl => DirectLightPaths::EmissionOnly,
+                },
+                reflected_environment: true,
+                spp: settings.direct_spp,
+            }),
+            start: Instant::now(),
+        };
+        let setup = || -> GpuResult<Box<dyn MethodFrames + '_>> {
+            Ok(Box::new(self.set_up(ctx, scene, gpu_scene, settings)?))
+        };
+        Ok(driver::render(
+            ctx,
+            &self.direct,
+            gpu_scene,
+            plan,
+            setup,
+            progress,
+        )?)
+    }
+
+    /// The render's VPL buffers, the clamp and the interleave's radiance.
+    fn set_up<'a>(
+        &'a self,
+        ctx: &Context,
+        scene: &Scene,
+        gpu_scene: &GpuScene,
+        settings: &'a IrSettings,
+    ) -> GpuResult<IrFrames<'a>> {
         let vpls = VplBuffers::new(ctx, Self::schedule(scene, settings))?;
         let interleave = settings.interleave.max(1);
         let vpl_radiance = Buffer::zeroed(
@@ -207,100 +236,102 @@ impl InstantRadiosity {
         let clamp = settings
             .clamp
             .prepare(ctx, scene, gpu_scene, surface.end - surface.start)?;
-        let direct_light = match settings.direct {
-            DirectLight::NextEvent => DirectLightPaths::NextEvent,
-            DirectLight::Vpl => DirectLightPaths::EmissionOnly,
-        };
-        let frames = settings.frames.max(1);
-        let passes = progressive::run(
-            ctx,
-            gpu_scene,
-            frames,
-            &accumulation,
-            |cmd, frame| {
-                self.direct.record(
-                    cmd,
-                    gpu_scene,
-                    &gbuffer,
-                    &accumulation,
-                    FrameKeys {
-                        frame,
-                        seed: settings.seed,
-                        pixels: settings.pixels,
-                    },
-                    DirectLightOptions {
-                        light: direct_light,
-                        reflected_environment: true,
-                        spp: settings.direct_spp,
-                    },
-                )?;
-                let walk_seed = pcg::hash(&[settings.seed, frame, 0x76706c73]);
-                cmd.pass("vpl walk", |cmd| {
-                    self.walk.record(cmd, gpu_scene, &vpls, walk_seed, None)
-                })?;
-                cmd.pass("vpl accumulation", |cmd| {
-                    if interleave > 1 {
-                        cmd.fill_zero(&vpl_radiance);
-                    }
-                    for (slots, clamp) in [
-                        (light_vertices.clone(), 0.0),
-                        (surface.clone(), clamp.g_clamp),
-                    ] {
-                        if slots.is_empty() {
-                            continue;
-                        }
-                        self.gather.record(
-                            cmd,
-                            gpu_scene,
-                            &gbuffer,
-                            &vpls.vpls,
-                            &accumulation,
-                            &vpl_radiance,
-                            slots,
-                            clamp,
-                            interleave,
-                            1.0,
-                        )?;
-                    }
-                    Ok(())
-                })?;
-                clamp.record_compensation(
-                    &self.compensation,
-                    cmd,
-                    gpu_scene,
-                    &gbuffer,
-                    &accumulation,
-                    &[VplSource {
-                        vpls: &vpls.vpls,
-                        slots: surface.clone(),
-                        weight: 1.0,
-                    }],
-                    1.0,
-                    frame,
-                    pcg::hash(&[settings.seed, frame, 0x636f6d70]),
-                )?;
-                if interleave > 1 {
-                    cmd.pass("interleave filter", |cmd| {
-                        self.filter.record(
-                            cmd,
-                            gpu_scene,
-                            &gbuffer,
-                            &vpl_radiance,
-                            &accumulation,
-                            interleave,
-                        )
-                    })?;
+        Ok(IrFrames {
+            ir: self,
+            settings,
+            vpls,
+            vpl_radiance,
+            interleave,
+            surface,
+            light_vertices,
+            clamp,
+        })
+    }
+}
+
+/// One ir render's buffers, recording each frame's VPL walk and gather.
+struct IrFrames<'a> {
+    ir: &'a InstantRadiosity,
+    settings: &'a IrSettings,
+    vpls: VplBuffers,
+    vpl_radiance: Buffer<glam::Vec4>,
+    interleave: u32,
+    surface: std::ops::Range<u32>,
+    light_vertices: std::ops::Range<u32>,
+    clamp: FrameClamp,
+}
+
+impl MethodFrames for IrFrames<'_> {
+    fn record<'a>(
+        &'a self,
+        shared: &Shared<'a>,
+        cmd: &mut Commands<'a>,
+        frame: u32,
+    ) -> GpuResult<()> {
+        let (ir, settings, gpu_scene) = (self.ir, self.settings, shared.scene);
+        let walk_seed = pcg::hash(&[settings.seed, frame, 0x76706c73]);
+        cmd.pass("vpl walk", |cmd| {
+            ir.walk.record(cmd, gpu_scene, &self.vpls, walk_seed, None)
+        })?;
+        cmd.pass("vpl accumulation", |cmd| {
+            if self.interleave > 1 {
+                cmd.fill_zero(&self.vpl_radiance);
+            }
+            for (slots, clamp) in [
+                (self.light_vertices.clone(), 0.0),
+                (self.surface.clone(), self.clamp.g_clamp),
+            ] {
+                if slots.is_empty() {
+                    continue;
                 }
-                Ok(())
-            },
-            progress,
+                ir.gather.record(
+                    cmd,
+                    gpu_scene,
+                    shared.gbuffer,
+                    &self.vpls.vpls,
+                    shared.accumulation,
+                    &self.vpl_radiance,
+                    slots,
+                    clamp,
+                    self.interleave,
+                    1.0,
+                )?;
+            }
+            Ok(())
+        })?;
+        self.clamp.record_compensation(
+            &ir.compensation,
+            cmd,
+            gpu_scene,
+            shared.gbuffer,
+            shared.accumulation,
+            &[VplSource {
+                vpls: &self.vpls.vpls,
+                slots: self.surface.clone(),
+                weight: 1.0,
+            }],
+            1.0,
+            frame,
+            pcg::hash(&[settings.seed, frame, 0x636f6d70]),
         )?;
-        Ok(RenderOutput {
-            image: accumulation.resolve(frames),
-            passes,
-            wall_ms: start.elapsed().as_secs_f64() * 1e3,
-            nonfinite_estimates: accumulation.nonfinite_estimates()?,
-            stats: clamp.stats(gpu_scene)?,
+        if self.interleave > 1 {
+            cmd.pass("interleave filter", |cmd| {
+                ir.filter.record(
+                    cmd,
+                    gpu_scene,
+                    shared.gbuffer,
+                    &self.vpl_radiance,
+                    shared.accumulation,
+                    self.interleave,
+                )
+            })?;
+        }
+        Ok(())
+    }
+
+    fn finish(&self, shared: &Shared<'_>) -> GpuResult<Extras> {
+        Ok(Extras {
+            stats: self.clamp.stats(shared.scene)?,
             maps: vec![],
         })
     }

@@ -404,11 +404,11 @@ impl Lightfield {
                         seed: settings.seed,
                         pixels: settings.pixels,
                     },
-                    DirectLightOptions {
+                    Some(DirectLightOptions {
                         light: DirectLightPaths::NextEvent,
                         reflected_environment: true,
                         spp: 0,
-                    },
+                    }),
                 )?;
                 for l in &luminaires {
                     let tables = [
