@@ -26,6 +26,13 @@ pub struct Shared<'a> {
 
 /// A method's render once set up: its per-frame passes and its additions to the output.
 pub trait MethodFrames {
+    /// Records frame `frame`'s passes that go before its G-buffer (tables rebuilt each
+    /// frame); none by default.
+    fn record_first<'a>(&'a self, cmd: &mut Commands<'a>, frame: u32) -> GpuResult<()> {
+        let _ = (cmd, frame);
+        Ok(())
+    }
+
     /// Records frame `frame`'s passes after the G-buffer and the direct light.
     fn record<'a>(
         &'a self,
@@ -85,6 +92,7 @@ pub fn render<'m>(
         frames,
         &accumulation,
         |cmd, frame| {
+            method.record_first(cmd, frame)?;
             let keys = FrameKeys {
                 frame,
                 seed: plan.seed,

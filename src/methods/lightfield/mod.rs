@@ -15,14 +15,11 @@ use bytemuck::{Pod, Zeroable};
 use glam::Vec4;
 use thiserror::Error;
 
-use crate::gpu::{bind, Buffer, Context, GpuError, Kernel};
+use crate::gpu::{bind, Buffer, Commands, Context, GpuError, GpuResult, Kernel};
 use crate::image::Image;
-use crate::methods::accumulation::Accumulation;
-use crate::methods::direct::{
-    DirectLightOptions, DirectLightPaths, FrameKeys, GBufferAndDirectLight,
-};
-use crate::methods::gbuffer::{GBuffer, PixelSampling};
-use crate::methods::progressive;
+use crate::methods::direct::{DirectLightOptions, DirectLightPaths, GBufferAndDirectLight};
+use crate::methods::driver::{self, Extras, MethodFrames, Plan, Shared};
+use crate::methods::gbuffer::PixelSampling;
 use crate::methods::rebuild::TableRebuild;
 use crate::methods::settings::{
     common_settings, field_setting, named_choices, Kind, Need, Setting, Value,
@@ -367,108 +364,128 @@ impl Lightfield {
         if let Some(e) = Self::declines(scene) {
             return Err(e);
         }
-        let start = Instant::now();
-        let gbuffer = GBuffer::new(ctx, gpu_scene)?;
-        let accumulation = Accumulation::new(ctx, gpu_scene.width, gpu_scene.height)?;
-        let luminaires = scene
-            .luminaires
-            .iter()
-            .enumerate()
-            .map(|(k, l)| GpuLuminaire::new(ctx, l, k as u32, settings))
-            .collect::<Result<Vec<_>, _>>()?;
-        let counts = Buffer::<f32>::zeroed(ctx, "LuminaireSampleCounts", gpu_scene.pixel_count())?;
-        let areas = Buffer::<f32>::zeroed(ctx, "LuminaireAreas", gpu_scene.pixel_count())?;
-        let visibility = match (settings.shadows, settings.averaged_visibility) {
-            (false, _) => 0,
-            (true, false) => 1,
-            (true, true) => 2,
+        // The G-buffer, the emission seen and the other lights' direct light.
+        let plan = Plan {
+            frames: settings.frames.max(1),
+            seed: settings.seed,
+            pixels: settings.pixels,
+            direct: Some(DirectLightOptions {
+                light: DirectLightPaths::NextEvent,
+                reflected_environment: true,
+                spp: 0,
+            }),
+            start: Instant::now(),
         };
-        let frames = settings.frames.max(1);
-        let passes = progressive::run(
+        let setup = || -> GpuResult<Box<dyn MethodFrames + '_>> {
+            let luminaires = scene
+                .luminaires
+                .iter()
+                .enumerate()
+                .map(|(k, l)| GpuLuminaire::new(ctx, l, k as u32, settings))
+                .collect::<Result<Vec<_>, _>>()?;
+            Ok(Box::new(LightfieldFrames {
+                lightfield: self,
+                settings,
+                luminaires,
+                counts: Buffer::zeroed(ctx, "LuminaireSampleCounts", gpu_scene.pixel_count())?,
+                areas: Buffer::zeroed(ctx, "LuminaireAreas", gpu_scene.pixel_count())?,
+                visibility: match (settings.shadows, settings.averaged_visibility) {
+                    (false, _) => 0,
+                    (true, false) => 1,
+                    (true, true) => 2,
+                },
+                frames: settings.frames.max(1),
+            }))
+        };
+        Ok(driver::render(
             ctx,
+            &self.direct,
             gpu_scene,
-            frames,
-            &accumulation,
-            |cmd, frame| {
-                for l in &luminaires {
-                    l.tables.record_frame(cmd, frame, settings.rebuild)?;
-                }
-                // The G-buffer, the emission seen and the other lights' direct light.
-                self.direct.record(
-                    cmd,
-                    gpu_scene,
-                    &gbuffer,
-                    &accumulation,
-                    FrameKeys {
+            plan,
+            setup,
+            progress,
+        )?)
+    }
+}
+
+/// One lightfield render's luminaires and per-pixel sample counts.
+struct LightfieldFrames<'a> {
+    lightfield: &'a Lightfield,
+    settings: &'a LightfieldSettings,
+    luminaires: Vec<GpuLuminaire>,
+    counts: Buffer<f32>,
+    areas: Buffer<f32>,
+    visibility: u32,
+    frames: u32,
+}
+
+impl MethodFrames for LightfieldFrames<'_> {
+    fn record_first<'a>(&'a self, cmd: &mut Commands<'a>, frame: u32) -> GpuResult<()> {
+        for l in &self.luminaires {
+            l.tables.record_frame(cmd, frame, self.settings.rebuild)?;
+        }
+        Ok(())
+    }
+
+    fn record<'a>(
+        &'a self,
+        shared: &Shared<'a>,
+        cmd: &mut Commands<'a>,
+        frame: u32,
+    ) -> GpuResult<()> {
+        let (lf, settings, gpu_scene) = (self.lightfield, self.settings, shared.scene);
+        for l in &self.luminaires {
+            let tables = [
+                bind("LuminaireTexels", &l.tables.texels),
+                bind("ColumnCdf", &l.tables.column_cdf),
+                bind("LuminaireSat", &l.tables.sat),
+                bind("LuminaireParams", &l.frame),
+                bind("LuminaireAreas", &self.areas),
+            ];
+            cmd.pass("A estimation", |cmd| {
+                let mut bindings = gpu_scene.scene_bindings();
+                bindings.push(bind("GBuffer", &shared.gbuffer.texels));
+                bindings.extend(tables.iter().map(|b| bind(b.name, b.buffer)));
+                lf.estimate
+                    .dispatch(cmd, &bindings, &(), gpu_scene.image_workgroups())
+            })?;
+            cmd.pass("shade", |cmd| {
+                let mut bindings = gpu_scene.bindings();
+                bindings.push(bind("GBuffer", &shared.gbuffer.texels));
+                bindings.extend(shared.accumulation.bindings());
+                bindings.extend(tables.iter().map(|b| bind(b.name, b.buffer)));
+                bindings.push(bind("LuminaireSampleCounts", &self.counts));
+                for [sample_begin, sample_end] in shade_parts(l.most_samples) {
+                    let params = ShadeParams {
                         frame,
-                        seed: settings.seed,
-                        pixels: settings.pixels,
-                    },
-                    Some(DirectLightOptions {
-                        light: DirectLightPaths::NextEvent,
-                        reflected_environment: true,
-                        spp: 0,
-                    }),
-                )?;
-                for l in &luminaires {
-                    let tables = [
-                        bind("LuminaireTexels", &l.tables.texels),
-                        bind("ColumnCdf", &l.tables.column_cdf),
-                        bind("LuminaireSat", &l.tables.sat),
-                        bind("LuminaireParams", &l.frame),
-                        bind("LuminaireAreas", &areas),
-                    ];
-                    cmd.pass("A estimation", |cmd| {
-                        let mut bindings = gpu_scene.scene_bindings();
-                        bindings.push(bind("GBuffer", &gbuffer.texels));
-                        bindings.extend(tables.iter().map(|b| bind(b.name, b.buffer)));
-                        self.estimate
-                            .dispatch(cmd, &bindings, &(), gpu_scene.image_workgroups())
-                    })?;
-                    cmd.pass("shade", |cmd| {
-                        let mut bindings = gpu_scene.bindings();
-                        bindings.push(bind("GBuffer", &gbuffer.texels));
-                        bindings.extend(accumulation.bindings());
-                        bindings.extend(tables.iter().map(|b| bind(b.name, b.buffer)));
-                        bindings.push(bind("LuminaireSampleCounts", &counts));
-                        for [sample_begin, sample_end] in shade_parts(l.most_samples) {
-                            let params = ShadeParams {
-                                frame,
-                                seed: l.seed,
-                                search: settings.secant as u32,
-                                shared_samples: settings.shared_samples as u32,
-                                visibility,
-                                sampling_only: settings.sampling_only as u32,
-                                sample_begin,
-                                sample_end,
-                            };
-                            self.shade.dispatch(
-                                cmd,
-                                &bindings,
-                                &params,
-                                gpu_scene.image_workgroups(),
-                            )?;
-                        }
-                        Ok(())
-                    })?;
+                        seed: l.seed,
+                        search: settings.secant as u32,
+                        shared_samples: settings.shared_samples as u32,
+                        visibility: self.visibility,
+                        sampling_only: settings.sampling_only as u32,
+                        sample_begin,
+                        sample_end,
+                    };
+                    lf.shade
+                        .dispatch(cmd, &bindings, &params, gpu_scene.image_workgroups())?;
                 }
                 Ok(())
-            },
-            progress,
-        )?;
-        let counts = counts.read()?;
+            })?;
+        }
+        Ok(())
+    }
+
+    fn finish(&self, shared: &Shared<'_>) -> GpuResult<Extras> {
+        let frames = self.frames;
+        let counts = self.counts.read()?;
         let lit = counts.iter().filter(|&&c| c > 0.0).count();
         let drawn: f64 = counts.iter().map(|&c| c as f64).sum();
         let most = counts.iter().fold(0.0f32, |a, &c| a.max(c));
-        let mut map = Image::new(gpu_scene.width, gpu_scene.height);
+        let mut map = Image::new(shared.scene.width, shared.scene.height);
         for (texel, &c) in map.pixels.iter_mut().zip(&counts) {
             *texel = [c / most.max(1.0); 3];
         }
-        Ok(RenderOutput {
-            image: accumulation.resolve(frames),
-            passes,
-            wall_ms: start.elapsed().as_secs_f64() * 1e3,
-            nonfinite_estimates: accumulation.nonfinite_estimates()?,
+        Ok(Extras {
             stats: vec![
                 (
                     "luminaire_samples_per_pixel".into(),
