@@ -11,14 +11,11 @@ use std::time::Instant;
 
 use thiserror::Error;
 
-use crate::gpu::{Buffer, Context, GpuError};
+use crate::gpu::{Buffer, Commands, Context, GpuError, GpuResult};
 use crate::image::Image;
-use crate::methods::accumulation::Accumulation;
-use crate::methods::direct::{
-    DirectLightOptions, DirectLightPaths, FrameKeys, GBufferAndDirectLight,
-};
-use crate::methods::gbuffer::{GBuffer, PixelSampling};
-use crate::methods::progressive;
+use crate::methods::direct::{DirectLightOptions, DirectLightPaths, GBufferAndDirectLight};
+use crate::methods::driver::{self, Extras, MethodFrames, Plan, Shared};
+use crate::methods::gbuffer::PixelSampling;
 use crate::methods::rebuild::TableRebuild;
 use crate::methods::settings::{
     common_settings, field_setting, named_choices, Kind, Need, Setting, Value,
@@ -286,9 +283,39 @@ impl Env {
         if let Some(e) = Self::declines(scene) {
             return Err(e);
         }
-        let start = Instant::now();
-        let gbuffer = GBuffer::new(ctx, gpu_scene)?;
-        let accumulation = Accumulation::new(ctx, gpu_scene.width, gpu_scene.height)?;
+        // The G-buffer and the emission the camera sees (the map behind the scene).
+        let plan = Plan {
+            frames: settings.frames.max(1),
+            seed: settings.seed,
+            pixels: settings.pixels,
+            direct: Some(DirectLightOptions {
+                light: DirectLightPaths::EmissionOnly,
+                reflected_environment: true,
+                spp: 0,
+            }),
+            start: Instant::now(),
+        };
+        let setup = || -> GpuResult<Box<dyn MethodFrames + '_>> {
+            Ok(Box::new(self.set_up(ctx, gpu_scene, settings)?))
+        };
+        Ok(driver::render(
+            ctx,
+            &self.direct,
+            gpu_scene,
+            plan,
+            setup,
+            progress,
+        )?)
+    }
+
+    /// The render's sampling tables (cube map, latitude-longitude, pyramid) and per-pixel
+    /// counts.
+    fn set_up<'a>(
+        &'a self,
+        ctx: &Context,
+        gpu_scene: &GpuScene,
+        settings: &'a EnvSettings,
+    ) -> GpuResult<EnvFrames<'a>> {
         let spp = settings.spp.max(1);
         let strategy = settings.strategy;
         let light_only =
@@ -308,99 +335,114 @@ impl Env {
         } else {
             (MAX_WINDOWED_SAMPLES / (6 * sets * per_face).max(1)).clamp(1, SAMPLE_WINDOWS)
         };
-        let cube = CubeTable::new(ctx, settings.face_resolution, per_face, sets, windows)?;
-        let seed = pcg::hash(&[settings.seed, 0x656e76]);
-        let counts = Buffer::<[f32; 2]>::zeroed(ctx, "EnvSampleCounts", gpu_scene.pixel_count())?;
-        let alpha = Buffer::<[f32; 2]>::zeroed(ctx, "EnvAlpha", gpu_scene.pixel_count())?;
-        let alpha_terms = Buffer::<[f32; 2]>::zeroed(
-            ctx,
-            "EnvAlphaTerms",
-            if strategy == Strategy::Alpha {
-                gpu_scene.pixel_count()
-            } else {
-                1
-            },
-        )?;
-        let latlong = EquirectTable::new(ctx, gpu_scene, 0.0, strategy == Strategy::Latlong)?;
-        let pyramid = EnvPyramid::new(ctx, gpu_scene, strategy == Strategy::Hierarchical)?;
-        let frames = settings.frames.max(1);
-        let sequence = gpu_scene.environment_frames() > 1;
-        let passes = progressive::run(
-            ctx,
-            gpu_scene,
-            frames,
-            &accumulation,
-            |cmd, frame| {
-                // The G-buffer and the emission the camera sees (the map behind the scene).
-                self.direct.record(
-                    cmd,
-                    gpu_scene,
-                    &gbuffer,
-                    &accumulation,
-                    FrameKeys {
-                        frame,
-                        seed: settings.seed,
-                        pixels: settings.pixels,
-                    },
-                    Some(DirectLightOptions {
-                        light: DirectLightPaths::EmissionOnly,
-                        reflected_environment: true,
-                        spp: 0,
-                    }),
-                )?;
-                let rebuild = settings.rebuild.due(frame, sequence);
-                if strategy.uses_cube() {
-                    if rebuild {
-                        cmd.pass("cube map", |cmd| cube.record_weights(cmd, gpu_scene))?;
-                        cmd.pass("cdf", |cmd| cube.record_cdf(cmd))?;
-                    }
-                    // Each frame's samples are a Halton sequence from index 0 under the frame's
-                    // own scrambling: every pixel uses a prefix (M_f of them), and a prefix of
-                    // one sequence is well spread where a strided piece of a longer one is not.
-                    cmd.pass("light samples", |cmd| {
-                        (0..cube.sets).try_for_each(|set| {
-                            cube.record_samples(cmd, set, 0, pcg::hash(&[seed, frame, set]))
-                        })
-                    })?;
-                }
-                if latlong.is_built() && rebuild {
-                    cmd.pass("latlong table", |cmd| latlong.record(cmd, gpu_scene))?;
-                }
-                if pyramid.is_built() && rebuild {
-                    cmd.pass("pyramid", |cmd| pyramid.record(cmd, gpu_scene))?;
-                }
-                cmd.pass("shade", |cmd| {
-                    self.shade.record(
-                        cmd,
-                        gpu_scene,
-                        &gbuffer,
-                        &cube,
-                        &latlong,
-                        &pyramid,
-                        &accumulation,
-                        &counts,
-                        &alpha,
-                        &alpha_terms,
-                        &shade::ShadeSettings {
-                            strategy,
-                            spp,
-                            light_only,
-                            integer_counts: settings.integer_counts,
-                            alpha_samples,
-                            shadows: settings.shadows,
-                            frame,
-                            seed,
-                        },
-                    )
+        let pixels = gpu_scene.pixel_count();
+        Ok(EnvFrames {
+            env: self,
+            settings,
+            spp,
+            light_only,
+            alpha_samples,
+            cube: CubeTable::new(ctx, settings.face_resolution, per_face, sets, windows)?,
+            seed: pcg::hash(&[settings.seed, 0x656e76]),
+            counts: Buffer::zeroed(ctx, "EnvSampleCounts", pixels)?,
+            alpha: Buffer::zeroed(ctx, "EnvAlpha", pixels)?,
+            alpha_terms: Buffer::zeroed(
+                ctx,
+                "EnvAlphaTerms",
+                if strategy == Strategy::Alpha {
+                    pixels
+                } else {
+                    1
+                },
+            )?,
+            latlong: EquirectTable::new(ctx, gpu_scene, 0.0, strategy == Strategy::Latlong)?,
+            pyramid: EnvPyramid::new(ctx, gpu_scene, strategy == Strategy::Hierarchical)?,
+            sequence: gpu_scene.environment_frames() > 1,
+        })
+    }
+}
+
+/// One env render's tables and per-pixel counts.
+struct EnvFrames<'a> {
+    env: &'a Env,
+    settings: &'a EnvSettings,
+    spp: u32,
+    light_only: bool,
+    alpha_samples: u32,
+    cube: CubeTable,
+    seed: u32,
+    counts: Buffer<[f32; 2]>,
+    alpha: Buffer<[f32; 2]>,
+    alpha_terms: Buffer<[f32; 2]>,
+    latlong: EquirectTable,
+    pyramid: EnvPyramid,
+    sequence: bool,
+}
+
+impl MethodFrames for EnvFrames<'_> {
+    fn record<'a>(
+        &'a self,
+        shared: &Shared<'a>,
+        cmd: &mut Commands<'a>,
+        frame: u32,
+    ) -> GpuResult<()> {
+        let (settings, gpu_scene, cube) = (self.settings, shared.scene, &self.cube);
+        let strategy = settings.strategy;
+        let rebuild = settings.rebuild.due(frame, self.sequence);
+        if strategy.uses_cube() {
+            if rebuild {
+                cmd.pass("cube map", |cmd| cube.record_weights(cmd, gpu_scene))?;
+                cmd.pass("cdf", |cmd| cube.record_cdf(cmd))?;
+            }
+            // Each frame's samples are a Halton sequence from index 0 under the frame's own
+            // scrambling: every pixel uses a prefix (M_f of them), and a prefix of one sequence
+            // is well spread where a strided piece of a longer one is not.
+            cmd.pass("light samples", |cmd| {
+                (0..cube.sets).try_for_each(|set| {
+                    cube.record_samples(cmd, set, 0, pcg::hash(&[self.seed, frame, set]))
                 })
-            },
-            progress,
-        )?;
+            })?;
+        }
+        if self.latlong.is_built() && rebuild {
+            cmd.pass("latlong table", |cmd| self.latlong.record(cmd, gpu_scene))?;
+        }
+        if self.pyramid.is_built() && rebuild {
+            cmd.pass("pyramid", |cmd| self.pyramid.record(cmd, gpu_scene))?;
+        }
+        cmd.pass("shade", |cmd| {
+            self.env.shade.record(
+                cmd,
+                gpu_scene,
+                shared.gbuffer,
+                cube,
+                &self.latlong,
+                &self.pyramid,
+                shared.accumulation,
+                &self.counts,
+                &self.alpha,
+                &self.alpha_terms,
+                &shade::ShadeSettings {
+                    strategy,
+                    spp: self.spp,
+                    light_only: self.light_only,
+                    integer_counts: settings.integer_counts,
+                    alpha_samples: self.alpha_samples,
+                    shadows: settings.shadows,
+                    frame,
+                    seed: self.seed,
+                },
+            )
+        })
+    }
+
+    fn finish(&self, shared: &Shared<'_>) -> GpuResult<Extras> {
+        let strategy = self.settings.strategy;
+        let frames = self.settings.frames.max(1);
         let mut stats = vec![];
         if !matches!(strategy, Strategy::Brdf | Strategy::Cosine) {
             // Over the pixels that see a surface, per frame: the light samples used and the
             // fraction of them above the surface (Lu Fig. 3.6's effective samples).
-            let counts = counts.read()?;
+            let counts = self.counts.read()?;
             let lit: Vec<&[f32; 2]> = counts.iter().filter(|c| c[0] > 0.0).collect();
             let used: f64 = lit.iter().map(|c| c[0] as f64).sum();
             let effective: f64 = lit.iter().map(|c| c[1] as f64).sum();
@@ -413,22 +455,15 @@ impl Env {
         }
         let mut maps = vec![];
         if strategy == Strategy::Alpha {
-            let alpha = alpha.read()?;
-            stats.push(("alpha_samples".into(), alpha_samples as f64));
+            let alpha = self.alpha.read()?;
+            stats.push(("alpha_samples".into(), self.alpha_samples as f64));
             stats.push(("mean_alpha".into(), mean_alpha(&alpha)));
             maps.push((
                 "alpha".into(),
-                alpha_map(&alpha, gpu_scene.width, gpu_scene.height),
+                alpha_map(&alpha, shared.scene.width, shared.scene.height),
             ));
         }
-        Ok(RenderOutput {
-            image: accumulation.resolve(frames),
-            passes,
-            wall_ms: start.elapsed().as_secs_f64() * 1e3,
-            nonfinite_estimates: accumulation.nonfinite_estimates()?,
-            stats,
-            maps,
-        })
+        Ok(Extras { stats, maps })
     }
 }
 
