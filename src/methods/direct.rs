@@ -27,6 +27,11 @@ impl GBufferAndDirectLight {
         })
     }
 
+    /// The path tracer the direct light runs (the reference runs it to full depth).
+    pub fn paths(&self) -> &TracePaths {
+        &self.paths
+    }
+
     /// Records the passes "gbuffer" and "direct light" of `frame`, the direct light as
     /// `options` says (none: the G-buffer alone).
     pub fn record<'a>(

@@ -6,15 +6,15 @@
 
 use std::time::Instant;
 
-use crate::gpu::{Context, GpuResult};
+use crate::gpu::{Buffer, Commands, Context, GpuResult};
 use crate::scene::gpu::GpuScene;
 
-use super::accumulation::Accumulation;
+use super::direct::GBufferAndDirectLight;
 use super::direct_alpha::ShadeDirectAlpha;
+use super::driver::{self, Extras, MethodFrames, Plan, Shared};
 use super::envmap;
-use super::gbuffer::{GBuffer, PixelSampling, WriteGBuffer};
-use super::paths::{PathStarts, TracePaths};
-use super::progressive;
+use super::gbuffer::PixelSampling;
+use super::paths::PathStarts;
 use super::settings::{common_settings, field_setting, Kind, Need, Setting, Value};
 use super::RenderOutput;
 
@@ -101,16 +101,14 @@ pub const SETTINGS: &[Setting<ReferenceSettings>] = &[
 ];
 
 pub struct Reference {
-    gbuffer: WriteGBuffer,
-    paths: TracePaths,
+    passes: GBufferAndDirectLight,
     alpha: ShadeDirectAlpha,
 }
 
 impl Reference {
     pub fn new(ctx: &Context) -> GpuResult<Reference> {
         Ok(Reference {
-            gbuffer: WriteGBuffer::new(ctx)?,
-            paths: TracePaths::new(ctx)?,
+            passes: GBufferAndDirectLight::new(ctx)?,
             alpha: ShadeDirectAlpha::new(ctx)?,
         })
     }
@@ -124,71 +122,86 @@ impl Reference {
         settings: &ReferenceSettings,
         progress: impl FnMut(u32, u32),
     ) -> GpuResult<RenderOutput> {
-        let start = Instant::now();
-        let gbuffer = GBuffer::new(ctx, scene)?;
-        let accumulation = Accumulation::new(ctx, scene.width, scene.height)?;
-        let spp = settings.spp.max(1);
-        let alpha_frames = settings.alpha_frames.filter(|_| settings.max_depth == 1);
-        let state = ShadeDirectAlpha::state(ctx, scene)?;
-        let passes = progressive::run(
-            ctx,
-            scene,
-            spp,
-            &accumulation,
-            |cmd, frame| {
-                cmd.pass("gbuffer", |cmd| {
-                    self.gbuffer
-                        .record(cmd, scene, &gbuffer, frame, settings.seed, settings.pixels)
-                })?;
-                if let Some(m) = alpha_frames {
-                    return cmd.pass("direct light alpha", |cmd| {
-                        self.alpha.record(
-                            cmd,
-                            scene,
-                            &gbuffer,
-                            &accumulation,
-                            &state,
-                            frame,
-                            settings.seed,
-                            m,
-                        )
-                    });
-                }
-                cmd.pass("reference paths", |cmd| {
-                    self.paths.record(
-                        cmd,
-                        scene,
-                        &gbuffer,
-                        &accumulation,
-                        frame,
-                        settings.seed,
-                        settings.max_depth,
-                        settings.roulette_depth,
-                        true,
-                        PathStarts::GBuffer,
-                    )
-                })
-            },
-            progress,
-        )?;
-        let (mut stats, mut maps) = (vec![], vec![]);
-        if alpha_frames.is_some() {
+        // The G-buffer alone: the paths (or alpha's direct light) are the reference's own.
+        let plan = Plan {
+            frames: settings.spp.max(1),
+            seed: settings.seed,
+            pixels: settings.pixels,
+            direct: None,
+            start: Instant::now(),
+        };
+        let setup = || -> GpuResult<Box<dyn MethodFrames + '_>> {
+            Ok(Box::new(ReferenceFrames {
+                reference: self,
+                settings,
+                alpha_frames: settings.alpha_frames.filter(|_| settings.max_depth == 1),
+                state: ShadeDirectAlpha::state(ctx, scene)?,
+            }))
+        };
+        driver::render(ctx, &self.passes, scene, plan, setup, progress)
+    }
+}
+
+/// One reference render: its paths, or alpha's direct light and state.
+struct ReferenceFrames<'a> {
+    reference: &'a Reference,
+    settings: &'a ReferenceSettings,
+    alpha_frames: Option<u32>,
+    state: Buffer<[f32; 4]>,
+}
+
+impl MethodFrames for ReferenceFrames<'_> {
+    fn record<'a>(
+        &'a self,
+        shared: &Shared<'a>,
+        cmd: &mut Commands<'a>,
+        frame: u32,
+    ) -> GpuResult<()> {
+        let (reference, settings) = (self.reference, self.settings);
+        if let Some(m) = self.alpha_frames {
+            return cmd.pass("direct light alpha", |cmd| {
+                reference.alpha.record(
+                    cmd,
+                    shared.scene,
+                    shared.gbuffer,
+                    shared.accumulation,
+                    &self.state,
+                    frame,
+                    settings.seed,
+                    m,
+                )
+            });
+        }
+        cmd.pass("reference paths", |cmd| {
+            reference.passes.paths().record(
+                cmd,
+                shared.scene,
+                shared.gbuffer,
+                shared.accumulation,
+                frame,
+                settings.seed,
+                settings.max_depth,
+                settings.roulette_depth,
+                true,
+                PathStarts::GBuffer,
+            )
+        })
+    }
+
+    fn finish(&self, shared: &Shared<'_>) -> GpuResult<Extras> {
+        let mut extras = Extras::default();
+        if self.alpha_frames.is_some() {
             // Per pixel: alpha's mean over the frames from M on that saw a surface there.
-            let sums: Vec<[f32; 2]> = state.read()?.iter().map(|s| [s[3], s[2]]).collect();
-            stats.push(("mean_alpha".into(), envmap::mean_alpha(&sums)));
-            maps.push((
+            let sums: Vec<[f32; 2]> = self.state.read()?.iter().map(|s| [s[3], s[2]]).collect();
+            extras
+                .stats
+                .push(("mean_alpha".into(), envmap::mean_alpha(&sums)));
+            extras.maps.push((
                 "alpha".into(),
-                envmap::alpha_map(&sums, scene.width, scene.height),
+                envmap::alpha_map(&sums, shared.scene.width, shared.scene.height),
             ));
         }
-        Ok(RenderOutput {
-            image: accumulation.resolve(spp),
-            passes,
-            wall_ms: start.elapsed().as_secs_f64() * 1e3,
-            nonfinite_estimates: accumulation.nonfinite_estimates()?,
-            stats,
-            maps,
-        })
+        Ok(extras)
     }
 }
 
