@@ -18,14 +18,11 @@ use std::time::Instant;
 
 use thiserror::Error;
 
-use crate::gpu::{Buffer, Context, GpuError};
-use crate::methods::accumulation::Accumulation;
+use crate::gpu::{Buffer, Commands, Context, GpuError, GpuResult};
 use crate::methods::compensation::ClampSettings;
-use crate::methods::direct::{
-    DirectLightOptions, DirectLightPaths, FrameKeys, GBufferAndDirectLight,
-};
-use crate::methods::gbuffer::{GBuffer, PixelSampling};
-use crate::methods::progressive;
+use crate::methods::direct::{DirectLightOptions, DirectLightPaths, GBufferAndDirectLight};
+use crate::methods::driver::{self, Extras, MethodFrames, Plan, Shared};
+use crate::methods::gbuffer::PixelSampling;
 use crate::methods::rebuild::TableRebuild;
 use crate::methods::settings::{
     common_settings, field_setting, named_choices, Kind, Need, Setting, Value,
@@ -389,9 +386,39 @@ impl Bundles {
         if let Some(e) = Self::declines(scene) {
             return Err(e);
         }
-        let start = Instant::now();
-        let gbuffer = GBuffer::new(ctx, gpu_scene)?;
-        let accumulation = Accumulation::new(ctx, gpu_scene.width, gpu_scene.height)?;
+        // The environment's direct light is the bundles' own.
+        let plan = Plan {
+            frames: settings.frames.max(1),
+            seed: settings.seed,
+            pixels: settings.pixels,
+            direct: Some(DirectLightOptions {
+                light: DirectLightPaths::NextEvent,
+                reflected_environment: false,
+                spp: settings.direct_spp,
+            }),
+            start: Instant::now(),
+        };
+        let setup = || -> GpuResult<Box<dyn MethodFrames + '_>> {
+            Ok(Box::new(self.set_up(ctx, scene, gpu_scene, settings)?))
+        };
+        Ok(driver::render(
+            ctx,
+            &self.direct,
+            gpu_scene,
+            plan,
+            setup,
+            progress,
+        )?)
+    }
+
+    /// The render's light vertices, bundle directions, hits and shading settings.
+    fn set_up<'a>(
+        &'a self,
+        ctx: &Context,
+        scene: &Scene,
+        gpu_scene: &GpuScene,
+        settings: &'a BundlesSettings,
+    ) -> GpuResult<BundlesFrames<'a>> {
         let per_frame = settings.iterations.max(1);
         let chunk = Self::chunk_size(per_frame, gpu_scene.pixel_count());
         let vertices = FrameLightVertices::new(ctx, gpu_scene, per_frame, settings.lights)?;
@@ -400,7 +427,6 @@ impl Bundles {
             .unwrap_or_else(|| Self::default_env_offset(scene));
         let directions = BundleDirections::new(ctx, gpu_scene, settings.directions, offset)?;
         let hits = Buffer::zeroed(ctx, "BundleHits", chunk as usize * gpu_scene.pixel_count())?;
-        let seed = pcg::hash(&[settings.seed, 0x62756e64]);
         let environment = gpu_scene.environment_size.is_some();
         let shading = Shading {
             strategy: settings.strategy,
@@ -416,102 +442,132 @@ impl Bundles {
             suppression: settings.suppression,
             environment,
         };
-        // The VPL paths alone need no bundle hits (the shading kernel then reads none).
-        let trace_bundles =
-            settings.strategy != Strategy::Vpl || settings.two_bounce || environment;
+        Ok(BundlesFrames {
+            bundles: self,
+            settings,
+            per_frame,
+            chunk,
+            vertices,
+            offset,
+            directions,
+            hits,
+            seed: pcg::hash(&[settings.seed, 0x62756e64]),
+            environment,
+            shading,
+            // The VPL paths alone need no bundle hits (the shading kernel then reads none).
+            trace_bundles: settings.strategy != Strategy::Vpl || settings.two_bounce || environment,
+        })
+    }
+}
+
+/// One bundles render's light vertices, directions and hits.
+struct BundlesFrames<'a> {
+    bundles: &'a Bundles,
+    settings: &'a BundlesSettings,
+    per_frame: u32,
+    chunk: u32,
+    vertices: FrameLightVertices,
+    offset: f32,
+    directions: BundleDirections,
+    hits: Buffer<BundleHit>,
+    seed: u32,
+    environment: bool,
+    shading: Shading,
+    trace_bundles: bool,
+}
+
+impl MethodFrames for BundlesFrames<'_> {
+    fn record<'a>(
+        &'a self,
+        shared: &Shared<'a>,
+        cmd: &mut Commands<'a>,
+        frame: u32,
+    ) -> GpuResult<()> {
+        let (bundles, settings, gpu_scene) = (self.bundles, self.settings, shared.scene);
+        let (per_frame, chunk) = (self.per_frame, self.chunk);
         let frames = settings.frames.max(1);
-        let passes = progressive::run(
-            ctx,
-            gpu_scene,
-            frames,
-            &accumulation,
-            |cmd, frame| {
-                self.direct.record(
+        if self.environment
+            && self.directions.density() == DirectionDensity::Environment
+            && settings
+                .rebuild
+                .due(frame, gpu_scene.environment_frames() > 1)
+        {
+            cmd.pass("bundle directions", |cmd| {
+                self.directions.record(cmd, gpu_scene)
+            })?;
+        }
+        let first = frame * per_frame;
+        cmd.pass("light vertices", |cmd| {
+            bundles.light_vertices.record(
+                cmd,
+                gpu_scene,
+                &self.vertices,
+                &self.directions,
+                first,
+                self.seed,
+            )
+        })?;
+        let mut index = 0;
+        while index < per_frame {
+            let count = chunk.min(per_frame - index);
+            if self.trace_bundles {
+                cmd.pass("ray bundles", |cmd| {
+                    bundles.ray_bundles.record(
+                        cmd,
+                        gpu_scene,
+                        shared.gbuffer,
+                        &self.vertices,
+                        &self.hits,
+                        index,
+                        count,
+                    )
+                })?;
+            }
+            let c = Chunk {
+                first_index: index,
+                count,
+                per_frame,
+                samples: per_frame * frames,
+                traced: self.trace_bundles,
+                frame_first: first,
+            };
+            cmd.pass("bundle paths", |cmd| {
+                bundles.paths.record(
                     cmd,
                     gpu_scene,
-                    &gbuffer,
-                    &accumulation,
-                    FrameKeys {
-                        frame,
-                        seed: settings.seed,
-                        pixels: settings.pixels,
-                    },
-                    Some(DirectLightOptions {
-                        light: DirectLightPaths::NextEvent,
-                        reflected_environment: false,
-                        spp: settings.direct_spp,
-                    }),
-                )?;
-                if environment
-                    && directions.density() == DirectionDensity::Environment
-                    && settings
-                        .rebuild
-                        .due(frame, gpu_scene.environment_frames() > 1)
-                {
-                    cmd.pass("bundle directions", |cmd| directions.record(cmd, gpu_scene))?;
-                }
-                let first = frame * per_frame;
-                cmd.pass("light vertices", |cmd| {
-                    self.light_vertices
-                        .record(cmd, gpu_scene, &vertices, &directions, first, seed)
-                })?;
-                let mut index = 0;
-                while index < per_frame {
-                    let count = chunk.min(per_frame - index);
-                    if trace_bundles {
-                        cmd.pass("ray bundles", |cmd| {
-                            self.ray_bundles
-                                .record(cmd, gpu_scene, &gbuffer, &vertices, &hits, index, count)
-                        })?;
-                    }
-                    let c = Chunk {
-                        first_index: index,
-                        count,
-                        per_frame,
-                        samples: per_frame * frames,
-                        traced: trace_bundles,
-                        frame_first: first,
-                    };
-                    cmd.pass("bundle paths", |cmd| {
-                        self.paths.record(
-                            cmd,
-                            gpu_scene,
-                            &gbuffer,
-                            &vertices,
-                            &directions,
-                            &hits,
-                            &accumulation,
-                            &c,
-                            &shading,
-                        )
-                    })?;
-                    index += count;
-                }
-                Ok(())
-            },
-            progress,
-        )?;
-        let pixels = gpu_scene.pixel_count() as f64;
+                    shared.gbuffer,
+                    &self.vertices,
+                    &self.directions,
+                    &self.hits,
+                    shared.accumulation,
+                    &c,
+                    &self.shading,
+                )
+            })?;
+            index += count;
+        }
+        Ok(())
+    }
+
+    fn finish(&self, shared: &Shared<'_>) -> GpuResult<Extras> {
+        let (settings, shading) = (self.settings, &self.shading);
+        let pixels = shared.scene.pixel_count() as f64;
         // Per iteration: each light vertex's ray, and per pixel the bundle ray and, per light
         // vertex, at most three shadow rays (to x1, from x2 to the light, and x1-x2 for two
         // bounces); the two-bounce compensation adds per pixel one ray from x2 and, per light
         // vertex, at most one shadow ray.
-        let slots = vertices.slots as f64;
+        let slots = self.vertices.slots as f64;
         let compensated = shading.two_bounce.is_some_and(|b| b > 0.0) && shading.compensate;
         let shadow_rays = match settings.strategy {
             Strategy::Vpl | Strategy::Bundle => 1.0,
             Strategy::Mis => 2.0,
         } + if settings.two_bounce { 1.0 } else { 0.0 }
             + if compensated { 1.0 } else { 0.0 };
-        Ok(RenderOutput {
-            image: accumulation.resolve(frames),
-            passes,
-            wall_ms: start.elapsed().as_secs_f64() * 1e3,
-            nonfinite_estimates: accumulation.nonfinite_estimates()?,
+        Ok(Extras {
             stats: vec![
-                ("iterations_per_chunk".into(), chunk as f64),
+                ("iterations_per_chunk".into(), self.chunk as f64),
                 ("light_vertices_per_iteration".into(), slots),
-                ("bundle_env_offset".into(), offset as f64),
+                ("bundle_env_offset".into(), self.offset as f64),
                 // The two-bounce edge's b (0: unclamped or no two-bounce paths).
                 (
                     "two_bounce_clamp".into(),
