@@ -19,17 +19,15 @@ use std::time::Instant;
 
 use thiserror::Error;
 
-use crate::gpu::{Buffer, Commands, Context, GpuError};
+use crate::gpu::{Buffer, Commands, Context, GpuError, GpuResult};
 use crate::methods::accumulation::Accumulation;
 use crate::methods::compensation::{ClampCompensation, ClampSettings, FrameClamp, VplSource};
-use crate::methods::direct::{
-    DirectLightOptions, DirectLightPaths, FrameKeys, GBufferAndDirectLight,
-};
+use crate::methods::direct::{DirectLightOptions, DirectLightPaths, GBufferAndDirectLight};
+use crate::methods::driver::{self, Extras, MethodFrames, Plan, Shared};
 use crate::methods::gbuffer::{GBuffer, PixelSampling};
 use crate::methods::ir::gather::AccumulateVpls;
 use crate::methods::ir::schedule::{mean_albedo, Absorption, Schedule};
 use crate::methods::ir::walk::{TraceVpls, Vpl, VplBuffers};
-use crate::methods::progressive;
 use crate::methods::settings::{
     common_settings, field_setting, named_choices, Kind, Need, Setting, Value,
 };
@@ -368,7 +366,39 @@ impl Bir {
         if scene.environment.is_some() {
             return Err(BirError::Environment);
         }
-        let start = Instant::now();
+        let plan = Plan {
+            frames: settings.frames.max(1),
+            seed: settings.seed,
+            pixels: settings.pixels,
+            direct: Some(DirectLightOptions {
+                light: DirectLightPaths::NextEvent,
+                reflected_environment: true,
+                spp: settings.direct_spp,
+            }),
+            start: Instant::now(),
+        };
+        let setup = || -> GpuResult<Box<dyn MethodFrames + '_>> {
+            Ok(Box::new(self.set_up(ctx, scene, gpu_scene, settings)?))
+        };
+        Ok(driver::render(
+            ctx,
+            &self.direct,
+            gpu_scene,
+            plan,
+            setup,
+            progress,
+        )?)
+    }
+
+    /// The render's split of VPLs into batches and sides, its VPL buffers, resampling buffers,
+    /// light table and clamp.
+    fn set_up<'a>(
+        &'a self,
+        ctx: &Context,
+        scene: &Scene,
+        gpu_scene: &GpuScene,
+        settings: &'a BirSettings,
+    ) -> GpuResult<BirFrames<'a>> {
         let rho = mean_albedo(scene);
         let vpls_per_frame = settings.vpls.max(2);
         let batch = if settings.batch == 0 {
@@ -380,8 +410,6 @@ impl Bir {
         let split = Split::new(settings.strategy, batch, rho);
         let resampling = settings.ratio > 0;
         let draws = (batch / settings.ratio.max(1)).max(1);
-        let gbuffer = GBuffer::new(ctx, gpu_scene)?;
-        let accumulation = Accumulation::new(ctx, gpu_scene.width, gpu_scene.height)?;
         let vpls = VplBuffers::new(
             ctx,
             Schedule::new(split.light_paths, rho, Absorption::Fractional),
@@ -426,228 +454,290 @@ impl Bir {
         let clamp = settings
             .clamp
             .prepare(ctx, scene, gpu_scene, shaded_per_frame)?;
-        let frames = settings.frames.max(1);
-        let passes = progressive::run(
-            ctx,
-            gpu_scene,
-            frames,
-            &accumulation,
-            |cmd, frame| {
-                self.direct.record(
-                    cmd,
-                    gpu_scene,
-                    &gbuffer,
-                    &accumulation,
-                    FrameKeys {
-                        frame,
-                        seed: settings.seed,
-                        pixels: settings.pixels,
-                    },
-                    Some(DirectLightOptions {
-                        light: DirectLightPaths::NextEvent,
-                        reflected_environment: true,
-                        spp: settings.direct_spp,
-                    }),
-                )?;
-                // Once per render, on the first frame's G-buffer: the table only steers which
-                // lights start paths (each walk divides by the probability it used), so it
-                // need not change per frame, and lavapipe pays per dispatch.
-                if let (Some(cdf), 0) = (&light_cdf, frame) {
-                    let seed = pcg::hash(&[settings.seed, 0x6c636466]);
-                    cmd.pass("light cdf", |cmd| {
-                        cdf.record(cmd, gpu_scene, &gbuffer, seed, settings.floor)
-                    })?;
-                }
-                let entries = light_cdf.as_ref().map(|c| &c.table);
-                for b in 0..batches {
-                    let walk_seed = pcg::hash(&[settings.seed, frame, b, 0x76706c73]);
-                    let reverse_seed = pcg::hash(&[settings.seed, frame, b, 0x72657672]);
-                    let power_seed = pcg::hash(&[settings.seed, frame, b, 0x706f7772]);
-                    cmd.pass("vpl walk", |cmd| {
-                        self.walk.record(cmd, gpu_scene, &vpls, walk_seed, entries)
-                    })?;
-                    if split.reverse > 0 {
-                        cmd.pass("reverse vpls", |cmd| {
-                            self.trace_reverse.record(
-                                cmd,
-                                gpu_scene,
-                                &gbuffer,
-                                &reverse,
-                                settings.pool,
-                                reverse_seed,
-                            )
-                        })?;
-                        cmd.pass("reverse radiance", |cmd| {
-                            self.shade_reverse.record(
-                                cmd,
-                                gpu_scene,
-                                &reverse,
-                                &vpls.vpls,
-                                slots.clone(),
-                                settings.light_samples,
-                                settings.connections,
-                                settings.depth,
-                                reverse_seed,
-                                // Resampling applies the side weights itself.
-                                if resampling {
-                                    1.0
-                                } else {
-                                    split.reverse_weight
-                                },
-                            )
-                        })?;
-                        // After the radiance pass, which connects to their unscaled power.
-                        if standard_count > 0 {
-                            cmd.pass("uncovered vpls", |cmd| {
-                                self.find_uncovered.record(
-                                    cmd,
-                                    gpu_scene,
-                                    &gbuffer,
-                                    &vpls.vpls,
-                                    slots.clone(),
-                                    settings.pool,
-                                    reverse_seed,
-                                    // Without resampling the gather weighs them a_s.
-                                    if resampling {
-                                        1.0
-                                    } else {
-                                        1.0 / split.standard_weight
-                                    },
-                                )
-                            })?;
-                        }
-                    }
-                    if resampling {
-                        cmd.pass("vpl power", |cmd| {
-                            self.power.record(
-                                cmd,
-                                gpu_scene,
-                                &gbuffer,
-                                &vpls.vpls,
-                                slots.start,
-                                standard_count,
-                                0,
-                                &resample_buffers,
-                                settings.power_samples,
-                                power_seed,
-                                1.0,
-                            )?;
-                            self.power.record(
-                                cmd,
-                                gpu_scene,
-                                &gbuffer,
-                                &reverse,
-                                0,
-                                split.reverse,
-                                standard_count,
-                                &resample_buffers,
-                                settings.power_samples,
-                                power_seed,
-                                1.0,
-                            )
-                        })?;
-                        let sources = Candidates {
-                            standard: &vpls.vpls,
-                            standard_begin: slots.start,
-                            standard_count,
-                            reverse: &reverse,
-                        };
-                        cmd.pass("resampling", |cmd| {
-                            self.resample.record(
-                                cmd,
-                                &sources,
-                                &resample_buffers,
-                                &kept,
-                                b * draws,
-                                draws,
-                                settings.floor,
-                                power_seed,
-                            )?;
-                            if adaptive {
-                                self.side_weights.record(
-                                    cmd,
-                                    &resample_buffers,
-                                    standard_count,
-                                    MIN_SIDE_WEIGHT,
-                                )?;
-                            }
-                            Ok(())
-                        })?;
-                    } else {
-                        let sources =
-                            unresampled_sources(&vpls, &reverse, &split, 1.0 / batches as f32);
-                        let seed = pcg::hash(&[settings.seed, frame, b, 0x636f6d70]);
-                        self.gather_compensated(
-                            cmd,
-                            gpu_scene,
-                            &gbuffer,
-                            &accumulation,
-                            &unused,
-                            &clamp,
-                            &sources,
-                            // The sides' weights sum to 1: each batch is 1 / batches of the
-                            // frame's estimate.
-                            1.0 / batches as f32,
-                            frame,
-                            seed,
-                        )?;
-                    }
-                }
-                if resampling {
-                    // Each batch's draws estimate its candidates' sum; the batches are
-                    // `batches` estimates of one frame's.
-                    let sources = [VplSource {
-                        vpls: &kept,
-                        slots: 0..draws * batches,
-                        weight: 1.0 / batches as f32,
-                    }];
-                    let seed = pcg::hash(&[settings.seed, frame, 0x636f6d70]);
-                    self.gather_compensated(
-                        cmd,
-                        gpu_scene,
-                        &gbuffer,
-                        &accumulation,
-                        &unused,
-                        &clamp,
-                        &sources,
-                        1.0,
-                        frame,
-                        seed,
-                    )?;
-                }
-                Ok(())
-            },
-            progress,
-        )?;
-        let mut stats = clamp.stats(gpu_scene)?;
-        if resampling {
-            let kept_counts = resample_buffers.stats.read()?;
+        Ok(BirFrames {
+            bir: self,
+            settings,
+            batches,
+            split,
+            resampling,
+            draws,
+            vpls,
+            reverse,
+            unused,
+            slots,
+            standard_count,
+            candidates,
+            resample_buffers,
+            adaptive,
+            kept,
+            light_cdf,
+            clamp,
+        })
+    }
+}
+
+/// One bir render's VPLs, resampling buffers, light table and clamp.
+struct BirFrames<'a> {
+    bir: &'a Bir,
+    settings: &'a BirSettings,
+    batches: u32,
+    split: Split,
+    resampling: bool,
+    draws: u32,
+    vpls: VplBuffers,
+    reverse: Buffer<Vpl>,
+    unused: Buffer<glam::Vec4>,
+    slots: std::ops::Range<u32>,
+    standard_count: u32,
+    candidates: u32,
+    resample_buffers: ResampleBuffers,
+    adaptive: bool,
+    kept: Buffer<Vpl>,
+    light_cdf: Option<LightCdf>,
+    clamp: FrameClamp,
+}
+
+impl MethodFrames for BirFrames<'_> {
+    fn record<'a>(
+        &'a self,
+        shared: &Shared<'a>,
+        cmd: &mut Commands<'a>,
+        frame: u32,
+    ) -> GpuResult<()> {
+        let (bir, settings, gpu_scene) = (self.bir, self.settings, shared.scene);
+        // Once per render, on the first frame's G-buffer: the table only steers which lights
+        // start paths (each walk divides by the probability it used), so it need not change
+        // per frame, and lavapipe pays per dispatch.
+        if let (Some(cdf), 0) = (&self.light_cdf, frame) {
+            let seed = pcg::hash(&[settings.seed, 0x6c636466]);
+            cmd.pass("light cdf", |cmd| {
+                cdf.record(cmd, gpu_scene, shared.gbuffer, seed, settings.floor)
+            })?;
+        }
+        for b in 0..self.batches {
+            self.record_batch(shared, cmd, frame, b)?;
+        }
+        if self.resampling {
+            // Each batch's draws estimate its candidates' sum; the batches are `batches`
+            // estimates of one frame's.
+            let sources = [VplSource {
+                vpls: &self.kept,
+                slots: 0..self.draws * self.batches,
+                weight: 1.0 / self.batches as f32,
+            }];
+            let seed = pcg::hash(&[settings.seed, frame, 0x636f6d70]);
+            bir.gather_compensated(
+                cmd,
+                gpu_scene,
+                shared.gbuffer,
+                shared.accumulation,
+                &self.unused,
+                &self.clamp,
+                &sources,
+                1.0,
+                frame,
+                seed,
+            )?;
+        }
+        Ok(())
+    }
+
+    fn finish(&self, shared: &Shared<'_>) -> GpuResult<Extras> {
+        let settings = self.settings;
+        let mut stats = self.clamp.stats(shared.scene)?;
+        if self.resampling {
+            let kept_counts = self.resample_buffers.stats.read()?;
             let all = (kept_counts[0] + kept_counts[1]).max(1) as f64;
             stats.push(("kept_standard_fraction".into(), kept_counts[0] as f64 / all));
             stats.push(("kept_reverse_fraction".into(), kept_counts[1] as f64 / all));
-            if adaptive {
-                let side = resample_buffers.side.read()?[0];
+            if self.adaptive {
+                let side = self.resample_buffers.side.read()?[0];
                 stats.push(("final_standard_weight".into(), side[0] as f64));
             }
         }
-        let sampling_rays =
-            sampling_rays(&vpls.layout, &split, settings, standard_count, resampling);
-        let kept_per_frame = if resampling { draws } else { candidates } as f64;
+        let sampling_rays = sampling_rays(
+            &self.vpls.layout,
+            &self.split,
+            settings,
+            self.standard_count,
+            self.resampling,
+        );
+        let kept_per_frame = if self.resampling {
+            self.draws
+        } else {
+            self.candidates
+        } as f64;
         stats.push((
             "sampling_rays_per_kept_vpl".into(),
             sampling_rays / kept_per_frame,
         ));
         stats.push((
             "gather_rays_per_kept_vpl".into(),
-            gpu_scene.pixel_count() as f64,
+            shared.scene.pixel_count() as f64,
         ));
-        Ok(RenderOutput {
-            image: accumulation.resolve(frames),
-            passes,
-            wall_ms: start.elapsed().as_secs_f64() * 1e3,
-            nonfinite_estimates: accumulation.nonfinite_estimates()?,
+        Ok(Extras {
             stats,
             maps: vec![],
+        })
+    }
+}
+
+impl<'f> BirFrames<'f> {
+    /// Batch `b` of frame `frame`: its standard walk, reverse VPLs and their radiance, the
+    /// pool's coverage, and either its resampling or (without) its gather.
+    fn record_batch<'a>(
+        &'a self,
+        shared: &Shared<'a>,
+        cmd: &mut Commands<'a>,
+        frame: u32,
+        b: u32,
+    ) -> GpuResult<()> {
+        let (bir, settings, gpu_scene, gbuffer) =
+            (self.bir, self.settings, shared.scene, shared.gbuffer);
+        let (split, slots, standard_count) = (&self.split, &self.slots, self.standard_count);
+        let (vpls, reverse, resampling) = (&self.vpls, &self.reverse, self.resampling);
+        let entries = self.light_cdf.as_ref().map(|c| &c.table);
+        let walk_seed = pcg::hash(&[settings.seed, frame, b, 0x76706c73]);
+        let reverse_seed = pcg::hash(&[settings.seed, frame, b, 0x72657672]);
+        let power_seed = pcg::hash(&[settings.seed, frame, b, 0x706f7772]);
+        cmd.pass("vpl walk", |cmd| {
+            bir.walk.record(cmd, gpu_scene, vpls, walk_seed, entries)
+        })?;
+        if split.reverse > 0 {
+            cmd.pass("reverse vpls", |cmd| {
+                bir.trace_reverse.record(
+                    cmd,
+                    gpu_scene,
+                    gbuffer,
+                    reverse,
+                    settings.pool,
+                    reverse_seed,
+                )
+            })?;
+            cmd.pass("reverse radiance", |cmd| {
+                bir.shade_reverse.record(
+                    cmd,
+                    gpu_scene,
+                    reverse,
+                    &vpls.vpls,
+                    slots.clone(),
+                    settings.light_samples,
+                    settings.connections,
+                    settings.depth,
+                    reverse_seed,
+                    // Resampling applies the side weights itself.
+                    if resampling {
+                        1.0
+                    } else {
+                        split.reverse_weight
+                    },
+                )
+            })?;
+            // After the radiance pass, which connects to their unscaled power.
+            if standard_count > 0 {
+                cmd.pass("uncovered vpls", |cmd| {
+                    bir.find_uncovered.record(
+                        cmd,
+                        gpu_scene,
+                        gbuffer,
+                        &vpls.vpls,
+                        slots.clone(),
+                        settings.pool,
+                        reverse_seed,
+                        // Without resampling the gather weighs them a_s.
+                        if resampling {
+                            1.0
+                        } else {
+                            1.0 / split.standard_weight
+                        },
+                    )
+                })?;
+            }
+        }
+        if resampling {
+            return self.record_resampling(shared, cmd, b, power_seed);
+        }
+        let batches = self.batches;
+        let sources = unresampled_sources(vpls, reverse, split, 1.0 / batches as f32);
+        let seed = pcg::hash(&[settings.seed, frame, b, 0x636f6d70]);
+        bir.gather_compensated(
+            cmd,
+            gpu_scene,
+            gbuffer,
+            shared.accumulation,
+            &self.unused,
+            &self.clamp,
+            &sources,
+            // The sides' weights sum to 1: each batch is 1 / batches of the frame's estimate.
+            1.0 / batches as f32,
+            frame,
+            seed,
+        )
+    }
+
+    /// Batch `b`'s candidates' power estimates, then its draws into the kept VPLs (and the
+    /// adaptive side weights' update).
+    fn record_resampling<'a>(
+        &'a self,
+        shared: &Shared<'a>,
+        cmd: &mut Commands<'a>,
+        b: u32,
+        power_seed: u32,
+    ) -> GpuResult<()> {
+        let (bir, settings, gpu_scene, gbuffer) =
+            (self.bir, self.settings, shared.scene, shared.gbuffer);
+        let (slots, standard_count) = (&self.slots, self.standard_count);
+        let resample_buffers = &self.resample_buffers;
+        cmd.pass("vpl power", |cmd| {
+            bir.power.record(
+                cmd,
+                gpu_scene,
+                gbuffer,
+                &self.vpls.vpls,
+                slots.start,
+                standard_count,
+                0,
+                resample_buffers,
+                settings.power_samples,
+                power_seed,
+                1.0,
+            )?;
+            bir.power.record(
+                cmd,
+                gpu_scene,
+                gbuffer,
+                &self.reverse,
+                0,
+                self.split.reverse,
+                standard_count,
+                resample_buffers,
+                settings.power_samples,
+                power_seed,
+                1.0,
+            )
+        })?;
+        let sources = Candidates {
+            standard: &self.vpls.vpls,
+            standard_begin: slots.start,
+            standard_count,
+            reverse: &self.reverse,
+        };
+        cmd.pass("resampling", |cmd| {
+            bir.resample.record(
+                cmd,
+                &sources,
+                resample_buffers,
+                &self.kept,
+                b * self.draws,
+                self.draws,
+                settings.floor,
+                power_seed,
+            )?;
+            if self.adaptive {
+                bir.side_weights
+                    .record(cmd, resample_buffers, standard_count, MIN_SIDE_WEIGHT)?;
+            }
+            Ok(())
         })
     }
 }
