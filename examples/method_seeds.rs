@@ -26,8 +26,9 @@ use irad::gpu::{Context, ContextOptions, Validation};
 use irad::image::{exr, metrics, Image};
 use irad::methods::gbuffer::PixelSampling;
 use irad::methods::reference::{Reference, ReferenceSettings};
-use irad::methods::{Method, Renderers};
+use irad::methods::{Method, Renderer, Renderers, RunError};
 use irad::scene::gpu::GpuScene;
+use irad::scene::Scene;
 
 fn luminance_mean(image: &Image) -> f64 {
     metrics::luminance(image.mean().map(f64::from))
@@ -60,6 +61,7 @@ fn method(config: &str) -> Result<Method, String> {
 
 fn reference(
     ctx: &Context,
+    scene: &Scene,
     gpu: &GpuScene,
     path: &Path,
     spp: u32,
@@ -78,8 +80,9 @@ fn reference(
         pixels,
         ..Default::default()
     };
-    let out = Reference::new(ctx)
-        .and_then(|r| r.render(ctx, gpu, &settings, |_, _| {}))
+    let out = Renderer::<Reference>::new(ctx)
+        .map_err(RunError::from)
+        .and_then(|r| r.render(ctx, scene, gpu, &settings, |_, _| {}))
         .unwrap_or_else(|e| panic!("reference: {e}"));
     exr::write(path, &out.image).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     out.image
@@ -139,8 +142,26 @@ fn main() {
             if centres { "_centres" } else { "" }
         ))
     };
-    let a = reference(&ctx, &gpu, &cache(77), ref_spp, ref_depth, pixels, 77);
-    let b = reference(&ctx, &gpu, &cache(78), ref_spp, ref_depth, pixels, 78);
+    let a = reference(
+        &ctx,
+        &scene,
+        &gpu,
+        &cache(77),
+        ref_spp,
+        ref_depth,
+        pixels,
+        77,
+    );
+    let b = reference(
+        &ctx,
+        &scene,
+        &gpu,
+        &cache(78),
+        ref_spp,
+        ref_depth,
+        pixels,
+        78,
+    );
     let own = metrics::compare(&a, &b).unwrap().rel_mse / 4.0;
     let mut r = a.clone();
     for (p, q) in r.pixels.iter_mut().zip(&b.pixels) {

@@ -56,7 +56,9 @@ pub use methods::envmap::EnvSettings;
 pub use methods::ir::IrSettings;
 pub use methods::lightfield::LightfieldSettings;
 pub use methods::reference::ReferenceSettings;
-pub use methods::{Method, ParamError, RenderOutput, Renderers, RunError, METHODS};
+pub use methods::{
+    Method, ParamError, Registry, RenderMethod, RenderOutput, Renderer, Renderers, RunError,
+};
 pub use render::{render, RenderJob};
 pub use scene::gpu::GpuScene;
 pub use scene::{Scene, SceneError};

@@ -6,6 +6,7 @@ use irad::gpu::Context;
 use irad::methods::bir::{Bir, BirSettings, Strategy};
 use irad::methods::compensation::{ClampSettings, VplClamp};
 use irad::methods::reference::{Reference, ReferenceSettings};
+use irad::methods::Renderer;
 use irad::scene::gpu::GpuScene;
 use irad::scene::Scene;
 
@@ -25,9 +26,9 @@ fn reference_mean(ctx: &Context, scene: &Scene, spp: u32) -> f64 {
         seed: 4321,
         ..Default::default()
     };
-    let out = Reference::new(ctx)
+    let out = Renderer::<Reference>::new(ctx)
         .unwrap()
-        .render(ctx, &gpu, &settings, |_, _| {})
+        .render(ctx, scene, &gpu, &settings, |_, _| {})
         .unwrap();
     luminance_mean(&out.image)
 }
@@ -46,7 +47,7 @@ fn every_strategy_matches_the_reference_mean_in_the_cornell_box() {
         let scene = small_cornell(32);
         let r = reference_mean(ctx, &scene, 4096);
         let gpu = GpuScene::upload(ctx, &scene).unwrap();
-        let bir = Bir::new(ctx).unwrap();
+        let bir = Renderer::<Bir>::new(ctx).unwrap();
         let cases = [
             (Strategy::Standard, 10),
             (Strategy::Reverse, 10),
@@ -136,7 +137,7 @@ fn the_uniform_floor_keeps_the_mean_where_power_estimates_miss_vpls() {
         let scene = cells();
         let r = reference_mean(ctx, &scene, 2048);
         let gpu = GpuScene::upload(ctx, &scene).unwrap();
-        let bir = Bir::new(ctx).unwrap();
+        let bir = Renderer::<Bir>::new(ctx).unwrap();
         let ratio = |floor: f32| {
             let means: Vec<f64> = (0..16)
                 .map(|seed| {
@@ -190,7 +191,7 @@ fn both_sides_beat_reverse_only_in_the_halogen_office() {
     with_gpu(|ctx| {
         let scene = scene_file("failure/halogen-office", 32, 24);
         let gpu = GpuScene::upload(ctx, &scene).unwrap();
-        let bir = Bir::new(ctx).unwrap();
+        let bir = Renderer::<Bir>::new(ctx).unwrap();
         let variance = |strategy: Strategy| {
             let mut standard_weight = 0.0;
             let images: Vec<_> = (0..12)

@@ -12,6 +12,7 @@ use irad::methods::bundles::{Bundles, BundlesSettings, Strategy, Suppression};
 use irad::methods::compensation::{ClampSettings, VplClamp};
 use irad::methods::gbuffer::PixelSampling;
 use irad::methods::reference::{Reference, ReferenceSettings};
+use irad::methods::Renderer;
 use irad::scene::gpu::GpuScene;
 use irad::scene::{Light, Scene};
 
@@ -21,7 +22,14 @@ use common::{luminance_mean, mean_and_stderr, scene_file, with_gpu};
 /// bounce; 3 adds the second), at pixel centres as every render here: the point light 5 cm
 /// from the corner's walls makes a few pixels so bright that where a jittered frame samples
 /// them would swamp the indirect light's variance.
-fn reference(ctx: &Context, gpu: &GpuScene, spp: u32, max_depth: u32, seed: u32) -> Image {
+fn reference(
+    ctx: &Context,
+    scene: &Scene,
+    gpu: &GpuScene,
+    spp: u32,
+    max_depth: u32,
+    seed: u32,
+) -> Image {
     let settings = ReferenceSettings {
         spp,
         seed,
@@ -29,16 +37,16 @@ fn reference(ctx: &Context, gpu: &GpuScene, spp: u32, max_depth: u32, seed: u32)
         pixels: PixelSampling::Centres,
         ..Default::default()
     };
-    Reference::new(ctx)
+    Renderer::<Reference>::new(ctx)
         .unwrap()
-        .render(ctx, gpu, &settings, |_, _| {})
+        .render(ctx, scene, gpu, &settings, |_, _| {})
         .unwrap()
         .image
 }
 
 fn renders(
     ctx: &Context,
-    bundles: &Bundles,
+    bundles: &Renderer<Bundles>,
     scene: &Scene,
     gpu: &GpuScene,
     base: BundlesSettings,
@@ -63,7 +71,7 @@ fn renders(
 /// The image mean over `seeds` renders relative to `r`: its mean and standard error.
 fn relative_mean(
     ctx: &Context,
-    bundles: &Bundles,
+    bundles: &Renderer<Bundles>,
     scene: &Scene,
     gpu: &GpuScene,
     base: BundlesSettings,
@@ -89,7 +97,7 @@ fn relative_mean(
 #[test]
 fn every_strategy_matches_the_path_length_limited_reference_mean() {
     with_gpu(|ctx| {
-        let bundles = Bundles::new(ctx).unwrap();
+        let bundles = Renderer::<Bundles>::new(ctx).unwrap();
         let all = [Strategy::Vpl, Strategy::Bundle, Strategy::Mis];
         // (scene, width, height, two-bounce paths, reference path length, strategies)
         type Case<'a> = (&'a str, u32, u32, bool, u32, &'a [Strategy]);
@@ -102,7 +110,7 @@ fn every_strategy_matches_the_path_length_limited_reference_mean() {
             let scene = scene_file(name, w, h);
             let gpu = GpuScene::upload(ctx, &scene).unwrap();
             {
-                let r = luminance_mean(&reference(ctx, &gpu, 4096, depth, 7));
+                let r = luminance_mean(&reference(ctx, &scene, &gpu, 4096, depth, 7));
                 for &strategy in strategies {
                     let base = BundlesSettings {
                         iterations: 21,
@@ -147,8 +155,8 @@ fn the_compensated_two_bounce_clamp_keeps_the_mean() {
     with_gpu(|ctx| {
         let scene = scene_file("failure/glossy-cornell", 32, 32);
         let gpu = GpuScene::upload(ctx, &scene).unwrap();
-        let r = luminance_mean(&reference(ctx, &gpu, 4096, 3, 5));
-        let bundles = Bundles::new(ctx).unwrap();
+        let r = luminance_mean(&reference(ctx, &scene, &gpu, 4096, 3, 5));
+        let bundles = Renderer::<Bundles>::new(ctx).unwrap();
         let mean = |compensate: bool| {
             let base = BundlesSettings {
                 frames: 4,
@@ -187,9 +195,9 @@ fn mis_beats_vpls_and_bundles_alone_in_the_corner() {
     with_gpu(|ctx| {
         let scene = scene_file("failure/corner-light", 32, 32);
         let gpu = GpuScene::upload(ctx, &scene).unwrap();
-        let a = reference(ctx, &gpu, 4096, 2, 11);
-        let b = reference(ctx, &gpu, 4096, 2, 12);
-        let bundles = Bundles::new(ctx).unwrap();
+        let a = reference(ctx, &scene, &gpu, 4096, 2, 11);
+        let b = reference(ctx, &scene, &gpu, 4096, 2, 12);
+        let bundles = Renderer::<Bundles>::new(ctx).unwrap();
         let error = |strategy: Strategy| {
             let base = BundlesSettings {
                 iterations: 21,
@@ -228,10 +236,10 @@ fn roughness_clamping_suppresses_glossy_spikes_and_keeps_more_energy_than_clampi
     with_gpu(|ctx| {
         let scene = scene_file("failure/glossy-cornell", 32, 32);
         let gpu = GpuScene::upload(ctx, &scene).unwrap();
-        let a = reference(ctx, &gpu, 4096, 2, 21);
-        let b = reference(ctx, &gpu, 4096, 2, 22);
+        let a = reference(ctx, &scene, &gpu, 4096, 2, 21);
+        let b = reference(ctx, &scene, &gpu, 4096, 2, 22);
         let r = (luminance_mean(&a) + luminance_mean(&b)) / 2.0;
-        let bundles = Bundles::new(ctx).unwrap();
+        let bundles = Renderer::<Bundles>::new(ctx).unwrap();
         let measure = |suppression: Suppression| {
             let base = BundlesSettings {
                 iterations: 21,
@@ -285,10 +293,10 @@ fn environment_bundles_match_the_reference_direct_light() {
     with_gpu(|ctx| {
         let scene = scene_file("glossy-env", 32, 24);
         let gpu = GpuScene::upload(ctx, &scene).unwrap();
-        let a = reference(ctx, &gpu, 4096, 1, 31);
-        let b = reference(ctx, &gpu, 4096, 1, 32);
+        let a = reference(ctx, &scene, &gpu, 4096, 1, 31);
+        let b = reference(ctx, &scene, &gpu, 4096, 1, 32);
         let r = (luminance_mean(&a) + luminance_mean(&b)) / 2.0;
-        let bundles = Bundles::new(ctx).unwrap();
+        let bundles = Renderer::<Bundles>::new(ctx).unwrap();
         let measure = |directions: DirectionDensity, suppression: Suppression, seeds: u32| {
             let base = BundlesSettings {
                 iterations: 21,
@@ -343,8 +351,8 @@ fn roulette_over_lights_keeps_the_mean() {
             intensity: Vec3::new(1.0, 2.0, 3.0),
         });
         let gpu = GpuScene::upload(ctx, &scene).unwrap();
-        let r = luminance_mean(&reference(ctx, &gpu, 4096, 2, 41));
-        let bundles = Bundles::new(ctx).unwrap();
+        let r = luminance_mean(&reference(ctx, &scene, &gpu, 4096, 2, 41));
+        let bundles = Renderer::<Bundles>::new(ctx).unwrap();
         for lights in [LightSelection::All, LightSelection::Roulette] {
             let base = BundlesSettings {
                 iterations: 21,

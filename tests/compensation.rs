@@ -13,6 +13,7 @@ use irad::methods::gbuffer::PixelSampling;
 use irad::methods::ir::{InstantRadiosity, IrSettings};
 use irad::methods::reference::{Reference, ReferenceSettings};
 use irad::methods::RenderOutput;
+use irad::methods::Renderer;
 use irad::scene::gpu::GpuScene;
 use irad::scene::Scene;
 
@@ -26,9 +27,9 @@ fn reference(ctx: &Context, scene: &Scene, spp: u32) -> Image {
         pixels: PixelSampling::Jittered,
         ..Default::default()
     };
-    Reference::new(ctx)
+    Renderer::<Reference>::new(ctx)
         .unwrap()
-        .render(ctx, &gpu, &settings, |_, _| {})
+        .render(ctx, scene, &gpu, &settings, |_, _| {})
         .unwrap()
         .image
 }
@@ -75,7 +76,7 @@ fn compensated_clamp_keeps_the_mean_and_removes_spikes_in_the_corner_light() {
         let gpu = GpuScene::upload(ctx, &scene).unwrap();
         let reference_image = reference(ctx, &scene, 8192);
         let r = luminance_mean(&reference_image);
-        let ir = InstantRadiosity::new(ctx).unwrap();
+        let ir = Renderer::<InstantRadiosity>::new(ctx).unwrap();
         let ir_run = |seed: u32, clamp: ClampSettings| {
             let settings = IrSettings {
                 paths: 16,
@@ -111,7 +112,7 @@ fn compensated_clamp_keeps_the_mean_and_removes_spikes_in_the_corner_light() {
         eprintln!("largest pixel over 8 seeds: {largest:.3}, reference's {reference_largest:.3}");
         assert!(largest < 10.0 * reference_largest);
 
-        let bir = Bir::new(ctx).unwrap();
+        let bir = Renderer::<Bir>::new(ctx).unwrap();
         let images: Vec<Image> = (0..16)
             .map(|seed| {
                 let settings = BirSettings {

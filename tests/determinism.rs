@@ -8,6 +8,7 @@ use glam::Vec3;
 use irad::gpu::Context;
 use irad::image::{exr, Image};
 use irad::methods::reference::{Reference, ReferenceSettings};
+use irad::methods::Renderer;
 use irad::scene::gpu::GpuScene;
 use irad::scene::{Light, Scene};
 
@@ -50,15 +51,16 @@ fn room() -> Scene {
     s
 }
 
-fn render(ctx: &Context, scene: &GpuScene, seed: u32) -> Image {
+fn render(ctx: &Context, scene: &Scene, seed: u32) -> Image {
+    let gpu = GpuScene::upload(ctx, scene).unwrap();
     let settings = ReferenceSettings {
         spp: 8,
         seed,
         ..Default::default()
     };
-    Reference::new(ctx)
+    Renderer::<Reference>::new(ctx)
         .unwrap()
-        .render(ctx, scene, &settings, |_, _| {})
+        .render(ctx, scene, &gpu, &settings, |_, _| {})
         .unwrap()
         .image
 }
@@ -66,7 +68,7 @@ fn render(ctx: &Context, scene: &GpuScene, seed: u32) -> Image {
 #[test]
 fn same_seed_same_bits_different_seed_same_mean() {
     with_gpu(|ctx| {
-        let scene = GpuScene::upload(ctx, &room()).unwrap();
+        let scene = room();
         let a = render(ctx, &scene, 7);
         let b = render(ctx, &scene, 7);
         let c = render(ctx, &scene, 8);

@@ -16,15 +16,16 @@ use irad::methods::envmap::{Env, EnvSettings, Strategy};
 use irad::methods::gbuffer::PixelSampling;
 use irad::methods::rebuild::TableRebuild;
 use irad::methods::reference::{Reference, ReferenceSettings};
+use irad::methods::Renderer;
 use irad::sampling::cubemap;
 use irad::sampling::environment::{sampling_weights, texel_index, texel_solid_angle};
 use irad::scene::gpu::GpuScene;
-use irad::scene::Environment;
+use irad::scene::{Environment, Scene};
 
 use common::{luminance_mean, mean_and_stderr, scene_file, with_gpu};
 
 /// The path tracer's direct light (one scattering event) at pixel centres.
-fn direct_reference(ctx: &Context, gpu: &GpuScene, spp: u32, seed: u32) -> Image {
+fn direct_reference(ctx: &Context, scene: &Scene, gpu: &GpuScene, spp: u32, seed: u32) -> Image {
     let settings = ReferenceSettings {
         spp,
         seed,
@@ -32,9 +33,9 @@ fn direct_reference(ctx: &Context, gpu: &GpuScene, spp: u32, seed: u32) -> Image
         pixels: PixelSampling::Centres,
         ..Default::default()
     };
-    Reference::new(ctx)
+    Renderer::<Reference>::new(ctx)
         .unwrap()
-        .render(ctx, gpu, &settings, |_, _| {})
+        .render(ctx, scene, gpu, &settings, |_, _| {})
         .unwrap()
         .image
 }
@@ -56,8 +57,8 @@ fn every_strategy_matches_the_reference_direct_light() {
         }
         scene.environment = Some(broad_sky());
         let gpu = GpuScene::upload(ctx, &scene).unwrap();
-        let r = luminance_mean(&direct_reference(ctx, &gpu, 8192, 51));
-        let env = Env::new(ctx).unwrap();
+        let r = luminance_mean(&direct_reference(ctx, &scene, &gpu, 8192, 51));
+        let env = Renderer::<Env>::new(ctx).unwrap();
         // Every strategy, dynamic with light samples only (Eq. 3.5), and alpha estimated from
         // an odd M = 5 of the 16 samples.
         let cases = Strategy::ALL.iter().map(|&s| (s, false, None)).chain([
@@ -357,7 +358,7 @@ fn black_and_single_texel_maps() {
         black.texels.iter_mut().for_each(|t| *t = Vec3::ZERO);
         let mut single = black.clone();
         single.texels[(6 * single.width + 40) as usize] = Vec3::splat(1000.0);
-        let env = Env::new(ctx).unwrap();
+        let env = Renderer::<Env>::new(ctx).unwrap();
         for (map, lit) in [(black, false), (single, true)] {
             scene.environment = Some(map);
             let gpu = GpuScene::upload(ctx, &scene).unwrap();
@@ -394,9 +395,9 @@ fn dynamic_shares_waste_fewer_samples_with_the_sun_behind() {
     with_gpu(|ctx| {
         let scene = scene_file("failure/sun-behind", 48, 36);
         let gpu = GpuScene::upload(ctx, &scene).unwrap();
-        let a = direct_reference(ctx, &gpu, 4096, 61);
-        let b = direct_reference(ctx, &gpu, 4096, 62);
-        let env = Env::new(ctx).unwrap();
+        let a = direct_reference(ctx, &scene, &gpu, 4096, 61);
+        let b = direct_reference(ctx, &scene, &gpu, 4096, 62);
+        let env = Renderer::<Env>::new(ctx).unwrap();
         let measure = |strategy: Strategy| {
             let (mut fraction, mut error) = (0.0, 0.0);
             for seed in 0..4 {
@@ -454,7 +455,7 @@ fn beta_weights_keep_neighbouring_pixels_continuous() {
         let mut scene = scene_file("glossy-env", 160, 120);
         scene.environment = Some(broad_sky());
         let gpu = GpuScene::upload(ctx, &scene).unwrap();
-        let env = Env::new(ctx).unwrap();
+        let env = Renderer::<Env>::new(ctx).unwrap();
         // A box inside the sphere in the image (no silhouette).
         let (x0, x1, y0, y1) = (70u32, 90u32, 56u32, 78u32);
         let energy = |image: &Image| {
@@ -805,7 +806,7 @@ fn env_settings(strategy: Strategy, spp: u32, frames: u32, seed: u32) -> EnvSett
 #[test]
 fn alpha_names_the_better_strategy_in_the_extreme_cases() {
     with_gpu(|ctx| {
-        let env = Env::new(ctx).unwrap();
+        let env = Renderer::<Env>::new(ctx).unwrap();
         let mut sun = test_sky();
         sun.texels.iter_mut().for_each(|t| *t = Vec3::ZERO);
         sun.texels[(10 * sun.width + 20) as usize] = Vec3::splat(400.0);
@@ -892,7 +893,7 @@ fn alpha_lowers_the_variance_under_a_high_frequency_map() {
         let mut scene = scene_file("glossy-env", 32, 24);
         scene.environment = Some(starry_sky());
         let gpu = GpuScene::upload(ctx, &scene).unwrap();
-        let env = Env::new(ctx).unwrap();
+        let env = Renderer::<Env>::new(ctx).unwrap();
         let variance = |strategy: Strategy| {
             let images: Vec<Image> = (0..16)
                 .map(|seed| {
@@ -977,8 +978,8 @@ fn dynamic_maps_change_every_frame() {
             assert_eq!(cdf.len(), 32 * 16);
             assert_eq!(*cdf.last().unwrap(), 1u32 << 31);
         }
-        let r = luminance_mean(&direct_reference(ctx, &gpu, 4096, 61));
-        let env = Env::new(ctx).unwrap();
+        let r = luminance_mean(&direct_reference(ctx, &scene, &gpu, 4096, 61));
+        let env = Renderer::<Env>::new(ctx).unwrap();
         let means: Vec<f64> = (0..32)
             .map(|seed| {
                 let out = env
@@ -999,7 +1000,7 @@ fn dynamic_maps_change_every_frame() {
         let mut still = scene.clone();
         still.environment_sequence.clear();
         let still_gpu = GpuScene::upload(ctx, &still).unwrap();
-        let frame0 = luminance_mean(&direct_reference(ctx, &still_gpu, 1024, 62)) / r;
+        let frame0 = luminance_mean(&direct_reference(ctx, &still, &still_gpu, 1024, 62)) / r;
         eprintln!("moving sun: env mean / reference {mean:.4} ± {stderr:.4}; frame 0's map alone {frame0:.4}");
         assert!(stderr < 0.005, "standard error {stderr}");
         assert!((mean - 1.0).abs() < 0.01, "mean {mean:.4} ± {stderr:.4}");
@@ -1024,9 +1025,9 @@ fn uniform_faces_needs_more_samples_at_equal_error() {
     with_gpu(|ctx| {
         let scene = scene_file("failure/sun-behind", 48, 36);
         let gpu = GpuScene::upload(ctx, &scene).unwrap();
-        let a = direct_reference(ctx, &gpu, 4096, 71);
-        let b = direct_reference(ctx, &gpu, 4096, 72);
-        let env = Env::new(ctx).unwrap();
+        let a = direct_reference(ctx, &scene, &gpu, 4096, 71);
+        let b = direct_reference(ctx, &scene, &gpu, 4096, 72);
+        let env = Renderer::<Env>::new(ctx).unwrap();
         let error = |strategy: Strategy, spp: u32| {
             let seeds = 6;
             (0..seeds)
@@ -1323,10 +1324,10 @@ fn decorrelated_light_samples_keep_the_image_mean_within_its_standard_error() {
         let scene = scene_file("failure/sun-behind", 24, 18);
         let gpu = GpuScene::upload(ctx, &scene).unwrap();
         let references: Vec<f64> = (81u32..85)
-            .map(|seed| luminance_mean(&direct_reference(ctx, &gpu, 8192, seed)))
+            .map(|seed| luminance_mean(&direct_reference(ctx, &scene, &gpu, 8192, seed)))
             .collect();
         let (r, r_stderr) = mean_and_stderr(&references);
-        let env = Env::new(ctx).unwrap();
+        let env = Renderer::<Env>::new(ctx).unwrap();
         let run = |shared_samples: bool| {
             let means: Vec<f64> = (0..16)
                 .map(|seed| {

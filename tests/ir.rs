@@ -12,6 +12,7 @@ use irad::methods::ir::schedule::{Absorption, Schedule};
 use irad::methods::ir::walk::{TraceVpls, VplBuffers, VPL_NONE};
 use irad::methods::ir::{DirectLight, InstantRadiosity, IrSettings};
 use irad::methods::reference::{Reference, ReferenceSettings};
+use irad::methods::Renderer;
 use irad::scene::gpu::GpuScene;
 use irad::scene::{Light, Scene};
 
@@ -85,16 +86,16 @@ fn reference(ctx: &Context, scene: &Scene, spp: u32, pixels: PixelSampling) -> I
         pixels,
         ..Default::default()
     };
-    Reference::new(ctx)
+    Renderer::<Reference>::new(ctx)
         .unwrap()
-        .render(ctx, &gpu, &settings, |_, _| {})
+        .render(ctx, scene, &gpu, &settings, |_, _| {})
         .unwrap()
         .image
 }
 
 fn ir(ctx: &Context, scene: &Scene, settings: &IrSettings) -> Image {
     let gpu = GpuScene::upload(ctx, scene).unwrap();
-    let out = InstantRadiosity::new(ctx)
+    let out = Renderer::<InstantRadiosity>::new(ctx)
         .unwrap()
         .render(ctx, scene, &gpu, settings, |_, _| {})
         .unwrap();

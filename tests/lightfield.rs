@@ -7,6 +7,7 @@ mod common;
 use irad::gpu::Commands;
 use irad::methods::lightfield::tables::LuminaireTables;
 use irad::methods::rebuild::TableRebuild;
+use irad::methods::Renderer;
 use irad::sampling::luminaire::LuminaireSampler;
 use irad::scene::luminaire::{Basis, Emitter, Geometry, Luminaire};
 
@@ -262,7 +263,7 @@ fn render_lightfield(
 ) -> irad::methods::RenderOutput {
     use irad::methods::lightfield::Lightfield;
     let gpu = irad::scene::gpu::GpuScene::upload(ctx, scene).unwrap();
-    let out = Lightfield::new(ctx)
+    let out = Renderer::<Lightfield>::new(ctx)
         .unwrap()
         .render(ctx, scene, &gpu, &settings, |_, _| {})
         .unwrap();
@@ -284,7 +285,7 @@ fn every_lightfield_strategy_matches_the_brute_force() {
         let mut scene = headlight_wall(32, 24);
         scene.luminaires[0].luminaire = smooth_headlight();
         let gpu = GpuScene::upload(ctx, &scene).unwrap();
-        let lf = Lightfield::new(ctx).unwrap();
+        let lf = Renderer::<Lightfield>::new(ctx).unwrap();
         let render_with = |strategy: Strategy, spp: u32, frames: u32, seed: u32, shared: bool| {
             let settings = LightfieldSettings {
                 spp,
@@ -343,7 +344,8 @@ fn every_lightfield_strategy_matches_the_brute_force() {
         }
         assert!(reference_error / reference < 0.005);
         // The methods that do not model luminaires decline the scene.
-        let reference = irad::methods::Method::Reference(Default::default());
+        let reference =
+            irad::methods::Method::new::<irad::methods::reference::Reference>(Default::default());
         let why = reference.declines(&scene).unwrap();
         assert!(
             why.contains("does not render light-field luminaires"),
@@ -366,7 +368,7 @@ fn strategies_at_equal_error() {
     with_gpu(|ctx| {
         let scene = headlight_wall(48, 36);
         let gpu = GpuScene::upload(ctx, &scene).unwrap();
-        let lf = Lightfield::new(ctx).unwrap();
+        let lf = Renderer::<Lightfield>::new(ctx).unwrap();
         let render = |strategy: Strategy, spp: u32, frames: u32, seed: u32| {
             let settings = LightfieldSettings {
                 spp,

@@ -10,6 +10,7 @@ use glam::Vec3;
 use irad::gpu::Context;
 use irad::image::Image;
 use irad::methods::reference::{Reference, ReferenceSettings};
+use irad::methods::Renderer;
 use irad::scene::gpu::GpuScene;
 use irad::scene::{Environment, Light, Scene};
 
@@ -18,14 +19,14 @@ use common::with_gpu;
 
 fn render(ctx: &Context, scene: &Scene, spp: u32, seed: u32) -> Image {
     let gpu = GpuScene::upload(ctx, scene).expect("upload");
-    let reference = Reference::new(ctx).expect("kernels");
+    let reference = Renderer::<Reference>::new(ctx).expect("kernels");
     let settings = ReferenceSettings {
         spp,
         seed,
         ..Default::default()
     };
     let out = reference
-        .render(ctx, &gpu, &settings, |_, _| {})
+        .render(ctx, scene, &gpu, &settings, |_, _| {})
         .expect("render");
     assert_eq!(out.nonfinite_estimates, 0);
     out.image
@@ -355,7 +356,14 @@ fn veach_plates(size: u32) -> Scene {
     scene("veach-plates", camera, triangles, materials)
 }
 
-fn direct_light(ctx: &Context, gpu: &GpuScene, spp: u32, seed: u32, alpha: Option<u32>) -> Image {
+fn direct_light(
+    ctx: &Context,
+    scene: &Scene,
+    gpu: &GpuScene,
+    spp: u32,
+    seed: u32,
+    alpha: Option<u32>,
+) -> Image {
     let settings = ReferenceSettings {
         spp,
         seed,
@@ -363,9 +371,9 @@ fn direct_light(ctx: &Context, gpu: &GpuScene, spp: u32, seed: u32, alpha: Optio
         alpha_frames: alpha,
         ..Default::default()
     };
-    let out = Reference::new(ctx)
+    let out = Renderer::<Reference>::new(ctx)
         .unwrap()
-        .render(ctx, gpu, &settings, |_, _| {})
+        .render(ctx, scene, gpu, &settings, |_, _| {})
         .unwrap();
     assert_eq!(out.nonfinite_estimates, 0);
     if alpha.is_some() {
@@ -391,11 +399,11 @@ fn alpha_direct_light_is_unbiased_and_lowers_the_variance() {
     with_gpu(|ctx| {
         let scene = veach_plates(48);
         let gpu = GpuScene::upload(ctx, &scene).unwrap();
-        let reference = direct_light(ctx, &gpu, 4096, 91, None);
+        let reference = direct_light(ctx, &scene, &gpu, 4096, 91, None);
         let r: f64 = reference.pixels.iter().map(|&p| luminance(p)).sum::<f64>();
         let run = |m: u32| -> (Vec<f64>, f64) {
             let images: Vec<Image> = (0..16)
-                .map(|seed| direct_light(ctx, &gpu, 128, 300 + seed, Some(m)))
+                .map(|seed| direct_light(ctx, &scene, &gpu, 128, 300 + seed, Some(m)))
                 .collect();
             let means = images
                 .iter()
@@ -443,7 +451,7 @@ fn kernels_specialized_to_a_scene_give_the_general_kernels_bits() {
         ("glossy-env", [true, false, true]),
     ];
     with_gpu(|ctx| {
-        let reference = Reference::new(ctx).expect("kernels");
+        let reference = Renderer::<Reference>::new(ctx).expect("kernels");
         let settings = ReferenceSettings {
             spp: 4,
             seed: 3,
@@ -458,9 +466,13 @@ fn kernels_specialized_to_a_scene_give_the_general_kernels_bits() {
                 glossy,
             };
             assert_eq!(gpu.features, features, "{name}");
-            let specialized = reference.render(ctx, &gpu, &settings, |_, _| {}).unwrap();
+            let specialized = reference
+                .render(ctx, &scene, &gpu, &settings, |_, _| {})
+                .unwrap();
             gpu.features = SceneFeatures::ALL;
-            let general = reference.render(ctx, &gpu, &settings, |_, _| {}).unwrap();
+            let general = reference
+                .render(ctx, &scene, &gpu, &settings, |_, _| {})
+                .unwrap();
             assert!(
                 specialized.image.pixels.iter().any(|p| p[0] > 0.0),
                 "{name}: a black image tests nothing"

@@ -25,7 +25,7 @@ mod common;
 
 use common::{luminance_mean, scene_file, with_gpu};
 use irad::methods::settings::Kind;
-use irad::methods::{Method, Renderers, METHOD_NAMES};
+use irad::methods::{Method, Registry, Renderers};
 use irad::scene::gpu::GpuScene;
 
 const SEEDS: u32 = 8;
@@ -179,7 +179,7 @@ fn method(name: &str, layers: &[&str]) -> Method {
 fn every_count_setting_at_its_maximum_keeps_the_image_mean() {
     // Every Count row has a plan (checked without a GPU first).
     let mut missing = vec![];
-    for &name in METHOD_NAMES {
+    for name in Registry::builtin().names() {
         for doc in Method::settings(name).unwrap() {
             if matches!(doc.kind, Kind::Count { .. }) && plan(name, doc.key).is_none() {
                 missing.push(format!("{name}.{}", doc.key));
@@ -191,7 +191,7 @@ fn every_count_setting_at_its_maximum_keeps_the_image_mean() {
     with_gpu(|ctx| {
         let renderers = Renderers::default();
         let mut failures = vec![];
-        for &name in METHOD_NAMES {
+        for name in Registry::builtin().names() {
             let (scene_name, base_params) = base(name);
             let scene = scene_file(scene_name, 16, 16);
             let gpu_scene = GpuScene::upload(ctx, &scene).unwrap();

@@ -11,6 +11,7 @@ use irad::methods::bundles::{Bundles, BundlesSettings};
 use irad::methods::envmap::{Env, EnvSettings, Strategy};
 use irad::methods::rebuild::TableRebuild;
 use irad::methods::RenderOutput;
+use irad::methods::Renderer;
 use irad::scene::gpu::GpuScene;
 use irad::scene::Scene;
 
@@ -49,7 +50,7 @@ fn env_and_bundles_tables_are_built_once_for_a_still_map() {
         let moving = sequence(&still);
         let still_gpu = GpuScene::upload(ctx, &still).unwrap();
         let moving_gpu = GpuScene::upload(ctx, &moving).unwrap();
-        let env = Env::new(ctx).unwrap();
+        let env = Renderer::<Env>::new(ctx).unwrap();
         for (strategy, passes) in [
             (Strategy::Dynamic, &["cube map", "cdf"][..]),
             (Strategy::Latlong, &["latlong table"][..]),
@@ -85,7 +86,7 @@ fn env_and_bundles_tables_are_built_once_for_a_still_map() {
             assert_eq!(once.image.pixels, every.image.pixels, "{strategy:?}: bits");
         }
 
-        let bundles = Bundles::new(ctx).unwrap();
+        let bundles = Renderer::<Bundles>::new(ctx).unwrap();
         let settings = |rebuild| BundlesSettings {
             iterations: 2,
             frames: FRAMES,

@@ -14,6 +14,7 @@ use crate::gpu::{copy::CopyValues, Buffer, Commands, Context};
 use crate::methods::envmap::cube::CubeTable;
 use crate::methods::envmap::{Env, EnvSettings, Strategy};
 use crate::methods::equirect_table::EquirectTable;
+use crate::methods::interface::{self, Renderer};
 use crate::methods::rebuild::TableRebuild;
 use crate::scene::gpu::GpuScene;
 use crate::scene::{Environment, Scene};
@@ -169,11 +170,11 @@ pub fn run_shading(
     frames: u32,
     mut progress: impl FnMut(Strategy, u32, bool),
 ) -> Result<Vec<EnvShadingResult>> {
-    if let Some(e) = Env::declines(scene) {
+    if let Some(e) = interface::declines::<Env>(scene) {
         anyhow::bail!("bench env: {e}");
     }
     let gpu = GpuScene::upload(ctx, scene)?;
-    let env = Env::new(ctx)?;
+    let env = Renderer::<Env>::new(ctx)?;
     let mut results = vec![];
     for &strategy in strategies {
         for &spp in spps {

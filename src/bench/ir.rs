@@ -8,6 +8,7 @@ use anyhow::Result;
 use crate::bvh::procedural;
 use crate::gpu::Context;
 use crate::methods::ir::{InstantRadiosity, IrSettings};
+use crate::methods::Renderer;
 use crate::scene::gpu::GpuScene;
 use crate::scene::Scene;
 use crate::trace::TraceMode;
@@ -51,7 +52,7 @@ pub fn run(
     mut progress: impl FnMut(&str),
 ) -> Result<IrReport> {
     let gpu_scene = GpuScene::upload(ctx, scene)?;
-    let ir = InstantRadiosity::new(ctx)?;
+    let ir = Renderer::<InstantRadiosity>::new(ctx)?;
     let settings = |paths, frames| IrSettings {
         paths,
         frames,

@@ -18,6 +18,7 @@ use anyhow::Result;
 
 use super::median;
 
+use crate::methods::interface::{self, Renderer};
 use crate::methods::lightfield::{Lightfield, LightfieldSettings, Strategy};
 use crate::methods::RenderOutput;
 use crate::scene::gpu::GpuScene;
@@ -76,11 +77,11 @@ pub fn run(
     repeats: usize,
     mut progress: impl FnMut(Strategy, u32),
 ) -> Result<Vec<LightfieldTiming>> {
-    if let Some(e) = Lightfield::declines(scene) {
+    if let Some(e) = interface::declines::<Lightfield>(scene) {
         anyhow::bail!("bench lightfield: {e}");
     }
     let gpu = GpuScene::upload(ctx, scene)?;
-    let lightfield = Lightfield::new(ctx)?;
+    let lightfield = Renderer::<Lightfield>::new(ctx)?;
     let frames = frames.max(1);
     let sequence = scene
         .luminaires

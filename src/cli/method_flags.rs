@@ -10,7 +10,7 @@ use clap::parser::ValueSource;
 use clap::{Arg, ArgAction, ArgMatches, Args, Command, FromArgMatches};
 
 use irad::methods::settings::{Kind, SettingDoc};
-use irad::methods::{Method, ParamError, METHODS};
+use irad::methods::{Method, ParamError, Registry};
 
 /// The method flags given on the command line, as (key, text).
 #[derive(Clone, Debug, Default)]
@@ -23,11 +23,12 @@ pub fn flag(key: &str) -> String {
     format!("--{}", key.replace('_', "-"))
 }
 
-/// Every method's settings, in `METHODS` order.
+/// Every method's settings, in the registry's order.
 fn all_settings() -> Vec<(&'static str, Vec<SettingDoc>)> {
-    METHODS
+    Registry::builtin()
+        .entries()
         .iter()
-        .map(|(name, _)| (*name, Method::settings(name).expect("a method of METHODS")))
+        .map(|e| (e.name(), e.docs()))
         .collect()
 }
 
@@ -318,7 +319,7 @@ mod tests {
     fn cli_flags_and_suite_keys_are_the_same_settings() {
         let all_keys: Vec<&str> = keys().into_iter().map(|(k, _)| k).collect();
         let mut compared = 0;
-        for (method, _) in METHODS {
+        for method in Registry::builtin().names() {
             // The defaults.
             let default = Method::from_params(method, &toml::Table::new()).unwrap();
             assert_eq!(cli(method, &[]).unwrap(), default, "{method} defaults");

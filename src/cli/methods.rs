@@ -4,7 +4,7 @@
 use anyhow::Result;
 
 use irad::methods::settings::{describe_needs, Kind};
-use irad::methods::{Method, METHODS};
+use irad::methods::Registry;
 
 use super::method_flags::flag;
 
@@ -17,16 +17,13 @@ pub struct MethodsArgs {
 pub fn run(args: &MethodsArgs) -> Result<()> {
     let Some(name) = &args.name else {
         println!("methods (`irad methods NAME` lists one's settings):");
-        for (name, about) in METHODS {
-            println!("  {name:<12}{about}");
+        for e in Registry::builtin().entries() {
+            println!("  {:<12}{}", e.name(), e.summary());
         }
         return Ok(());
     };
-    let settings = Method::settings(name)?;
-    let about = METHODS
-        .iter()
-        .find(|(n, _)| n == name)
-        .map_or("", |(_, a)| a);
+    let entry = Registry::builtin().get(name)?;
+    let (settings, about) = (entry.docs(), entry.summary());
     println!("{name}: {about}");
     println!(
         "settings: `irad render --method {name} --FLAG VALUE` (a switch: `--FLAG` or \

@@ -39,9 +39,10 @@ pub struct RenderArgs {
 /// `--method`'s values, each with what it is.
 fn method_names() -> PossibleValuesParser {
     PossibleValuesParser::new(
-        irad::methods::METHODS
+        irad::methods::Registry::builtin()
+            .entries()
             .iter()
-            .map(|(name, about)| PossibleValue::new(*name).help(*about)),
+            .map(|e| PossibleValue::new(e.name()).help(e.summary())),
     )
 }
 

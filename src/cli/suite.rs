@@ -13,7 +13,7 @@ use irad::bench::suite::{
     self, Event, RunRecord, Shard, Status, Suite, SuiteOptions, SuiteResults,
 };
 use irad::gpu::{Context, ContextOptions};
-use irad::methods::Method;
+use irad::methods::reference::Reference;
 
 use super::device_line;
 
@@ -145,8 +145,8 @@ fn print_list(suite: &Suite, path: &Path, shard: Shard) {
             .as_ref()
             .map(|f| format!(", expected to fail: {}", f.methods.join(", ")))
             .unwrap_or_default();
-        let depth = match &s.reference {
-            Method::Reference(r) if r.max_depth < 64 => format!(" (max_depth {})", r.max_depth),
+        let depth = match s.reference.settings_of::<Reference>() {
+            Some(r) if r.max_depth < 64 => format!(" (max_depth {})", r.max_depth),
             _ => String::new(),
         };
         let home = if s.home.is_empty() {

@@ -12,16 +12,8 @@ use std::mem::size_of;
 
 use glam::Vec4;
 
-use crate::methods::bir::Split;
-use crate::methods::bundles::light_vertices::{LightSelection, LightVertex};
-use crate::methods::bundles::ray_bundles::BundleHit;
-use crate::methods::bundles::Bundles;
-use crate::methods::compensation::{CompensationVertex, VplClamp};
+use crate::methods::compensation::{ClampSettings, CompensationVertex, VplClamp};
 use crate::methods::gbuffer::GBufferTexel;
-use crate::methods::ir::schedule::{mean_albedo, Absorption, Schedule};
-use crate::methods::ir::walk::Vpl;
-use crate::methods::ir::InstantRadiosity;
-use crate::methods::Method;
 use crate::scene::Scene;
 
 /// Bytes a pixel takes in the largest per-pixel buffer every method binds (the G-buffer; a
@@ -44,7 +36,8 @@ pub fn largest_fitting(max: u64, limit: u64, bytes: impl Fn(u64) -> u64) -> u64 
     lo
 }
 
-fn over(bytes: u64, limit: u64) -> String {
+/// "would take BYTES bytes in one buffer, over this device's maxStorageBufferRange".
+pub fn over(bytes: u64, limit: u64) -> String {
     format!(
         "would take {bytes} bytes in one buffer, over this device's maxStorageBufferRange of \
          {limit} bytes (`irad info`)"
@@ -116,111 +109,16 @@ fn scene_file(scene: &Scene) -> String {
     )
 }
 
-/// The method's settings against `limit` on `scene` (which `check_scene` passed).
-pub fn check_method(method: &Method, scene: &Scene, limit: u64) -> Result<(), String> {
-    let pixels = scene.camera.width as u64 * scene.camera.height as u64;
-    // ir's and bir's clamp compensation keeps per-pixel vertex lists (compensation.rs:
-    // allocated where it compensates a clamp other than 0).
-    let clamp = match method {
-        Method::Ir(s) => Some(s.clamp),
-        Method::Bir(s) => Some(s.clamp),
-        _ => None,
-    };
-    if let Some(c) = clamp {
-        if c.compensate && c.clamp != VplClamp::Fixed(0.0) {
-            check_pixels(
-                scene,
-                COMPENSATION_PIXEL_BYTES,
-                " in the clamp's compensation (compensate = false avoids it)",
-                limit,
-            )?;
-        }
-    }
-    match method {
-        Method::Env(s) => {
-            // CubeWeights and CubeRowCdf: 6 R^2 f32s (envmap/cube.rs).
-            let bytes = |r: u64| 6 * r * r * size_of::<f32>() as u64;
-            let r = s.face_resolution as u64;
-            if bytes(r) > limit {
-                let largest = largest_fitting(r, limit, bytes);
-                return Err(format!(
-                    "env: face_resolution = {r} (--face-resolution): the cube map's table {}; \
-                     the largest that fits is {largest}",
-                    over(bytes(r), limit)
-                ));
-            }
-            // The strategies' light samples are bounded by MAX_WINDOWED_SAMPLES whatever
-            // spp is.
-        }
-        Method::Ir(s) => {
-            // Vpls: one slot per VPL of every path level (ir/walk.rs).
-            let bytes = |paths: u64| {
-                let settings = crate::methods::ir::IrSettings {
-                    paths: paths as u32,
-                    ..*s
-                };
-                InstantRadiosity::schedule(scene, &settings).slot_count as u64
-                    * size_of::<Vpl>() as u64
-            };
-            let paths = s.paths as u64;
-            if bytes(paths) > limit {
-                let largest = largest_fitting(paths, limit, bytes);
-                return Err(format!(
-                    "ir: vpls = {paths} (--vpls): the VPLs {}; the largest that fits is {largest}",
-                    over(bytes(paths), limit)
-                ));
-            }
-        }
-        Method::Bundles(s) => {
-            // BundleHits: a chunk of iterations' hits per pixel (bundles/mod.rs); the frame's
-            // light vertices: iterations x slots (bundles/light_vertices.rs).
-            let slots = match s.lights {
-                LightSelection::All => scene.lights.len().max(1) as u64,
-                LightSelection::Roulette => 1,
-            };
-            let bytes = |iterations: u64| {
-                let hits = Bundles::chunk_size(iterations as u32, pixels as usize) as u64
-                    * pixels
-                    * size_of::<BundleHit>() as u64;
-                hits.max(iterations * slots * size_of::<LightVertex>() as u64)
-            };
-            let n = s.iterations as u64;
-            if bytes(n) > limit {
-                let largest = largest_fitting(n, limit, bytes);
-                return Err(format!(
-                    "bundles: iterations = {n} (--iterations): the bundles' hits at {}x{} pixels \
-                     {}; the largest that fits is {largest}",
-                    scene.camera.width,
-                    scene.camera.height,
-                    over(bytes(n), limit)
-                ));
-            }
-        }
-        Method::Bir(s) => {
-            // Vpls: the standard walk's slots for a batch's light paths (bir/mod.rs).
-            let bytes = |vpls: u64| {
-                let vpls_per_frame = (vpls as u32).max(2);
-                let batch = if s.batch == 0 {
-                    vpls_per_frame
-                } else {
-                    s.batch.clamp(2, vpls_per_frame)
-                };
-                let rho = mean_albedo(scene);
-                let split = Split::new(s.strategy, batch, rho);
-                Schedule::new(split.light_paths, rho, Absorption::Fractional).slot_count as u64
-                    * size_of::<Vpl>() as u64
-            };
-            let vpls = s.vpls as u64;
-            if bytes(vpls) > limit {
-                let largest = largest_fitting(vpls, limit, bytes);
-                return Err(format!(
-                    "bir: vpls = {vpls} (--vpls): the standard VPLs {}; the largest that fits is \
-                     {largest} (or a smaller batch)",
-                    over(bytes(vpls), limit)
-                ));
-            }
-        }
-        Method::Reference(_) | Method::Lightfield(_) => {}
+/// The clamp compensation's per-pixel vertex lists (ir, bir: compensation.rs allocates them
+/// where it compensates a clamp other than 0) against `limit`.
+pub fn check_compensation(clamp: &ClampSettings, scene: &Scene, limit: u64) -> Result<(), String> {
+    if clamp.compensate && clamp.clamp != VplClamp::Fixed(0.0) {
+        check_pixels(
+            scene,
+            COMPENSATION_PIXEL_BYTES,
+            " in the clamp's compensation (compensate = false avoids it)",
+            limit,
+        )?;
     }
     Ok(())
 }
@@ -265,7 +163,7 @@ mod tests {
             size_of::<[f32; 4]>(),
             size_of::<[f32; 2]>(),
             size_of::<[f32; 4]>(),
-            size_of::<Vpl>(),
+            size_of::<crate::methods::ir::walk::Vpl>(),
         ] {
             assert!(other as u64 <= PIXEL_BYTES, "{other} > {PIXEL_BYTES}");
         }

@@ -19,6 +19,8 @@ use super::RenderOutput;
 
 /// What every frame's own passes read besides the method's state.
 pub struct Shared<'a> {
+    /// The G-buffer and direct-light kernels (the reference runs their path tracer).
+    pub passes: &'a GBufferAndDirectLight,
     pub scene: &'a GpuScene,
     pub gbuffer: &'a GBuffer,
     pub accumulation: &'a Accumulation,
@@ -81,6 +83,7 @@ pub fn render<'m>(
     let accumulation = Accumulation::new(ctx, scene.width, scene.height)?;
     let method = setup()?;
     let shared = Shared {
+        passes,
         scene,
         gbuffer: &gbuffer,
         accumulation: &accumulation,

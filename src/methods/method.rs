@@ -1,161 +1,98 @@
-//! The methods by name: one `Method` value holds a method and all its settings, built from
-//! named parameters by each method's settings table (src/methods/settings.rs: suite files, the
-//! CLI's flags and records share it), says when a method declines a scene, and runs through
-//! `Renderers` (src/methods/renderers.rs).
+//! A method with its settings, as one value: `Method` pairs a registered method's entry
+//! (registry.rs) with its settings struct, built from named parameters by the method's
+//! settings table (src/methods/settings.rs: suite files, the CLI's flags and records share it),
+//! says when the method declines a scene, and runs through `Renderers` (renderers.rs).
 
+use std::any::Any;
 use std::collections::BTreeMap;
+use std::fmt;
+use std::sync::Arc;
 
-use serde_json::json;
-
-use crate::methods::bir::{BirError, BirSettings};
-use crate::methods::bundles::{Bundles, BundlesSettings};
-use crate::methods::envmap::{Env, EnvSettings};
-use crate::methods::ir::{IrError, IrSettings};
-use crate::methods::lightfield::{Lightfield, LightfieldSettings};
-use crate::methods::reference::ReferenceSettings;
-use crate::methods::settings::{self, ParamError, SettingDoc, Value};
-use crate::methods::{bir, bundles, envmap, ir, lightfield, reference};
 use crate::scene::Scene;
 
-/// Every method irad has, by the name `--method` and suite files use, with what it is.
-pub const METHODS: &[(&str, &str)] = &[
-    (
-        "reference",
-        "The unbiased path tracer every accuracy figure is measured against.",
-    ),
-    (
-        "ir",
-        "Instant radiosity (Keller 97): VPLs from a quasi-random walk from the lights.",
-    ),
-    (
-        "bir",
-        "Bidirectional instant radiosity (Segovia 06): VPLs from the lights and from the camera.",
-    ),
-    (
-        "bundles",
-        "Real-time bidirectional path tracing (Tokuyoshi 12): VPLs and global ray bundles \
-         combined by MIS, for point and spot lights.",
-    ),
-    (
-        "env",
-        "Environment-map direct light with per-pixel dynamic cube-map sampling (Lu 14 ch. 3).",
-    ),
-    (
-        "lightfield",
-        "Light-field luminaires' direct light by restricted-CDF sampling (Lu 14 ch. 4).",
-    ),
-];
+use super::interface::RenderMethod;
+use super::lights;
+use super::registry::{self, MethodEntry, Registry};
+use super::settings::{ParamError, SettingDoc, Value};
 
-/// Every method irad has, by name (`METHODS`' names).
-pub const METHOD_NAMES: &[&str] = &{
-    let mut names = [""; METHODS.len()];
-    let mut i = 0;
-    while i < METHODS.len() {
-        names[i] = METHODS[i].0;
-        i += 1;
-    }
-    names
-};
-
-#[derive(Clone, Debug, PartialEq)]
-pub enum Method {
-    Reference(ReferenceSettings),
-    Ir(IrSettings),
-    Bir(BirSettings),
-    Bundles(BundlesSettings),
-    Env(EnvSettings),
-    Lightfield(LightfieldSettings),
-}
-
-fn unknown(name: &str) -> ParamError {
-    ParamError::UnknownMethod {
-        name: name.to_string(),
-    }
+/// A method and all its settings.
+#[derive(Clone)]
+pub struct Method {
+    entry: &'static dyn MethodEntry,
+    /// `entry`'s method's `Settings`.
+    settings: Arc<dyn Any + Send + Sync>,
 }
 
 impl Method {
-    pub fn name(&self) -> &'static str {
-        match self {
-            Method::Reference(_) => "reference",
-            Method::Ir(_) => "ir",
-            Method::Bir(_) => "bir",
-            Method::Bundles(_) => "bundles",
-            Method::Env(_) => "env",
-            Method::Lightfield(_) => "lightfield",
+    /// `M` with `settings`.
+    pub fn new<M: RenderMethod>(settings: M::Settings) -> Method {
+        Method {
+            entry: registry::entry::<M>(),
+            settings: Arc::new(settings),
         }
     }
 
+    /// The settings, where this is method `M`.
+    pub fn settings_of<M: RenderMethod>(&self) -> Option<&M::Settings> {
+        (self.entry.method_type() == std::any::TypeId::of::<M>())
+            .then(|| self.settings.downcast_ref())
+            .flatten()
+    }
+
+    /// Whether this is method `M`.
+    pub fn is<M: RenderMethod>(&self) -> bool {
+        self.settings_of::<M>().is_some()
+    }
+
+    /// The method's registry entry: its constants, table and render.
+    pub fn entry(&self) -> &'static dyn MethodEntry {
+        self.entry
+    }
+
+    pub(crate) fn settings_any(&self) -> &dyn Any {
+        &*self.settings
+    }
+
+    pub fn name(&self) -> &'static str {
+        self.entry.name()
+    }
+
     pub fn seed(&self) -> u32 {
-        match self {
-            Method::Reference(s) => s.seed,
-            Method::Ir(s) => s.seed,
-            Method::Bir(s) => s.seed,
-            Method::Bundles(s) => s.seed,
-            Method::Env(s) => s.seed,
-            Method::Lightfield(s) => s.seed,
-        }
+        self.entry.seed(self.settings_any())
     }
 
     /// The same method and settings with another seed.
     pub fn with_seed(&self, seed: u32) -> Method {
-        let mut m = self.clone();
-        match &mut m {
-            Method::Reference(s) => s.seed = seed,
-            Method::Ir(s) => s.seed = seed,
-            Method::Bir(s) => s.seed = seed,
-            Method::Bundles(s) => s.seed = seed,
-            Method::Env(s) => s.seed = seed,
-            Method::Lightfield(s) => s.seed = seed,
+        Method {
+            entry: self.entry,
+            settings: self.entry.with_seed(self.settings_any(), seed),
         }
-        m
     }
 
-    /// Samples as the method counts them, for progress: samples per pixel, or frames.
+    /// Samples as the method counts them, for progress: samples per pixel, or frames
+    /// (`count_key()`'s value).
     pub fn samples(&self) -> u64 {
-        match self {
-            Method::Reference(s) => s.spp as u64,
-            Method::Ir(s) => s.frames as u64,
-            Method::Bir(s) => s.frames as u64,
-            Method::Bundles(s) => s.frames as u64,
-            Method::Env(s) => s.frames as u64,
-            Method::Lightfield(s) => s.frames as u64,
-        }
+        self.entry.count(self.settings_any()) as u64
     }
 
     /// The parameter a time budget calibrates (`time_ms` in a suite): the reference's `spp`,
-    /// every other method's `frames`; `samples()` reads it.
+    /// every other method's `frames` (`RenderMethod::COUNT`); `samples()` reads it.
     pub fn count_key(&self) -> &'static str {
-        match self {
-            Method::Reference(_) => "spp",
-            _ => "frames",
-        }
+        self.entry.count_key()
     }
 
     /// The same method and settings with `count_key()` set to `count`.
     pub fn with_count(&self, count: u32) -> Method {
-        let mut m = self.clone();
-        match &mut m {
-            Method::Reference(s) => s.spp = count,
-            Method::Ir(s) => s.frames = count,
-            Method::Bir(s) => s.frames = count,
-            Method::Bundles(s) => s.frames = count,
-            Method::Env(s) => s.frames = count,
-            Method::Lightfield(s) => s.frames = count,
+        Method {
+            entry: self.entry,
+            settings: self.entry.with_count(self.settings_any(), count),
         }
-        m
     }
 
     /// Work in units that scale a method's cost at a fixed resolution, for time estimates:
     /// samples per pixel, or frames times light paths.
     pub fn work(&self) -> f64 {
-        match self {
-            Method::Reference(s) => s.spp as f64,
-            Method::Ir(s) => s.frames as f64 * s.paths as f64,
-            Method::Bir(s) => s.frames as f64 * s.vpls as f64,
-            Method::Bundles(s) => s.frames as f64 * s.iterations as f64,
-            Method::Env(s) => s.frames as f64 * s.spp as f64,
-            Method::Lightfield(s) => s.frames as f64 * s.spp as f64,
-        }
+        self.entry.work(self.settings_any())
     }
 
     /// The method's settings by the keys of its table, sorted, unset ones and the seed (a
@@ -168,100 +105,60 @@ impl Method {
     }
 
     fn parameters_with_seed(&self) -> BTreeMap<String, serde_json::Value> {
-        match self {
-            Method::Reference(s) => settings::values(reference::SETTINGS, s),
-            Method::Ir(s) => settings::values(ir::SETTINGS, s),
-            Method::Bir(s) => settings::values(bir::SETTINGS, s),
-            Method::Bundles(s) => settings::values(bundles::SETTINGS, s),
-            Method::Env(s) => settings::values(envmap::SETTINGS, s),
-            Method::Lightfield(s) => {
-                let mut p = settings::values(lightfield::SETTINGS, s);
-                // `irad bench lightfield`'s sampling-only renders, not a setting (so not fed
-                // back), but a record must say its image is black.
-                if s.sampling_only {
-                    p.insert("sampling_only".into(), json!(true));
-                }
-                p
-            }
-        }
+        self.entry.parameters(self.settings_any())
     }
 
-    /// `name` with `params` (a suite file's table: keys and values as `irad methods` lists
-    /// them) over its settings' defaults. Unknown keys, values out of range and settings
-    /// that do not apply are errors naming the method, key and value.
+    /// irad's method `name` with `params` (a suite file's table) over its defaults:
+    /// `Registry::builtin().from_params`.
     pub fn from_params(name: &str, params: &toml::Table) -> Result<Method, ParamError> {
-        Ok(match name {
-            "reference" => {
-                Method::Reference(settings::from_toml(name, reference::SETTINGS, params)?)
-            }
-            "ir" => Method::Ir(settings::from_toml(name, ir::SETTINGS, params)?),
-            "bir" => Method::Bir(settings::from_toml(name, bir::SETTINGS, params)?),
-            "bundles" => Method::Bundles(settings::from_toml(name, bundles::SETTINGS, params)?),
-            "env" => Method::Env(settings::from_toml(name, envmap::SETTINGS, params)?),
-            "lightfield" => {
-                Method::Lightfield(settings::from_toml(name, lightfield::SETTINGS, params)?)
-            }
-            _ => return Err(unknown(name)),
-        })
+        Registry::builtin().from_params(name, params)
     }
 
-    /// `name` with `given` (key, value as written, value checked against the key's kind in
-    /// `settings(name)`; the CLI's flags) over its defaults.
+    /// irad's method `name` with `given` (the CLI's flags) over its defaults:
+    /// `Registry::builtin().from_values`.
     pub fn from_values(name: &str, given: &[(&str, String, Value)]) -> Result<Method, ParamError> {
-        Ok(match name {
-            "reference" => Method::Reference(settings::build(name, reference::SETTINGS, given)?),
-            "ir" => Method::Ir(settings::build(name, ir::SETTINGS, given)?),
-            "bir" => Method::Bir(settings::build(name, bir::SETTINGS, given)?),
-            "bundles" => Method::Bundles(settings::build(name, bundles::SETTINGS, given)?),
-            "env" => Method::Env(settings::build(name, envmap::SETTINGS, given)?),
-            "lightfield" => Method::Lightfield(settings::build(name, lightfield::SETTINGS, given)?),
-            _ => return Err(unknown(name)),
-        })
+        Registry::builtin().from_values(name, given)
     }
 
-    /// The settings `name` takes, with their defaults, in table order.
+    /// The settings irad's method `name` takes, with their defaults, in table order.
     pub fn settings(name: &str) -> Result<Vec<SettingDoc>, ParamError> {
-        Ok(match name {
-            "reference" => settings::docs(reference::SETTINGS),
-            "ir" => settings::docs(ir::SETTINGS),
-            "bir" => settings::docs(bir::SETTINGS),
-            "bundles" => settings::docs(bundles::SETTINGS),
-            "env" => settings::docs(envmap::SETTINGS),
-            "lightfield" => settings::docs(lightfield::SETTINGS),
-            _ => return Err(unknown(name)),
-        })
+        Registry::builtin().settings(name)
     }
 
     /// Why this method cannot render `scene`, in one line, or None when it can.
     pub fn declines(&self, scene: &Scene) -> Option<String> {
-        if !scene.luminaires.is_empty() && !matches!(self, Method::Lightfield(_)) {
-            return Some(format!(
-                "{} does not render light-field luminaires (the scene places {}); use --method lightfield",
-                self.name(),
-                scene.luminaires.len()
-            ));
-        }
-        match self {
-            Method::Reference(_) => None,
-            Method::Ir(_) => scene
-                .environment
-                .is_some()
-                .then(|| IrError::Environment.to_string()),
-            Method::Bir(_) => scene
-                .environment
-                .is_some()
-                .then(|| BirError::Environment.to_string()),
-            Method::Bundles(_) => Bundles::declines(scene).map(|e| e.to_string()),
-            Method::Env(_) => Env::declines(scene).map(|e| e.to_string()),
-            Method::Lightfield(_) => Lightfield::declines(scene).map(|e| e.to_string()),
-        }
+        lights::declines(self.name(), &self.entry.lights(), scene)
+    }
+
+    /// Sizes this method's settings make on `scene` that a device with
+    /// maxStorageBufferRange `limit` cannot hold, in the user's words.
+    pub fn fits(&self, scene: &Scene, limit: u64) -> Result<(), String> {
+        self.entry.fits(self.settings_any(), scene, limit)
+    }
+}
+
+impl PartialEq for Method {
+    fn eq(&self, other: &Method) -> bool {
+        self.name() == other.name()
+            && self.entry.method_type() == other.entry.method_type()
+            && self.entry.equal(self.settings_any(), other.settings_any())
+    }
+}
+
+impl fmt::Debug for Method {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}(", self.name())?;
+        self.entry.debug(self.settings_any(), f)?;
+        write!(f, ")")
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::methods::reference::{Reference, ReferenceSettings};
     use crate::methods::settings::{Kind, Need};
+    use crate::methods::{bundles, envmap, lightfield};
 
     /// Each strategy's name, written `STRATEGY_` + upper case with `-` as `_`, is defined in
     /// its kernel as the strategy's code (`as u32`): the Rust names and the GLSL codes are
@@ -317,7 +214,7 @@ mod tests {
             Method::from_params("reference", &table("spp = 7\nroulette_depth = 5")).unwrap();
         assert_eq!(
             reference,
-            Method::Reference(ReferenceSettings {
+            Method::new::<Reference>(ReferenceSettings {
                 spp: 7,
                 roulette_depth: 5,
                 ..Default::default()
@@ -331,7 +228,7 @@ mod tests {
             Method::from_params("reference", &table("max_depth = 1\nalpha_frames = 32")).unwrap();
         assert_eq!(
             r,
-            Method::Reference(ReferenceSettings {
+            Method::new::<Reference>(ReferenceSettings {
                 max_depth: 1,
                 alpha_frames: Some(32),
                 ..Default::default()
@@ -510,7 +407,7 @@ mod tests {
     #[test]
     fn settings_are_refused_exactly_where_their_conditions_say() {
         let mut checked = 0;
-        for (method, _) in METHODS {
+        for method in Registry::builtin().names() {
             let docs = Method::settings(method).unwrap();
             let kind = |key: &str| docs.iter().find(|d| d.key == key).unwrap().kind;
             let defaults = Method::from_params(method, &toml::Table::new())
@@ -733,7 +630,7 @@ mod tests {
                 Need::Any(needs) => needs.iter().for_each(|n| check(method, docs, *n)),
             }
         }
-        for (method, _) in METHODS {
+        for method in Registry::builtin().names() {
             let docs = Method::settings(method).unwrap();
             for doc in &docs {
                 doc.needs.iter().for_each(|n| check(method, &docs, *n));

@@ -13,18 +13,24 @@ pub mod driver;
 pub mod envmap;
 pub mod equirect_table;
 pub mod gbuffer;
+pub mod interface;
 pub mod ir;
 pub mod lightfield;
+pub mod lights;
 pub mod method;
 pub mod paths;
 pub mod progressive;
 pub mod rebuild;
 pub mod reference;
+pub mod registry;
 pub mod renderers;
 pub mod scene_kernel;
 pub mod settings;
 
-pub use method::{Method, METHODS, METHOD_NAMES};
+pub use driver::{Extras, MethodFrames, Shared};
+pub use interface::{Lights, RenderMethod, Renderer, SharedPasses, Support};
+pub use method::Method;
+pub use registry::Registry;
 pub use renderers::{Renderers, RunError};
 pub use settings::ParamError;
 

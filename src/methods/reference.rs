@@ -4,19 +4,17 @@
 //! frames. Unbiased up to `max_depth` scattering events (a safety cap; Russian roulette ends
 //! paths long before it unless the scene reflects almost everything).
 
-use std::time::Instant;
-
 use crate::gpu::{Buffer, Commands, Context, GpuResult};
 use crate::scene::gpu::GpuScene;
+use crate::scene::Scene;
 
-use super::direct::GBufferAndDirectLight;
 use super::direct_alpha::ShadeDirectAlpha;
-use super::driver::{self, Extras, MethodFrames, Plan, Shared};
+use super::driver::{Extras, MethodFrames, Shared};
 use super::envmap;
 use super::gbuffer::PixelSampling;
+use super::interface::{Lights, RenderMethod, SharedPasses, Support};
 use super::paths::PathStarts;
 use super::settings::{common_settings, field_setting, Kind, Need, Setting, Value};
-use super::RenderOutput;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ReferenceSettings {
@@ -101,44 +99,51 @@ pub const SETTINGS: &[Setting<ReferenceSettings>] = &[
 ];
 
 pub struct Reference {
-    passes: GBufferAndDirectLight,
     alpha: ShadeDirectAlpha,
 }
 
-impl Reference {
-    pub fn new(ctx: &Context) -> GpuResult<Reference> {
+impl RenderMethod for Reference {
+    type Settings = ReferenceSettings;
+    const NAME: &'static str = "reference";
+    const SUMMARY: &'static str =
+        "The unbiased path tracer every accuracy figure is measured against.";
+    const SETTINGS: &'static [Setting<ReferenceSettings>] = SETTINGS;
+    /// One path per pixel a frame.
+    const COUNT: &'static str = "spp";
+    const LIGHTS: Lights = Lights {
+        environment: Support::Renders,
+        area: Support::Renders,
+        point: Support::Renders,
+        luminaires: Support::Declines("the path tracer does not model them"),
+    };
+
+    fn new(ctx: &Context) -> GpuResult<Reference> {
         Ok(Reference {
-            passes: GBufferAndDirectLight::new(ctx)?,
             alpha: ShadeDirectAlpha::new(ctx)?,
         })
     }
 
-    /// Renders `settings.spp` frames, calling `progress(frames_done, spp)` after each
-    /// submission.
-    pub fn render(
-        &self,
-        ctx: &Context,
-        scene: &GpuScene,
-        settings: &ReferenceSettings,
-        progress: impl FnMut(u32, u32),
-    ) -> GpuResult<RenderOutput> {
-        // The G-buffer alone: the paths (or alpha's direct light) are the reference's own.
-        let plan = Plan {
-            frames: settings.spp.max(1),
-            seed: settings.seed,
+    /// The G-buffer alone: the paths (or alpha's direct light) are the reference's own.
+    fn shared_passes(settings: &ReferenceSettings) -> SharedPasses {
+        SharedPasses {
             pixels: settings.pixels,
             direct: None,
-            start: Instant::now(),
-        };
-        let setup = || -> GpuResult<Box<dyn MethodFrames + '_>> {
-            Ok(Box::new(ReferenceFrames {
-                reference: self,
-                settings,
-                alpha_frames: settings.alpha_frames.filter(|_| settings.max_depth == 1),
-                state: ShadeDirectAlpha::state(ctx, scene)?,
-            }))
-        };
-        driver::render(ctx, &self.passes, scene, plan, setup, progress)
+        }
+    }
+
+    fn set_up<'a>(
+        &'a self,
+        ctx: &Context,
+        _scene: &Scene,
+        gpu_scene: &GpuScene,
+        settings: &'a ReferenceSettings,
+    ) -> GpuResult<Box<dyn MethodFrames + 'a>> {
+        Ok(Box::new(ReferenceFrames {
+            reference: self,
+            settings,
+            alpha_frames: settings.alpha_frames.filter(|_| settings.max_depth == 1),
+            state: ShadeDirectAlpha::state(ctx, gpu_scene)?,
+        }))
     }
 }
 
@@ -173,7 +178,7 @@ impl MethodFrames for ReferenceFrames<'_> {
             });
         }
         cmd.pass("reference paths", |cmd| {
-            reference.passes.paths().record(
+            shared.passes.paths().record(
                 cmd,
                 shared.scene,
                 shared.gbuffer,

@@ -1,34 +1,31 @@
 //! Each method's kernels, built on first use, so a benchmark that renders many times compiles
-//! its pipelines once.
+//! its pipelines once; the G-buffer and direct-light kernels are built once for every method.
 
-use std::cell::OnceCell;
+use std::any::{Any, TypeId};
+use std::cell::{OnceCell, RefCell};
+use std::rc::Rc;
 
 use thiserror::Error;
 
-use crate::gpu::{Context, GpuError};
-use crate::methods::bir::{Bir, BirError};
-use crate::methods::bundles::{Bundles, BundlesError};
-use crate::methods::envmap::{Env, EnvError};
-use crate::methods::ir::{InstantRadiosity, IrError};
-use crate::methods::lightfield::{Lightfield, LightfieldError};
-use crate::methods::reference::Reference;
-use crate::methods::{device_fit, Method, RenderOutput};
+use crate::gpu::{Context, GpuError, GpuResult};
 use crate::scene::gpu::GpuScene;
 use crate::scene::Scene;
 
-/// Each method's kernels, built the first time the method runs.
+use super::direct::GBufferAndDirectLight;
+use super::interface::RenderMethod;
+use super::{Method, RenderOutput};
+
+/// The kernels of each method that has run, and the shared passes'.
 #[derive(Default)]
 pub struct Renderers {
-    reference: OnceCell<Reference>,
-    ir: OnceCell<InstantRadiosity>,
-    bir: OnceCell<Bir>,
-    bundles: OnceCell<Bundles>,
-    env: OnceCell<Env>,
-    lightfield: OnceCell<Lightfield>,
+    passes: OnceCell<GBufferAndDirectLight>,
+    /// Each method's kernels by the method's type: an `Rc<M>` as `Rc<dyn Any>`.
+    methods: RefCell<Vec<(TypeId, Rc<dyn Any>)>>,
 }
 
 #[derive(Debug, Error)]
 pub enum RunError {
+    /// The method does not render this scene's lights (lights.rs says why).
     #[error("{0}")]
     Declined(String),
     #[error(transparent)]
@@ -37,81 +34,49 @@ pub enum RunError {
 
 impl Renderers {
     /// Renders `scene` (uploaded as `gpu_scene`) with `method`, calling `progress(done, total)`
-    /// as samples complete.
+    /// as samples complete. A method registered outside irad runs here too: the method value
+    /// carries its entry.
     pub fn run(
         &self,
         ctx: &Context,
         method: &Method,
         scene: &Scene,
         gpu_scene: &GpuScene,
-        progress: impl FnMut(u32, u32),
+        mut progress: impl FnMut(u32, u32),
     ) -> Result<RenderOutput, RunError> {
+        // Refused before any kernel is built.
         if let Some(why) = method.declines(scene) {
             return Err(RunError::Declined(why));
         }
-        device_fit::check_method(method, scene, ctx.info().max_storage_buffer_range)
-            .map_err(|e| RunError::Gpu(GpuError::DoesNotFit(e)))?;
-        // A cut traversal left over from an earlier render (one that failed before its
-        // check) is not this render's; the methods' frames check it (progressive::run).
-        gpu_scene.bvh.clear_loop_cuts()?;
-        match method {
-            Method::Reference(settings) => {
-                let r = get_or_try_init(&self.reference, || Reference::new(ctx))?;
-                Ok(r.render(ctx, gpu_scene, settings, progress)?)
-            }
-            Method::Ir(settings) => {
-                let ir = get_or_try_init(&self.ir, || InstantRadiosity::new(ctx))?;
-                ir.render(ctx, scene, gpu_scene, settings, progress)
-                    .map_err(|e| match e {
-                        IrError::Environment => RunError::Declined(e.to_string()),
-                        IrError::Gpu(g) => RunError::Gpu(g),
-                    })
-            }
-            Method::Bir(settings) => {
-                let bir = get_or_try_init(&self.bir, || Bir::new(ctx))?;
-                bir.render(ctx, scene, gpu_scene, settings, progress)
-                    .map_err(|e| match e {
-                        BirError::Environment => RunError::Declined(e.to_string()),
-                        BirError::Gpu(g) => RunError::Gpu(g),
-                    })
-            }
-            Method::Bundles(settings) => {
-                let bundles = get_or_try_init(&self.bundles, || Bundles::new(ctx))?;
-                bundles
-                    .render(ctx, scene, gpu_scene, settings, progress)
-                    .map_err(|e| match e {
-                        BundlesError::Gpu(g) => RunError::Gpu(g),
-                        e => RunError::Declined(e.to_string()),
-                    })
-            }
-            Method::Env(settings) => {
-                let env = get_or_try_init(&self.env, || Env::new(ctx))?;
-                env.render(ctx, scene, gpu_scene, settings, progress)
-                    .map_err(|e| match e {
-                        EnvError::Gpu(g) => RunError::Gpu(g),
-                        e => RunError::Declined(e.to_string()),
-                    })
-            }
-            Method::Lightfield(settings) => {
-                let lf = get_or_try_init(&self.lightfield, || Lightfield::new(ctx))?;
-                lf.render(ctx, scene, gpu_scene, settings, progress)
-                    .map_err(|e| match e {
-                        LightfieldError::Gpu(g) => RunError::Gpu(g),
-                        e => RunError::Declined(e.to_string()),
-                    })
-            }
-        }
+        method.entry().run(
+            self,
+            ctx,
+            method.settings_any(),
+            scene,
+            gpu_scene,
+            &mut progress,
+        )
     }
-}
 
-/// `OnceCell::get_or_try_init` is not stable yet.
-fn get_or_try_init<T>(
-    cell: &OnceCell<T>,
-    init: impl FnOnce() -> Result<T, GpuError>,
-) -> Result<&T, GpuError> {
-    if let Some(v) = cell.get() {
-        return Ok(v);
+    /// The shared passes' kernels and `M`'s, built the first time `M` runs.
+    pub(crate) fn kernels<M: RenderMethod>(
+        &self,
+        ctx: &Context,
+    ) -> GpuResult<(&GBufferAndDirectLight, Rc<M>)> {
+        let passes = match self.passes.get() {
+            Some(p) => p,
+            None => {
+                let p = GBufferAndDirectLight::new(ctx)?;
+                self.passes.get_or_init(|| p)
+            }
+        };
+        let id = TypeId::of::<M>();
+        if let Some((_, m)) = self.methods.borrow().iter().find(|(t, _)| *t == id) {
+            let m = m.clone().downcast::<M>().expect("kept by its TypeId");
+            return Ok((passes, m));
+        }
+        let m = Rc::new(M::new(ctx)?);
+        self.methods.borrow_mut().push((id, m.clone()));
+        Ok((passes, m))
     }
-    let v = init()?;
-    Ok(cell.get_or_init(|| v))
 }

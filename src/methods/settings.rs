@@ -138,8 +138,12 @@ pub struct SettingDoc {
 /// A parameter a method cannot take: `method: key = value: problem`.
 #[derive(Debug, Error, PartialEq)]
 pub enum ParamError {
-    #[error("unknown method `{name}` (irad has: {names})", names = crate::methods::METHOD_NAMES.join(", "))]
-    UnknownMethod { name: String },
+    #[error("unknown method `{name}` (irad has: {known})")]
+    UnknownMethod {
+        name: String,
+        /// The registry's methods, listed.
+        known: String,
+    },
     #[error("{method}: {key} = {value}: {problem}")]
     Value {
         method: String,

@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 use serde::Deserialize;
 use thiserror::Error;
 
-use crate::methods::{Method, ParamError, METHOD_NAMES};
+use crate::methods::{Method, ParamError, Registry};
 use crate::scene::hash::Fnv1a64;
 use crate::scene::toml_arrays::exact_opt;
 use crate::scene::MAX_RESOLUTION;
@@ -187,18 +187,39 @@ pub fn file_safe(s: &str) -> String {
 }
 
 impl Suite {
-    /// Loads the suite file at `path` and every scene it names.
+    /// Loads the suite file at `path` and every scene it names; its methods are irad's.
     pub fn load(path: &Path) -> Result<Suite, SuiteError> {
+        Suite::load_with(path, Registry::builtin())
+    }
+
+    /// `load` with the methods of `registry` (irad's and one of yours: `Registry::with`).
+    pub fn load_with(path: &Path, registry: &Registry) -> Result<Suite, SuiteError> {
         let file = path.display().to_string();
         let text = std::fs::read_to_string(path).map_err(|e| SuiteError::File {
             file: file.clone(),
             message: format!("cannot read it: {e}"),
         })?;
-        Suite::parse(&file, &text, path.parent().unwrap_or(Path::new("")))
+        Suite::parse_with(
+            &file,
+            &text,
+            path.parent().unwrap_or(Path::new("")),
+            registry,
+        )
     }
 
-    /// Parses suite text; scene paths are relative to `base`; `file` names it in messages.
+    /// Parses suite text; scene paths are relative to `base`; `file` names it in messages;
+    /// its methods are irad's.
     pub fn parse(file: &str, text: &str, base: &Path) -> Result<Suite, SuiteError> {
+        Suite::parse_with(file, text, base, Registry::builtin())
+    }
+
+    /// `parse` with the methods of `registry`.
+    pub fn parse_with(
+        file: &str,
+        text: &str,
+        base: &Path,
+        registry: &Registry,
+    ) -> Result<Suite, SuiteError> {
         let f: SuiteFile = toml::from_str(text).map_err(|e| SuiteError::File {
             file: file.into(),
             message: e.to_string().trim_end().to_string(),
@@ -218,9 +239,9 @@ impl Suite {
                 message: "no [[method]]: a suite needs at least one".into(),
             });
         }
-        let scenes = parse_scenes(file, &f, base, &reference_params, &reference)?;
+        let scenes = parse_scenes(file, &f, base, &reference_params, &reference, registry)?;
         check_reference_seeds(file, &scenes, &counts)?;
-        let (entries, budgets) = parse_methods(file, &f.method, &scenes, counts.seed)?;
+        let (entries, budgets) = parse_methods(file, &f.method, &scenes, counts.seed, registry)?;
         check_homes(file, &scenes, &entries)?;
         let runs = expand_runs(&scenes, &f.method, &entries, &budgets);
         Ok(Suite {
@@ -378,6 +399,7 @@ fn parse_scenes(
     base: &Path,
     reference_params: &toml::Table,
     reference: &Method,
+    registry: &Registry,
 ) -> Result<Vec<SuiteScene>, SuiteError> {
     let mut scenes: Vec<SuiteScene> = Vec::new();
     for (i, entry) in f.scene.iter().enumerate() {
@@ -398,16 +420,12 @@ fn parse_scenes(
             ));
         }
         if let Some(note) = &scene.failure {
-            if let Some(unknown) = note
-                .methods
-                .iter()
-                .find(|m| !METHOD_NAMES.contains(&m.as_str()))
-            {
+            if let Some(unknown) = note.methods.iter().find(|m| registry.get(m).is_err()) {
                 return Err(field_error(
                     file,
                     &format!("scene[{i}] ({}) failure.methods", entry.path),
                     format!("{unknown:?}"),
-                    &format!("not a method irad has ({})", METHOD_NAMES.join(", ")),
+                    &format!("not a method of this run ({})", registry.names().join(", ")),
                 ));
             }
         }
@@ -545,6 +563,7 @@ fn parse_methods(
     methods: &[MethodEntry],
     scenes: &[SuiteScene],
     seed: u32,
+    registry: &Registry,
 ) -> Result<(Vec<SuiteMethod>, Vec<Vec<Budget>>), SuiteError> {
     let scene_names: BTreeSet<&str> = scenes.iter().map(|s| s.scene.name.as_str()).collect();
     let mut entries = Vec::new();
@@ -602,7 +621,7 @@ fn parse_methods(
                 "needs at least one budget ({} for the defaults)",
             ));
         }
-        budgets.push(parse_budgets(file, i, m, seed)?);
+        budgets.push(parse_budgets(file, i, m, seed, registry)?);
         entries.push(SuiteMethod {
             method: m.method.clone(),
             label,
@@ -618,6 +637,7 @@ fn parse_budgets(
     i: usize,
     m: &MethodEntry,
     seed: u32,
+    registry: &Registry,
 ) -> Result<Vec<Budget>, SuiteError> {
     let field =
         |field: &str, value: String, problem: &str| field_error(file, field, value, problem);
@@ -655,7 +675,8 @@ fn parse_budgets(
             params.insert(k.clone(), v.clone());
         }
         params.insert("seed".into(), toml::Value::Integer(seed as i64));
-        let method = Method::from_params(&m.method, &params)
+        let method = registry
+            .from_params(&m.method, &params)
             .map_err(|e| param_error(file, format!("method[{i}].budgets[{b}]"), e))?;
         if let (Some(_), Some(v)) = (time_ms, params.get(method.count_key())) {
             let place = match m.params.contains_key(method.count_key()) {

@@ -26,6 +26,7 @@ use anyhow::Result;
 
 use crate::gpu::Context;
 use crate::image::{self, preview, sidecar::IRAD_VERSION, Image};
+use crate::methods::reference::Reference;
 use crate::methods::{Method, Renderers};
 use crate::scene::gpu::GpuScene;
 
@@ -281,10 +282,7 @@ fn prepare_scene(
 }
 
 fn reference_spp(method: &Method) -> u32 {
-    match method {
-        Method::Reference(s) => s.spp,
-        _ => 0,
-    }
+    method.settings_of::<Reference>().map_or(0, |s| s.spp)
 }
 
 fn run_one(

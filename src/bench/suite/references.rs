@@ -25,7 +25,8 @@ use serde::{Deserialize, Serialize};
 use crate::gpu::Context;
 use crate::image::metrics::REL_MSE_EPSILON;
 use crate::image::{exr, Image};
-use crate::methods::lightfield::{LightfieldSettings, Strategy as LightfieldStrategy};
+use crate::methods::lightfield::{Lightfield, LightfieldSettings, Strategy as LightfieldStrategy};
+use crate::methods::reference::Reference;
 use crate::methods::{reference, Method, Renderers};
 use crate::scene::gpu::GpuScene;
 use crate::scene::hash::fnv1a64;
@@ -125,7 +126,7 @@ pub fn get_or_render(
     if let Some(found) = lookup(root, &key) {
         return Ok(found);
     }
-    let Method::Reference(settings) = method else {
+    let Some(settings) = method.settings_of::<Reference>() else {
         anyhow::bail!(
             "a reference is rendered by the reference method, not {}",
             method.name()
@@ -148,7 +149,7 @@ pub fn get_or_render(
         .map(|l| l.luminaire.images.len() as u32)
         .max();
     let half = |spp: u32, seed: u32| match luminaire_images {
-        Some(images) => Method::Lightfield(LightfieldSettings {
+        Some(images) => Method::new::<Lightfield>(LightfieldSettings {
             spp: 64 * images,
             frames: spp,
             k_max: 64 * images,
@@ -161,7 +162,7 @@ pub fn get_or_render(
             let mut s = *settings;
             s.spp = spp;
             s.seed = seed;
-            Method::Reference(s)
+            Method::new::<Reference>(s)
         }
     };
     let a = renderers

@@ -15,23 +15,23 @@ pub mod light_cdf;
 pub mod resample;
 pub mod reverse;
 
-use std::time::Instant;
-
-use thiserror::Error;
+use std::mem::size_of;
 
 use crate::gpu::{Buffer, Commands, Context, GpuError, GpuResult};
 use crate::methods::accumulation::Accumulation;
 use crate::methods::compensation::{ClampCompensation, ClampSettings, FrameClamp, VplSource};
-use crate::methods::direct::{DirectLightOptions, DirectLightPaths, GBufferAndDirectLight};
-use crate::methods::driver::{self, Extras, MethodFrames, Plan, Shared};
+use crate::methods::device_fit;
+use crate::methods::direct::{DirectLightOptions, DirectLightPaths};
+use crate::methods::driver::{Extras, MethodFrames, Shared};
 use crate::methods::gbuffer::{GBuffer, PixelSampling};
+use crate::methods::interface::{Lights, RenderMethod, SharedPasses, Support};
 use crate::methods::ir::gather::AccumulateVpls;
 use crate::methods::ir::schedule::{mean_albedo, Absorption, Schedule};
 use crate::methods::ir::walk::{TraceVpls, Vpl, VplBuffers};
+use crate::methods::lights::NO_LUMINAIRES;
 use crate::methods::settings::{
     common_settings, field_setting, named_choices, Kind, Need, Setting, Value,
 };
-use crate::methods::RenderOutput;
 use crate::sampling::pcg;
 use crate::scene::gpu::GpuScene;
 use crate::scene::Scene;
@@ -269,14 +269,6 @@ pub const SETTINGS: &[Setting<BirSettings>] = &[
     common_settings!(pixel_centres),
 ];
 
-#[derive(Debug, Error)]
-pub enum BirError {
-    #[error("bir does not support environment lights: standard VPLs start on emissive triangles, point and spot lights (use --method reference)")]
-    Environment,
-    #[error(transparent)]
-    Gpu(#[from] GpuError),
-}
-
 /// How a frame's budget splits.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Split {
@@ -321,7 +313,6 @@ impl Split {
 }
 
 pub struct Bir {
-    direct: GBufferAndDirectLight,
     walk: TraceVpls,
     trace_reverse: TraceReverseVpls,
     shade_reverse: ShadeReverseVpls,
@@ -339,10 +330,24 @@ pub const MIN_SIDE_WEIGHT: f32 = 0.1;
 /// Below this many light entries a camera-driven table cannot differ from the power-based one.
 const LIGHT_CDF_MIN_ENTRIES: usize = 2;
 
-impl Bir {
-    pub fn new(ctx: &Context) -> Result<Self, GpuError> {
+impl RenderMethod for Bir {
+    type Settings = BirSettings;
+    const NAME: &'static str = "bir";
+    const SUMMARY: &'static str =
+        "Bidirectional instant radiosity (Segovia 06): VPLs from the lights and from the camera.";
+    const SETTINGS: &'static [Setting<BirSettings>] = SETTINGS;
+    const COUNT: &'static str = "frames";
+    const LIGHTS: Lights = Lights {
+        environment: Support::Declines(
+            "standard VPLs start on emissive triangles, point and spot lights",
+        ),
+        area: Support::Renders,
+        point: Support::Renders,
+        luminaires: Support::Declines(NO_LUMINAIRES),
+    };
+
+    fn new(ctx: &Context) -> GpuResult<Self> {
         Ok(Bir {
-            direct: GBufferAndDirectLight::new(ctx)?,
             walk: TraceVpls::new(ctx)?,
             trace_reverse: TraceReverseVpls::new(ctx)?,
             shade_reverse: ShadeReverseVpls::new(ctx)?,
@@ -355,39 +360,46 @@ impl Bir {
         })
     }
 
-    pub fn render(
-        &self,
-        ctx: &Context,
-        scene: &Scene,
-        gpu_scene: &GpuScene,
-        settings: &BirSettings,
-        progress: impl FnMut(u32, u32),
-    ) -> Result<RenderOutput, BirError> {
-        if scene.environment.is_some() {
-            return Err(BirError::Environment);
-        }
-        let plan = Plan {
-            frames: settings.frames.max(1),
-            seed: settings.seed,
+    fn shared_passes(settings: &BirSettings) -> SharedPasses {
+        SharedPasses {
             pixels: settings.pixels,
             direct: Some(DirectLightOptions {
                 light: DirectLightPaths::NextEvent,
                 reflected_environment: true,
                 spp: settings.direct_spp,
             }),
-            start: Instant::now(),
+        }
+    }
+
+    fn work(s: &BirSettings) -> f64 {
+        s.frames as f64 * s.vpls as f64
+    }
+
+    fn fits(s: &BirSettings, scene: &Scene, limit: u64) -> Result<(), String> {
+        device_fit::check_compensation(&s.clamp, scene, limit)?;
+        // Vpls: the standard walk's slots for a batch's light paths (set_up).
+        let bytes = |vpls: u64| {
+            let vpls_per_frame = (vpls as u32).max(2);
+            let batch = if s.batch == 0 {
+                vpls_per_frame
+            } else {
+                s.batch.clamp(2, vpls_per_frame)
+            };
+            let rho = mean_albedo(scene);
+            let split = Split::new(s.strategy, batch, rho);
+            Schedule::new(split.light_paths, rho, Absorption::Fractional).slot_count as u64
+                * size_of::<Vpl>() as u64
         };
-        let setup = || -> GpuResult<Box<dyn MethodFrames + '_>> {
-            Ok(Box::new(self.set_up(ctx, scene, gpu_scene, settings)?))
-        };
-        Ok(driver::render(
-            ctx,
-            &self.direct,
-            gpu_scene,
-            plan,
-            setup,
-            progress,
-        )?)
+        let vpls = s.vpls as u64;
+        if bytes(vpls) > limit {
+            let largest = device_fit::largest_fitting(vpls, limit, bytes);
+            return Err(format!(
+                "bir: vpls = {vpls} (--vpls): the standard VPLs {}; the largest that fits is \
+                 {largest} (or a smaller batch)",
+                device_fit::over(bytes(vpls), limit)
+            ));
+        }
+        Ok(())
     }
 
     /// The render's split of VPLs into batches and sides, its VPL buffers, resampling buffers,
@@ -398,7 +410,7 @@ impl Bir {
         scene: &Scene,
         gpu_scene: &GpuScene,
         settings: &'a BirSettings,
-    ) -> GpuResult<BirFrames<'a>> {
+    ) -> GpuResult<Box<dyn MethodFrames + 'a>> {
         let rho = mean_albedo(scene);
         let vpls_per_frame = settings.vpls.max(2);
         let batch = if settings.batch == 0 {
@@ -454,7 +466,7 @@ impl Bir {
         let clamp = settings
             .clamp
             .prepare(ctx, scene, gpu_scene, shaded_per_frame)?;
-        Ok(BirFrames {
+        Ok(Box::new(BirFrames {
             bir: self,
             settings,
             batches,
@@ -472,7 +484,7 @@ impl Bir {
             kept,
             light_cdf,
             clamp,
-        })
+        }))
     }
 }
 

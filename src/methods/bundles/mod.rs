@@ -14,20 +14,20 @@ pub mod light_vertices;
 pub mod paths;
 pub mod ray_bundles;
 
-use std::time::Instant;
+use std::mem::size_of;
 
-use thiserror::Error;
-
-use crate::gpu::{Buffer, Commands, Context, GpuError, GpuResult};
+use crate::gpu::{Buffer, Commands, Context, GpuResult};
 use crate::methods::compensation::ClampSettings;
-use crate::methods::direct::{DirectLightOptions, DirectLightPaths, GBufferAndDirectLight};
-use crate::methods::driver::{self, Extras, MethodFrames, Plan, Shared};
+use crate::methods::device_fit;
+use crate::methods::direct::{DirectLightOptions, DirectLightPaths};
+use crate::methods::driver::{Extras, MethodFrames, Shared};
 use crate::methods::gbuffer::PixelSampling;
+use crate::methods::interface::{Lights, RenderMethod, SharedPasses, Support};
+use crate::methods::lights::NO_LUMINAIRES;
 use crate::methods::rebuild::TableRebuild;
 use crate::methods::settings::{
     common_settings, field_setting, named_choices, Kind, Need, Setting, Value,
 };
-use crate::methods::RenderOutput;
 use crate::sampling::environment::sampling_weights;
 use crate::sampling::pcg;
 use crate::scene::gpu::GpuScene;
@@ -314,14 +314,6 @@ pub const SETTINGS: &[Setting<BundlesSettings>] = &[
     common_settings!(pixel_centres),
 ];
 
-#[derive(Debug, Error)]
-pub enum BundlesError {
-    #[error("bundles shades point and spot lights only (Tokuyoshi 12 Section 4: VPLs from point lights); this scene has {0} emissive triangles (use --method ir, bir or reference)")]
-    AreaLights(usize),
-    #[error(transparent)]
-    Gpu(#[from] GpuError),
-}
-
 /// Bundle hits kept at once: the iterations of a frame are traced and shaded in chunks that
 /// fit (a chunk is at least one iteration).
 const HIT_BYTES: usize = 64 << 20;
@@ -330,32 +322,12 @@ const HIT_BYTES: usize = 64 << 20;
 const MAX_CHUNKS: u32 = 12;
 
 pub struct Bundles {
-    direct: GBufferAndDirectLight,
     light_vertices: TraceLightVertices,
     ray_bundles: TraceRayBundles,
     paths: ShadeBundlePaths,
 }
 
 impl Bundles {
-    pub fn new(ctx: &Context) -> Result<Self, GpuError> {
-        Ok(Bundles {
-            direct: GBufferAndDirectLight::new(ctx)?,
-            light_vertices: TraceLightVertices::new(ctx)?,
-            ray_bundles: TraceRayBundles::new(ctx)?,
-            paths: ShadeBundlePaths::new(ctx)?,
-        })
-    }
-
-    /// Why bundles cannot render `scene`, or None.
-    pub fn declines(scene: &Scene) -> Option<BundlesError> {
-        let emissive = scene
-            .triangles
-            .iter()
-            .filter(|t| scene.materials[t.material as usize].is_emissive())
-            .count();
-        (emissive > 0).then_some(BundlesError::AreaLights(emissive))
-    }
-
     /// Eq. 2's Lo when none is given: 0 when the map is the only light (its direct light is
     /// all the bundles carry), else the map's mean luminance over the sphere, so every bundle
     /// direction keeps at least half the uniform density for the lights' indirect paths.
@@ -374,41 +346,73 @@ impl Bundles {
         let fits = (HIT_BYTES / (pixels.max(1) * std::mem::size_of::<BundleHit>())) as u32;
         fits.clamp(iterations.div_ceil(MAX_CHUNKS), iterations.max(1))
     }
+}
 
-    pub fn render(
-        &self,
-        ctx: &Context,
-        scene: &Scene,
-        gpu_scene: &GpuScene,
-        settings: &BundlesSettings,
-        progress: impl FnMut(u32, u32),
-    ) -> Result<RenderOutput, BundlesError> {
-        if let Some(e) = Self::declines(scene) {
-            return Err(e);
-        }
-        // The environment's direct light is the bundles' own.
-        let plan = Plan {
-            frames: settings.frames.max(1),
-            seed: settings.seed,
+impl RenderMethod for Bundles {
+    type Settings = BundlesSettings;
+    const NAME: &'static str = "bundles";
+    const SUMMARY: &'static str =
+        "Real-time bidirectional path tracing (Tokuyoshi 12): VPLs and global ray bundles \
+         combined by MIS, for point and spot lights.";
+    const SETTINGS: &'static [Setting<BundlesSettings>] = SETTINGS;
+    const COUNT: &'static str = "frames";
+    const LIGHTS: Lights = Lights {
+        environment: Support::Renders,
+        area: Support::Declines("Tokuyoshi 12 Section 4 starts VPLs from point lights"),
+        point: Support::Renders,
+        luminaires: Support::Declines(NO_LUMINAIRES),
+    };
+
+    fn new(ctx: &Context) -> GpuResult<Self> {
+        Ok(Bundles {
+            light_vertices: TraceLightVertices::new(ctx)?,
+            ray_bundles: TraceRayBundles::new(ctx)?,
+            paths: ShadeBundlePaths::new(ctx)?,
+        })
+    }
+
+    /// The environment's direct light is the bundles' own.
+    fn shared_passes(settings: &BundlesSettings) -> SharedPasses {
+        SharedPasses {
             pixels: settings.pixels,
             direct: Some(DirectLightOptions {
                 light: DirectLightPaths::NextEvent,
                 reflected_environment: false,
                 spp: settings.direct_spp,
             }),
-            start: Instant::now(),
+        }
+    }
+
+    fn work(s: &BundlesSettings) -> f64 {
+        s.frames as f64 * s.iterations as f64
+    }
+
+    fn fits(s: &BundlesSettings, scene: &Scene, limit: u64) -> Result<(), String> {
+        // BundleHits: a chunk of iterations' hits per pixel (set_up); the frame's light
+        // vertices: iterations x slots (light_vertices.rs).
+        let pixels = scene.camera.width as u64 * scene.camera.height as u64;
+        let slots = match s.lights {
+            LightSelection::All => scene.lights.len().max(1) as u64,
+            LightSelection::Roulette => 1,
         };
-        let setup = || -> GpuResult<Box<dyn MethodFrames + '_>> {
-            Ok(Box::new(self.set_up(ctx, scene, gpu_scene, settings)?))
+        let bytes = |iterations: u64| {
+            let hits = Self::chunk_size(iterations as u32, pixels as usize) as u64
+                * pixels
+                * size_of::<BundleHit>() as u64;
+            hits.max(iterations * slots * size_of::<light_vertices::LightVertex>() as u64)
         };
-        Ok(driver::render(
-            ctx,
-            &self.direct,
-            gpu_scene,
-            plan,
-            setup,
-            progress,
-        )?)
+        let n = s.iterations as u64;
+        if bytes(n) > limit {
+            let largest = device_fit::largest_fitting(n, limit, bytes);
+            return Err(format!(
+                "bundles: iterations = {n} (--iterations): the bundles' hits at {}x{} pixels \
+                 {}; the largest that fits is {largest}",
+                scene.camera.width,
+                scene.camera.height,
+                device_fit::over(bytes(n), limit)
+            ));
+        }
+        Ok(())
     }
 
     /// The render's light vertices, bundle directions, hits and shading settings.
@@ -418,7 +422,7 @@ impl Bundles {
         scene: &Scene,
         gpu_scene: &GpuScene,
         settings: &'a BundlesSettings,
-    ) -> GpuResult<BundlesFrames<'a>> {
+    ) -> GpuResult<Box<dyn MethodFrames + 'a>> {
         let per_frame = settings.iterations.max(1);
         let chunk = Self::chunk_size(per_frame, gpu_scene.pixel_count());
         let vertices = FrameLightVertices::new(ctx, gpu_scene, per_frame, settings.lights)?;
@@ -442,7 +446,7 @@ impl Bundles {
             suppression: settings.suppression,
             environment,
         };
-        Ok(BundlesFrames {
+        Ok(Box::new(BundlesFrames {
             bundles: self,
             settings,
             per_frame,
@@ -456,7 +460,7 @@ impl Bundles {
             shading,
             // The VPL paths alone need no bundle hits (the shading kernel then reads none).
             trace_bundles: settings.strategy != Strategy::Vpl || settings.two_bounce || environment,
-        })
+        }))
     }
 }
 

@@ -7,20 +7,20 @@ pub mod cube;
 pub mod pyramid;
 pub mod shade;
 
-use std::time::Instant;
+use std::mem::size_of;
 
-use thiserror::Error;
-
-use crate::gpu::{Buffer, Commands, Context, GpuError, GpuResult};
+use crate::gpu::{Buffer, Commands, Context, GpuResult};
 use crate::image::Image;
-use crate::methods::direct::{DirectLightOptions, DirectLightPaths, GBufferAndDirectLight};
-use crate::methods::driver::{self, Extras, MethodFrames, Plan, Shared};
+use crate::methods::device_fit;
+use crate::methods::direct::{DirectLightOptions, DirectLightPaths};
+use crate::methods::driver::{Extras, MethodFrames, Shared};
 use crate::methods::gbuffer::PixelSampling;
+use crate::methods::interface::{Lights, RenderMethod, SharedPasses, Support};
+use crate::methods::lights::NO_LUMINAIRES;
 use crate::methods::rebuild::TableRebuild;
 use crate::methods::settings::{
     common_settings, field_setting, named_choices, Kind, Need, Setting, Value,
 };
-use crate::methods::RenderOutput;
 use crate::sampling::pcg;
 use crate::scene::gpu::GpuScene;
 use crate::scene::Scene;
@@ -230,82 +230,68 @@ pub const SETTINGS: &[Setting<EnvSettings>] = &[
     common_settings!(pixel_centres),
 ];
 
-#[derive(Debug, Error)]
-pub enum EnvError {
-    #[error("env renders the direct light of an environment map, and this scene has none (add an [environment] table, or use another method)")]
-    NoEnvironment,
-    #[error("env shades the environment map only; this scene also has {0} other lights (use --method reference)")]
-    OtherLights(usize),
-    #[error(transparent)]
-    Gpu(#[from] GpuError),
-}
-
 /// Windows of light samples per face and frame that pixels pick from (unless shared).
 pub const SAMPLE_WINDOWS: u32 = 64;
 /// Most light samples a frame generates over its windows (16 MiB of samples).
 pub const MAX_WINDOWED_SAMPLES: u32 = 1 << 20;
 
 pub struct Env {
-    direct: GBufferAndDirectLight,
     shade: ShadeEnv,
 }
 
-impl Env {
-    pub fn new(ctx: &Context) -> Result<Self, GpuError> {
+/// Why env declines a scene with lights besides the map.
+const MAP_ONLY: &str = "it shades the environment map's direct light only";
+
+impl RenderMethod for Env {
+    type Settings = EnvSettings;
+    const NAME: &'static str = "env";
+    const SUMMARY: &'static str =
+        "Environment-map direct light with per-pixel dynamic cube-map sampling (Lu 14 ch. 3).";
+    const SETTINGS: &'static [Setting<EnvSettings>] = SETTINGS;
+    const COUNT: &'static str = "frames";
+    const LIGHTS: Lights = Lights {
+        environment: Support::Needs("it renders an environment map's direct light"),
+        area: Support::Declines(MAP_ONLY),
+        point: Support::Declines(MAP_ONLY),
+        luminaires: Support::Declines(NO_LUMINAIRES),
+    };
+
+    fn new(ctx: &Context) -> GpuResult<Self> {
         Ok(Env {
-            direct: GBufferAndDirectLight::new(ctx)?,
             shade: ShadeEnv::new(ctx)?,
         })
     }
 
-    /// Why env cannot render `scene`, or None.
-    pub fn declines(scene: &Scene) -> Option<EnvError> {
-        if scene.environment.is_none() {
-            return Some(EnvError::NoEnvironment);
-        }
-        let emissive = scene
-            .triangles
-            .iter()
-            .filter(|t| scene.materials[t.material as usize].is_emissive())
-            .count();
-        let others = emissive + scene.lights.len();
-        (others > 0).then_some(EnvError::OtherLights(others))
-    }
-
-    pub fn render(
-        &self,
-        ctx: &Context,
-        scene: &Scene,
-        gpu_scene: &GpuScene,
-        settings: &EnvSettings,
-        progress: impl FnMut(u32, u32),
-    ) -> Result<RenderOutput, EnvError> {
-        if let Some(e) = Self::declines(scene) {
-            return Err(e);
-        }
-        // The G-buffer and the emission the camera sees (the map behind the scene).
-        let plan = Plan {
-            frames: settings.frames.max(1),
-            seed: settings.seed,
+    /// The G-buffer and the emission the camera sees (the map behind the scene).
+    fn shared_passes(settings: &EnvSettings) -> SharedPasses {
+        SharedPasses {
             pixels: settings.pixels,
             direct: Some(DirectLightOptions {
                 light: DirectLightPaths::EmissionOnly,
                 reflected_environment: true,
                 spp: 0,
             }),
-            start: Instant::now(),
-        };
-        let setup = || -> GpuResult<Box<dyn MethodFrames + '_>> {
-            Ok(Box::new(self.set_up(ctx, gpu_scene, settings)?))
-        };
-        Ok(driver::render(
-            ctx,
-            &self.direct,
-            gpu_scene,
-            plan,
-            setup,
-            progress,
-        )?)
+        }
+    }
+
+    fn work(s: &EnvSettings) -> f64 {
+        s.frames as f64 * s.spp as f64
+    }
+
+    fn fits(s: &EnvSettings, _scene: &Scene, limit: u64) -> Result<(), String> {
+        // CubeWeights and CubeRowCdf: 6 R^2 f32s (cube.rs). The strategies' light samples are
+        // bounded by MAX_WINDOWED_SAMPLES whatever spp is.
+        let bytes = |r: u64| 6 * r * r * size_of::<f32>() as u64;
+        let r = s.face_resolution as u64;
+        if bytes(r) > limit {
+            let largest = device_fit::largest_fitting(r, limit, bytes);
+            return Err(format!(
+                "env: face_resolution = {r} (--face-resolution): the cube map's table {}; \
+                 the largest that fits is {largest}",
+                device_fit::over(bytes(r), limit)
+            ));
+        }
+        Ok(())
     }
 
     /// The render's sampling tables (cube map, latitude-longitude, pyramid) and per-pixel
@@ -313,9 +299,10 @@ impl Env {
     fn set_up<'a>(
         &'a self,
         ctx: &Context,
+        _scene: &Scene,
         gpu_scene: &GpuScene,
         settings: &'a EnvSettings,
-    ) -> GpuResult<EnvFrames<'a>> {
+    ) -> GpuResult<Box<dyn MethodFrames + 'a>> {
         let spp = settings.spp.max(1);
         let strategy = settings.strategy;
         let light_only =
@@ -336,7 +323,7 @@ impl Env {
             (MAX_WINDOWED_SAMPLES / (6 * sets * per_face).max(1)).clamp(1, SAMPLE_WINDOWS)
         };
         let pixels = gpu_scene.pixel_count();
-        Ok(EnvFrames {
+        Ok(Box::new(EnvFrames {
             env: self,
             settings,
             spp,
@@ -358,7 +345,7 @@ impl Env {
             latlong: EquirectTable::new(ctx, gpu_scene, 0.0, strategy == Strategy::Latlong)?,
             pyramid: EnvPyramid::new(ctx, gpu_scene, strategy == Strategy::Hierarchical)?,
             sequence: gpu_scene.environment_frames() > 1,
-        })
+        }))
     }
 }
 

@@ -8,19 +8,19 @@ pub mod gather;
 pub mod schedule;
 pub mod walk;
 
-use std::time::Instant;
+use std::mem::size_of;
 
-use thiserror::Error;
-
-use crate::gpu::{Buffer, Commands, Context, GpuError, GpuResult};
+use crate::gpu::{Buffer, Commands, Context, GpuResult};
 use crate::methods::compensation::{ClampCompensation, ClampSettings, FrameClamp, VplSource};
-use crate::methods::direct::{DirectLightOptions, DirectLightPaths, GBufferAndDirectLight};
-use crate::methods::driver::{self, Extras, MethodFrames, Plan, Shared};
+use crate::methods::device_fit;
+use crate::methods::direct::{DirectLightOptions, DirectLightPaths};
+use crate::methods::driver::{Extras, MethodFrames, Shared};
 use crate::methods::gbuffer::PixelSampling;
+use crate::methods::interface::{Lights, RenderMethod, SharedPasses, Support};
+use crate::methods::lights::NO_LUMINAIRES;
 use crate::methods::settings::{
     common_settings, field_setting, named_choices, Kind, Need, Setting, Value,
 };
-use crate::methods::RenderOutput;
 use crate::sampling::pcg;
 use crate::scene::gpu::GpuScene;
 use crate::scene::Scene;
@@ -28,7 +28,7 @@ use crate::scene::Scene;
 use filter::FilterInterleaved;
 use gather::AccumulateVpls;
 use schedule::{mean_albedo, Absorption, Schedule};
-use walk::{TraceVpls, VplBuffers};
+use walk::{TraceVpls, Vpl, VplBuffers};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum DirectLight {
@@ -136,16 +136,7 @@ pub const SETTINGS: &[Setting<IrSettings>] = &[
     common_settings!(pixel_centres),
 ];
 
-#[derive(Debug, Error)]
-pub enum IrError {
-    #[error("ir does not support environment lights: the quasi-random walk starts on emissive triangles, point and spot lights (use --method reference)")]
-    Environment,
-    #[error(transparent)]
-    Gpu(#[from] GpuError),
-}
-
 pub struct InstantRadiosity {
-    direct: GBufferAndDirectLight,
     walk: TraceVpls,
     gather: AccumulateVpls,
     filter: FilterInterleaved,
@@ -153,9 +144,30 @@ pub struct InstantRadiosity {
 }
 
 impl InstantRadiosity {
-    pub fn new(ctx: &Context) -> Result<Self, GpuError> {
+    /// The per-frame VPL layout this scene and these settings give.
+    pub fn schedule(scene: &Scene, settings: &IrSettings) -> Schedule {
+        Schedule::new(settings.paths, mean_albedo(scene), settings.absorption)
+    }
+}
+
+impl RenderMethod for InstantRadiosity {
+    type Settings = IrSettings;
+    const NAME: &'static str = "ir";
+    const SUMMARY: &'static str =
+        "Instant radiosity (Keller 97): VPLs from a quasi-random walk from the lights.";
+    const SETTINGS: &'static [Setting<IrSettings>] = SETTINGS;
+    const COUNT: &'static str = "frames";
+    const LIGHTS: Lights = Lights {
+        environment: Support::Declines(
+            "the quasi-random walk starts on emissive triangles, point and spot lights",
+        ),
+        area: Support::Renders,
+        point: Support::Renders,
+        luminaires: Support::Declines(NO_LUMINAIRES),
+    };
+
+    fn new(ctx: &Context) -> GpuResult<Self> {
         Ok(InstantRadiosity {
-            direct: GBufferAndDirectLight::new(ctx)?,
             walk: TraceVpls::new(ctx)?,
             gather: AccumulateVpls::new(ctx)?,
             filter: FilterInterleaved::new(ctx)?,
@@ -163,25 +175,8 @@ impl InstantRadiosity {
         })
     }
 
-    /// The per-frame VPL layout this scene and these settings give.
-    pub fn schedule(scene: &Scene, settings: &IrSettings) -> Schedule {
-        Schedule::new(settings.paths, mean_albedo(scene), settings.absorption)
-    }
-
-    pub fn render(
-        &self,
-        ctx: &Context,
-        scene: &Scene,
-        gpu_scene: &GpuScene,
-        settings: &IrSettings,
-        progress: impl FnMut(u32, u32),
-    ) -> Result<RenderOutput, IrError> {
-        if scene.environment.is_some() {
-            return Err(IrError::Environment);
-        }
-        let plan = Plan {
-            frames: settings.frames.max(1),
-            seed: settings.seed,
+    fn shared_passes(settings: &IrSettings) -> SharedPasses {
+        SharedPasses {
             pixels: settings.pixels,
             direct: Some(DirectLightOptions {
                 light: match settings.direct {
@@ -191,19 +186,32 @@ impl InstantRadiosity {
                 reflected_environment: true,
                 spp: settings.direct_spp,
             }),
-            start: Instant::now(),
+        }
+    }
+
+    fn work(s: &IrSettings) -> f64 {
+        s.frames as f64 * s.paths as f64
+    }
+
+    fn fits(s: &IrSettings, scene: &Scene, limit: u64) -> Result<(), String> {
+        device_fit::check_compensation(&s.clamp, scene, limit)?;
+        // Vpls: one slot per VPL of every path level (ir/walk.rs).
+        let bytes = |paths: u64| {
+            let settings = IrSettings {
+                paths: paths as u32,
+                ..*s
+            };
+            Self::schedule(scene, &settings).slot_count as u64 * size_of::<Vpl>() as u64
         };
-        let setup = || -> GpuResult<Box<dyn MethodFrames + '_>> {
-            Ok(Box::new(self.set_up(ctx, scene, gpu_scene, settings)?))
-        };
-        Ok(driver::render(
-            ctx,
-            &self.direct,
-            gpu_scene,
-            plan,
-            setup,
-            progress,
-        )?)
+        let paths = s.paths as u64;
+        if bytes(paths) > limit {
+            let largest = device_fit::largest_fitting(paths, limit, bytes);
+            return Err(format!(
+                "ir: vpls = {paths} (--vpls): the VPLs {}; the largest that fits is {largest}",
+                device_fit::over(bytes(paths), limit)
+            ));
+        }
+        Ok(())
     }
 
     /// The render's VPL buffers, the clamp and the interleave's radiance.
@@ -213,7 +221,7 @@ impl InstantRadiosity {
         scene: &Scene,
         gpu_scene: &GpuScene,
         settings: &'a IrSettings,
-    ) -> GpuResult<IrFrames<'a>> {
+    ) -> GpuResult<Box<dyn MethodFrames + 'a>> {
         let vpls = VplBuffers::new(ctx, Self::schedule(scene, settings))?;
         let interleave = settings.interleave.max(1);
         let vpl_radiance = Buffer::zeroed(
@@ -236,7 +244,7 @@ impl InstantRadiosity {
         let clamp = settings
             .clamp
             .prepare(ctx, scene, gpu_scene, surface.end - surface.start)?;
-        Ok(IrFrames {
+        Ok(Box::new(IrFrames {
             ir: self,
             settings,
             vpls,
@@ -245,7 +253,7 @@ impl InstantRadiosity {
             surface,
             light_vertices,
             clamp,
-        })
+        }))
     }
 }
 

@@ -9,22 +9,20 @@
 
 pub mod tables;
 
-use std::time::Instant;
-
 use bytemuck::{Pod, Zeroable};
 use glam::Vec4;
-use thiserror::Error;
+use serde_json::json;
 
 use crate::gpu::{bind, Buffer, Commands, Context, GpuError, GpuResult, Kernel};
 use crate::image::Image;
-use crate::methods::direct::{DirectLightOptions, DirectLightPaths, GBufferAndDirectLight};
-use crate::methods::driver::{self, Extras, MethodFrames, Plan, Shared};
+use crate::methods::direct::{DirectLightOptions, DirectLightPaths};
+use crate::methods::driver::{Extras, MethodFrames, Shared};
 use crate::methods::gbuffer::PixelSampling;
+use crate::methods::interface::{Lights, RenderMethod, SharedPasses, Support};
 use crate::methods::rebuild::TableRebuild;
 use crate::methods::settings::{
     common_settings, field_setting, named_choices, Kind, Need, Setting, Value,
 };
-use crate::methods::RenderOutput;
 use crate::sampling::pcg;
 use crate::scene::gpu::GpuScene;
 use crate::scene::luminaire::{Basis, PlacedLuminaire};
@@ -183,14 +181,6 @@ pub const SETTINGS: &[Setting<LightfieldSettings>] = &[
     common_settings!(pixel_centres),
 ];
 
-#[derive(Debug, Error)]
-pub enum LightfieldError {
-    #[error("lightfield renders light-field luminaires, and this scene places none (add a [[luminaire]])")]
-    NoLuminaire,
-    #[error(transparent)]
-    Gpu(#[from] GpuError),
-}
-
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
 struct LuminaireFrame {
@@ -332,79 +322,82 @@ impl GpuLuminaire {
 }
 
 pub struct Lightfield {
-    direct: GBufferAndDirectLight,
     estimate: Kernel,
     shade: Kernel,
 }
 
-impl Lightfield {
-    pub fn new(ctx: &Context) -> Result<Self, GpuError> {
+impl RenderMethod for Lightfield {
+    type Settings = LightfieldSettings;
+    const NAME: &'static str = "lightfield";
+    const SUMMARY: &'static str =
+        "Light-field luminaires' direct light by restricted-CDF sampling (Lu 14 ch. 4).";
+    const SETTINGS: &'static [Setting<LightfieldSettings>] = SETTINGS;
+    const COUNT: &'static str = "frames";
+    const LIGHTS: Lights = Lights {
+        environment: Support::Renders,
+        area: Support::Renders,
+        point: Support::Renders,
+        luminaires: Support::Needs("it renders light-field luminaires' direct light"),
+    };
+
+    fn new(ctx: &Context) -> GpuResult<Self> {
         Ok(Lightfield {
-            direct: GBufferAndDirectLight::new(ctx)?,
             estimate: Kernel::new(ctx, "estimate_luminaire_areas")?,
             shade: Kernel::new(ctx, "shade_lightfield")?,
         })
     }
 
-    pub fn declines(scene: &Scene) -> Option<LightfieldError> {
-        scene
-            .luminaires
-            .is_empty()
-            .then_some(LightfieldError::NoLuminaire)
-    }
-
-    pub fn render(
-        &self,
-        ctx: &Context,
-        scene: &Scene,
-        gpu_scene: &GpuScene,
-        settings: &LightfieldSettings,
-        progress: impl FnMut(u32, u32),
-    ) -> Result<RenderOutput, LightfieldError> {
-        if let Some(e) = Self::declines(scene) {
-            return Err(e);
-        }
-        // The G-buffer, the emission seen and the other lights' direct light.
-        let plan = Plan {
-            frames: settings.frames.max(1),
-            seed: settings.seed,
+    /// The G-buffer, the emission seen and the other lights' direct light.
+    fn shared_passes(settings: &LightfieldSettings) -> SharedPasses {
+        SharedPasses {
             pixels: settings.pixels,
             direct: Some(DirectLightOptions {
                 light: DirectLightPaths::NextEvent,
                 reflected_environment: true,
                 spp: 0,
             }),
-            start: Instant::now(),
-        };
-        let setup = || -> GpuResult<Box<dyn MethodFrames + '_>> {
-            let luminaires = scene
-                .luminaires
-                .iter()
-                .enumerate()
-                .map(|(k, l)| GpuLuminaire::new(ctx, l, k as u32, settings))
-                .collect::<Result<Vec<_>, _>>()?;
-            Ok(Box::new(LightfieldFrames {
-                lightfield: self,
-                settings,
-                luminaires,
-                counts: Buffer::zeroed(ctx, "LuminaireSampleCounts", gpu_scene.pixel_count())?,
-                areas: Buffer::zeroed(ctx, "LuminaireAreas", gpu_scene.pixel_count())?,
-                visibility: match (settings.shadows, settings.averaged_visibility) {
-                    (false, _) => 0,
-                    (true, false) => 1,
-                    (true, true) => 2,
-                },
-                frames: settings.frames.max(1),
-            }))
-        };
-        Ok(driver::render(
-            ctx,
-            &self.direct,
-            gpu_scene,
-            plan,
-            setup,
-            progress,
-        )?)
+        }
+    }
+
+    fn work(s: &LightfieldSettings) -> f64 {
+        s.frames as f64 * s.spp as f64
+    }
+
+    /// `irad bench lightfield`'s sampling-only renders are not a setting (so not fed back),
+    /// but a record must say its image is black.
+    fn record_notes(s: &LightfieldSettings) -> Vec<(&'static str, serde_json::Value)> {
+        match s.sampling_only {
+            true => vec![("sampling_only", json!(true))],
+            false => Vec::new(),
+        }
+    }
+
+    fn set_up<'a>(
+        &'a self,
+        ctx: &Context,
+        scene: &Scene,
+        gpu_scene: &GpuScene,
+        settings: &'a LightfieldSettings,
+    ) -> GpuResult<Box<dyn MethodFrames + 'a>> {
+        let luminaires = scene
+            .luminaires
+            .iter()
+            .enumerate()
+            .map(|(k, l)| GpuLuminaire::new(ctx, l, k as u32, settings))
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok(Box::new(LightfieldFrames {
+            lightfield: self,
+            settings,
+            luminaires,
+            counts: Buffer::zeroed(ctx, "LuminaireSampleCounts", gpu_scene.pixel_count())?,
+            areas: Buffer::zeroed(ctx, "LuminaireAreas", gpu_scene.pixel_count())?,
+            visibility: match (settings.shadows, settings.averaged_visibility) {
+                (false, _) => 0,
+                (true, false) => 1,
+                (true, true) => 2,
+            },
+            frames: settings.frames.max(1),
+        }))
     }
 }
 
