@@ -4,9 +4,11 @@
 //! A render in memory: a Vulkan context, a scene (from a TOML file with `scene::load`, or the
 //! embedded Cornell box), the scene uploaded, a method with its settings (built as a struct,
 //! or by name from the keys `irad methods NAME` lists, as a suite file gives them), and the
-//! image it returns, with its per-pass GPU times:
+//! image it returns, with its per-pass GPU times. A method of your own is a `RenderMethod`
+//! added to a `Registry` (README "Adding a method", examples/custom_method.rs):
 //!
 //! ```
+//! use irad::methods::reference::Reference;
 //! use irad::{Context, ContextOptions, GpuScene, Method, ReferenceSettings, Renderers};
 //!
 //! # fn main() -> anyhow::Result<()> {
@@ -18,7 +20,7 @@
 //! let gpu_scene = GpuScene::upload(&ctx, &scene)?;
 //! let renderers = Renderers::default(); // each method's kernels, built on first use
 //!
-//! let reference = Method::Reference(ReferenceSettings { spp: 4, ..Default::default() });
+//! let reference = Method::new::<Reference>(ReferenceSettings { spp: 4, ..Default::default() });
 //! let ir = Method::from_params("ir", &toml::from_str("vpls = 32\nframes = 2")?)?;
 //! for method in [reference, ir] {
 //!     let out = renderers.run(&ctx, &method, &scene, &gpu_scene, |_done, _total| {})?;
