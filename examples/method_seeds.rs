@@ -59,6 +59,7 @@ fn method(config: &str) -> Result<Method, String> {
     Method::from_params(name, &table).map_err(|e| e.to_string())
 }
 
+#[allow(clippy::too_many_arguments)]
 fn reference(
     ctx: &Context,
     scene: &Scene,

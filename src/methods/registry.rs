@@ -95,7 +95,7 @@ impl Registry {
     /// them) over its settings' defaults. Unknown keys, values out of range and settings
     /// that do not apply are errors naming the method, key and value.
     pub fn from_params(&self, name: &str, params: &toml::Table) -> Result<Method, ParamError> {
-        self.get(name)?.from_toml(params)
+        self.get(name)?.method_from_toml(params)
     }
 
     /// `name` with `given` (key, value as written, value checked against the key's kind in
@@ -105,7 +105,7 @@ impl Registry {
         name: &str,
         given: &[(&str, String, Value)],
     ) -> Result<Method, ParamError> {
-        self.get(name)?.from_values(given)
+        self.get(name)?.method_from_values(given)
     }
 
     /// The settings `name` takes, with their defaults, in table order.
@@ -123,8 +123,8 @@ pub trait MethodEntry: Sync {
     /// `RenderMethod::COUNT`.
     fn count_key(&self) -> &'static str;
     fn docs(&self) -> Vec<SettingDoc>;
-    fn from_toml(&self, params: &toml::Table) -> Result<Method, ParamError>;
-    fn from_values(&self, given: &[(&str, String, Value)]) -> Result<Method, ParamError>;
+    fn method_from_toml(&self, params: &toml::Table) -> Result<Method, ParamError>;
+    fn method_from_values(&self, given: &[(&str, String, Value)]) -> Result<Method, ParamError>;
     /// The `TypeId` of the method type (for `Method::settings_of`).
     fn method_type(&self) -> TypeId;
 
@@ -193,7 +193,7 @@ impl<M: RenderMethod> MethodEntry for Entry<M> {
         settings::docs(M::SETTINGS)
     }
 
-    fn from_toml(&self, params: &toml::Table) -> Result<Method, ParamError> {
+    fn method_from_toml(&self, params: &toml::Table) -> Result<Method, ParamError> {
         Ok(Method::new::<M>(settings::from_toml(
             M::NAME,
             M::SETTINGS,
@@ -201,7 +201,7 @@ impl<M: RenderMethod> MethodEntry for Entry<M> {
         )?))
     }
 
-    fn from_values(&self, given: &[(&str, String, Value)]) -> Result<Method, ParamError> {
+    fn method_from_values(&self, given: &[(&str, String, Value)]) -> Result<Method, ParamError> {
         Ok(Method::new::<M>(settings::build(
             M::NAME,
             M::SETTINGS,
@@ -292,7 +292,7 @@ mod tests {
             ["reference", "ir", "bir", "bundles", "env", "lightfield"]
         );
         for e in Registry::builtin().entries() {
-            let m = e.from_toml(&toml::Table::new()).unwrap();
+            let m = e.method_from_toml(&toml::Table::new()).unwrap();
             assert_eq!(m.with_seed(7).seed(), 7, "{}", e.name());
             assert_eq!(m.with_count(5).samples(), 5, "{}", e.name());
             assert_eq!(m.with_count(5).with_seed(3), m.with_seed(3).with_count(5));
