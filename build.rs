@@ -60,6 +60,10 @@ const REFERENCE_SOURCES: &[&str] = &[
     "src/methods/accumulation.rs",
     "src/methods/progressive.rs",
     "src/methods/direct.rs",
+    "src/methods/driver.rs",
+    "src/methods/interface.rs",
+    "src/methods/registry.rs",
+    "src/methods/settings.rs",
     "src/methods/lightfield",
     "src/bench/suite/references.rs",
 ];

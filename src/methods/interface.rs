@@ -150,6 +150,14 @@ pub fn declines<M: RenderMethod>(scene: &Scene) -> Option<String> {
     lights::declines(M::NAME, &M::LIGHTS, scene)
 }
 
+/// Panics naming the problem where `M`'s table cannot serve the interface (a method's code
+/// is wrong, whatever the input).
+pub fn assert_table<M: RenderMethod>() {
+    if let Some(problem) = table_problem::<M>() {
+        panic!("method {problem}");
+    }
+}
+
 /// Renders `scene` with `method`'s kernels and the shared `passes`: the refusals (lights,
 /// device sizes), then the driver.
 pub(crate) fn render<M: RenderMethod>(
@@ -161,7 +169,6 @@ pub(crate) fn render<M: RenderMethod>(
     settings: &M::Settings,
     progress: impl FnMut(u32, u32),
 ) -> Result<RenderOutput, RunError> {
-    let start = Instant::now();
     if let Some(why) = declines::<M>(scene) {
         return Err(RunError::Declined(why));
     }
@@ -170,6 +177,7 @@ pub(crate) fn render<M: RenderMethod>(
     // A cut traversal left over from an earlier render (one that failed before its check)
     // is not this render's; progressive::run checks it after every submission.
     gpu_scene.bvh.clear_loop_cuts()?;
+    let start = Instant::now();
     let shared = M::shared_passes(settings);
     let plan = Plan {
         frames: count::<M>(settings).max(1),
@@ -192,7 +200,10 @@ pub struct Renderer<M> {
 }
 
 impl<M: RenderMethod> Renderer<M> {
+    /// Panics where `M`'s table lacks the Count rows `seed` and `M::COUNT` (as
+    /// `Registry::with`).
     pub fn new(ctx: &Context) -> GpuResult<Renderer<M>> {
+        assert_table::<M>();
         Ok(Renderer {
             passes: GBufferAndDirectLight::new(ctx)?,
             method: M::new(ctx)?,

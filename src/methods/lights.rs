@@ -46,7 +46,15 @@ struct LightKind {
     add: &'static str,
 }
 
+/// In the order refusals name them: luminaires first (only lightfield renders them).
 const KINDS: [LightKind; 4] = [
+    LightKind {
+        support: |l| l.luminaires,
+        count: |s| s.luminaires.len(),
+        name: "light-field luminaires",
+        one: "a light-field luminaire",
+        add: "add a [[luminaire]]",
+    },
     LightKind {
         support: |l| l.environment,
         count: |s| s.environment.is_some() as usize,
@@ -64,7 +72,7 @@ const KINDS: [LightKind; 4] = [
         },
         name: "emissive triangles",
         one: "an emissive triangle",
-        add: "give a material an emission",
+        add: "give a material an emission (Ke)",
     },
     LightKind {
         support: |l| l.point,
@@ -73,46 +81,61 @@ const KINDS: [LightKind; 4] = [
         one: "a point or spot light",
         add: "add a [[light]]",
     },
-    LightKind {
-        support: |l| l.luminaires,
-        count: |s| s.luminaires.len(),
-        name: "light-field luminaires",
-        one: "a light-field luminaire",
-        add: "add a [[luminaire]]",
-    },
 ];
 
-/// The refusal without its alternatives: the first kind of light `lights` declines and
-/// `scene` has, or needs and `scene` lacks; with, for a light it needs, how to add one.
-fn refusal(name: &str, lights: &Lights, scene: &Scene) -> Option<(String, Option<&'static str>)> {
+/// The refusal without its alternatives, or None: every kind of light the method declines and
+/// the scene has (with how many), then every kind it needs and the scene lacks; how to add one
+/// only where a missing light is the scene's only problem.
+fn refusal(name: &str, lights: &Lights, scene: &Scene) -> Option<String> {
+    let mut declined: Vec<String> = Vec::new();
+    let mut whys: Vec<&str> = Vec::new();
+    let mut needed: Vec<(&LightKind, &str)> = Vec::new();
     for kind in &KINDS {
         let n = (kind.count)(scene);
         match (kind.support)(lights) {
             Support::Declines(why) if n > 0 => {
-                let has = match kind.name {
-                    "environment maps" => "one".to_string(),
-                    _ => n.to_string(),
-                };
-                let text = format!(
-                    "{name} does not render {} ({why}), and this scene has {has}",
-                    kind.name
-                );
-                return Some((text, None));
+                declined.push(match kind.name {
+                    "environment maps" => "environment maps (this scene has one)".to_string(),
+                    _ => format!("{} (this scene has {n})", kind.name),
+                });
+                if !whys.contains(&why) {
+                    whys.push(why);
+                }
             }
-            Support::Needs(why) if n == 0 => {
-                let text = format!("{name} needs {} ({why}), and this scene has none", kind.one);
-                return Some((text, Some(kind.add)));
-            }
+            Support::Needs(why) if n == 0 => needed.push((kind, why)),
             _ => {}
         }
     }
-    None
+    let needs = |(kind, why): &(&LightKind, &str)| format!("{} ({why})", kind.one);
+    match (declined.is_empty(), needed.as_slice()) {
+        (true, []) => None,
+        (true, [only]) => Some(format!(
+            "{name} needs {}, and this scene has none: {}, or",
+            needs(only),
+            only.0.add
+        )),
+        (true, all) => Some(format!(
+            "{name} needs {}, and this scene has none of them;",
+            all.iter().map(needs).collect::<Vec<_>>().join(" and ")
+        )),
+        (false, _) => {
+            let mut text = format!(
+                "{name} does not render {}: {};",
+                declined.join(" or "),
+                whys.join("; ")
+            );
+            for (kind, _) in &needed {
+                text += &format!(" and it needs {}, which this scene lacks;", kind.one);
+            }
+            Some(text)
+        }
+    }
 }
 
 /// Why a method named `name` that treats lights as `lights` declines `scene`, in one line
-/// with what renders it instead (irad's methods that render it), or None when it renders it.
+/// with irad's methods that render it, or None when it renders it.
 pub fn declines(name: &str, lights: &Lights, scene: &Scene) -> Option<String> {
-    let (why, add) = refusal(name, lights, scene)?;
+    let why = refusal(name, lights, scene)?;
     let others: Vec<&str> = Registry::builtin()
         .entries()
         .iter()
@@ -120,45 +143,89 @@ pub fn declines(name: &str, lights: &Lights, scene: &Scene) -> Option<String> {
         .map(|e| e.name())
         .collect();
     let others = match others.split_last() {
-        None => None,
-        Some((last, [])) => Some(format!("use --method {last}")),
-        Some((last, rest)) => Some(format!("use --method {} or {last}", rest.join(", "))),
+        None => "no method of irad renders this scene".to_string(),
+        Some((last, [])) => format!("use --method {last}"),
+        Some((last, rest)) => format!("use --method {} or {last}", rest.join(", ")),
     };
-    Some(match (add, others) {
-        (Some(add), Some(others)) => format!("{why}: {add}, or {others}"),
-        (Some(add), None) => format!("{why}: {add}"),
-        (None, Some(others)) => format!("{why}: {others}"),
-        (None, None) => format!("{why}; no method of irad renders this scene"),
-    })
+    Some(format!("{why} {others}"))
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    const IR_LIKE: Lights = Lights {
-        environment: Support::Declines("its walk starts on the scene's lights"),
-        area: Support::Renders,
-        point: Support::Renders,
-        luminaires: Support::Declines("only lightfield models them"),
-    };
+    fn why(method: &str, scene: &Scene) -> Option<String> {
+        let e = Registry::builtin().get(method).ok()?;
+        declines(method, &e.lights(), scene)
+    }
 
+    /// The refusals' exact words, per kind of light and method: what is declined with its
+    /// count and reason, what is needed and how to add it where that alone would do, and the
+    /// methods that render the scene.
     #[test]
-    fn a_declined_light_is_named_with_the_methods_that_render_the_scene() {
-        let mut scene = crate::scene::default_scene();
-        assert_eq!(declines("x", &IR_LIKE, &scene), None);
-        let needs = Lights {
-            environment: Support::Needs("it shades the map"),
-            ..IR_LIKE
-        };
-        let why = declines("x", &needs, &scene).unwrap();
-        assert!(
-            why.starts_with("x needs an environment map (it shades the map), and this scene has none: add an [environment] table, or use --method reference"),
-            "{why}"
+    fn refusals_name_the_lights_the_reasons_and_the_methods_that_render_the_scene() {
+        use crate::scene::{Environment, Light};
+        let cornell = crate::scene::default_scene();
+        assert_eq!(why("ir", &cornell), None);
+        assert_eq!(
+            why("env", &cornell).unwrap(),
+            "env does not render emissive triangles (this scene has 2): it shades the \
+             environment map's direct light only; and it needs an environment map, which this \
+             scene lacks; use --method reference, ir or bir"
         );
-        scene.lights.clear();
-        scene.triangles.clear();
-        let why = declines("x", &needs, &scene).unwrap();
-        assert!(why.contains("or use --method"), "{why}");
+        assert_eq!(
+            why("bundles", &cornell).unwrap(),
+            "bundles does not render emissive triangles (this scene has 2): Tokuyoshi 12 \
+             Section 4 starts VPLs from point lights; use --method reference, ir or bir"
+        );
+        assert_eq!(
+            why("lightfield", &cornell).unwrap(),
+            "lightfield needs a light-field luminaire (it renders light-field luminaires' \
+             direct light), and this scene has none: add a [[luminaire]], or use --method \
+             reference, ir or bir"
+        );
+        // A map, no emissive triangles, one point light.
+        let mut sky = cornell.clone();
+        sky.materials
+            .iter_mut()
+            .for_each(|m| m.ke = glam::Vec3::ZERO);
+        sky.environment = Some(Environment {
+            width: 2,
+            height: 1,
+            texels: vec![glam::Vec3::ONE; 2],
+            source: "sky.exr".into(),
+        });
+        sky.lights.push(Light::Point {
+            position: glam::Vec3::Y,
+            intensity: glam::Vec3::ONE,
+        });
+        assert_eq!(
+            why("ir", &sky).unwrap(),
+            "ir does not render environment maps (this scene has one): the quasi-random walk \
+             starts on emissive triangles, point and spot lights; use --method reference or \
+             bundles"
+        );
+        assert_eq!(
+            why("env", &sky).unwrap(),
+            "env does not render point and spot lights (this scene has 1): it shades the \
+             environment map's direct light only; use --method reference or bundles"
+        );
+        // Luminaires are named first, and a light the method needs is not offered as a fix
+        // where the scene would still be declined.
+        let mut headlights = sky.clone();
+        headlights.environment = None;
+        headlights.luminaires = crate::scene::load(std::path::Path::new(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/scenes/car-headlights/scene.toml"
+        )))
+        .unwrap()
+        .luminaires;
+        assert_eq!(
+            why("env", &headlights).unwrap(),
+            "env does not render light-field luminaires (this scene has 2) or point and spot \
+             lights (this scene has 1): it does not sample their images; it shades the \
+             environment map's direct light only; and it needs an environment map, which this \
+             scene lacks; use --method lightfield"
+        );
     }
 }

@@ -25,7 +25,11 @@ pub struct Method {
 
 impl Method {
     /// `M` with `settings`.
+    ///
+    /// Panics where `M`'s table lacks the Count rows `seed` and `M::COUNT` (as
+    /// `Registry::with`).
     pub fn new<M: RenderMethod>(settings: M::Settings) -> Method {
+        super::interface::assert_table::<M>();
         Method {
             entry: registry::entry::<M>(),
             settings: Arc::new(settings),

@@ -57,9 +57,7 @@ impl Registry {
     /// Panics where `M`'s name is taken or its table lacks the Count rows `seed` and
     /// `M::COUNT` (a method's code is wrong, whatever the input).
     pub fn with<M: RenderMethod>(mut self) -> Registry {
-        if let Some(problem) = interface::table_problem::<M>() {
-            panic!("cannot register method {problem}");
-        }
+        interface::assert_table::<M>();
         assert!(
             self.get(M::NAME).is_err(),
             "cannot register method {}: the name is taken",
@@ -115,8 +113,9 @@ impl Registry {
 }
 
 /// A method with its type erased: what the registry and `Method` reach. Implemented for every
-/// `RenderMethod`; settings pass as `&dyn Any` holding the method's `Settings`.
-pub trait MethodEntry: Sync {
+/// `RenderMethod` and sealed (settings pass as `&dyn Any` holding the method's `Settings`,
+/// which only the generic implementation can promise).
+pub trait MethodEntry: sealed::Sealed + Sync {
     fn name(&self) -> &'static str;
     fn summary(&self) -> &'static str;
     fn lights(&self) -> Lights;
@@ -165,6 +164,11 @@ impl<M: RenderMethod> EntryOf for M {
 }
 
 struct Entry<M>(PhantomData<fn() -> M>);
+
+mod sealed {
+    pub trait Sealed {}
+    impl<M: super::RenderMethod> Sealed for super::Entry<M> {}
+}
 
 /// `s` as `M`'s settings: a `Method` pairs an entry with its own method's settings only.
 fn settings_of<M: RenderMethod>(s: &dyn Any) -> &M::Settings {
@@ -302,7 +306,7 @@ mod tests {
         };
         assert_eq!(
             e.to_string(),
-            "unknown method `nothing` (irad has: reference, ir, bir, bundles, env, lightfield)"
+            "unknown method `nothing` (methods: reference, ir, bir, bundles, env, lightfield)"
         );
     }
 

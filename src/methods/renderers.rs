@@ -48,6 +48,9 @@ impl Renderers {
         if let Some(why) = method.declines(scene) {
             return Err(RunError::Declined(why));
         }
+        method
+            .fits(scene, ctx.info().max_storage_buffer_range)
+            .map_err(|e| RunError::Gpu(GpuError::DoesNotFit(e)))?;
         method.entry().run(
             self,
             ctx,

@@ -138,7 +138,7 @@ pub struct SettingDoc {
 /// A parameter a method cannot take: `method: key = value: problem`.
 #[derive(Debug, Error, PartialEq)]
 pub enum ParamError {
-    #[error("unknown method `{name}` (irad has: {known})")]
+    #[error("unknown method `{name}` (methods: {known})")]
     UnknownMethod {
         name: String,
         /// The registry's methods, listed.

@@ -1,6 +1,6 @@
 //! The suite file (`irad bench suite <suite.toml>`): scenes, methods with fixed parameters and
 //! budgets, the reference settings, and how each run is timed. Parsed with unknown fields
-//! refused, every method setting checked by `Method::from_params` before anything renders,
+//! refused, every method setting checked by its table (`Registry::from_params`) before anything renders,
 //! then expanded into a deterministic list of runs (scene, then method entry, then budget), the
 //! order `--shard` splits. Format in README ("Benchmark suites").
 
