@@ -43,6 +43,165 @@ const CASES: &[(&str, &str, &str)] = &[
         "failure/headlight-wall",
         "frames = 2\nseed = 3",
     ),
+    // The configurations of the statistical tests that scripts/test.sh's second pass (staged
+    // buffers, 4-lane subgroups) leaves out, so that their kernels' bits are still checked
+    // there, exactly: a statistical test reads its means and variances off these bits.
+    // reference: alpha_direct_light_is_unbiased_and_lowers_the_variance.
+    (
+        "reference",
+        "glossy-env",
+        "spp = 4\nmax_depth = 1\nalpha_frames = 2\nseed = 3",
+    ),
+    // ir: fractional_and_roulette_absorption_match_the_reference, ir_mean_matches_the_reference_
+    // with_and_without_interleaving, error_falls_with_vpls_and_clamping_darkens_corners, and
+    // compensation's plain clamp.
+    (
+        "ir",
+        "cornell-box",
+        "vpls = 64\nframes = 2\nabsorption = \"roulette\"\nclamp = 0\nseed = 3",
+    ),
+    (
+        "ir",
+        "cornell-box",
+        "vpls = 64\nframes = 2\ninterleave = 4\nseed = 3",
+    ),
+    (
+        "ir",
+        "cornell-box",
+        "vpls = 64\nframes = 2\ndirect = \"vpl\"\nclamp = 10\ncompensate = false\nseed = 3",
+    ),
+    (
+        "ir",
+        "failure/corner-light",
+        "vpls = 64\nframes = 2\ncompensate = false\nseed = 3",
+    ),
+    // bir: every_strategy_matches_the_reference_mean_in_the_cornell_box, both_sides_beat_
+    // reverse_only_in_the_halogen_office, the_uniform_floor_keeps_the_mean_where_power_
+    // estimates_miss_vpls; compensated on the corner light (compensation.rs).
+    (
+        "bir",
+        "cornell-box",
+        "vpls = 64\nframes = 2\nstrategy = \"standard\"\nseed = 3",
+    ),
+    (
+        "bir",
+        "cornell-box",
+        "vpls = 64\nframes = 2\nstrategy = \"reverse\"\nseed = 3",
+    ),
+    (
+        "bir",
+        "cornell-box",
+        "vpls = 64\nframes = 2\nratio = 0\nbatch = 32\nseed = 3",
+    ),
+    (
+        "bir",
+        "failure/halogen-office",
+        "vpls = 64\nframes = 2\nclamp = 0\ndirect_spp = 1\nseed = 3",
+    ),
+    (
+        "bir",
+        "failure/corner-light",
+        "vpls = 64\nframes = 2\nfloor = 0\nseed = 3",
+    ),
+    // bundles: every_strategy_matches_the_path_length_limited_reference_mean,
+    // environment_bundles_match_the_reference_direct_light, mis_beats_vpls_and_bundles_alone_
+    // in_the_corner, roughness_clamping_suppresses_glossy_spikes_and_keeps_more_energy_than_
+    // clamping.
+    (
+        "bundles",
+        "spot-light",
+        "frames = 2\niterations = 8\nstrategy = \"vpl\"\nseed = 3",
+    ),
+    (
+        "bundles",
+        "spot-light",
+        "frames = 2\niterations = 8\nstrategy = \"bundle\"\nseed = 3",
+    ),
+    (
+        "bundles",
+        "failure/corner-light",
+        "frames = 2\niterations = 8\ntwo_bounce = true\nseed = 3",
+    ),
+    (
+        "bundles",
+        "glossy-env",
+        "frames = 2\niterations = 8\ndirections = \"environment\"\nseed = 3",
+    ),
+    (
+        "bundles",
+        "glossy-env",
+        "frames = 2\niterations = 8\ndirections = \"uniform\"\nseed = 3",
+    ),
+    (
+        "bundles",
+        "failure/glossy-cornell",
+        "frames = 2\niterations = 8\nglossy = \"clamp\"\nseed = 3",
+    ),
+    // env: every_strategy_matches_the_reference_direct_light, decorrelated_light_samples_keep_
+    // the_image_mean_within_its_standard_error, dynamic_shares_waste_fewer_samples_with_the_
+    // sun_behind, uniform_faces_needs_more_samples_at_equal_error.
+    (
+        "env",
+        "glossy-env",
+        "frames = 2\nspp = 8\nstrategy = \"uniform-faces\"\nseed = 3",
+    ),
+    (
+        "env",
+        "glossy-env",
+        "frames = 2\nspp = 8\nstrategy = \"brdf\"\nseed = 3",
+    ),
+    (
+        "env",
+        "glossy-env",
+        "frames = 2\nspp = 8\nstrategy = \"cosine\"\nseed = 3",
+    ),
+    (
+        "env",
+        "glossy-env",
+        "frames = 2\nspp = 8\nstrategy = \"latlong\"\nseed = 3",
+    ),
+    (
+        "env",
+        "glossy-env",
+        "frames = 2\nspp = 8\nstrategy = \"hierarchical\"\nseed = 3",
+    ),
+    (
+        "env",
+        "glossy-env",
+        "frames = 2\nspp = 8\nstrategy = \"alpha\"\nalpha_samples = 5\nseed = 3",
+    ),
+    (
+        "env",
+        "glossy-env",
+        "frames = 2\nspp = 8\nlight_only = true\nseed = 3",
+    ),
+    (
+        "env",
+        "failure/sun-behind",
+        "frames = 2\nspp = 8\nshared_samples = true\nseed = 3",
+    ),
+    ("env", "moving-sun", "frames = 2\nspp = 8\nseed = 3"),
+    // lightfield: every_lightfield_strategy_matches_the_brute_force, strategies_at_equal_error.
+    (
+        "lightfield",
+        "failure/headlight-wall",
+        "frames = 2\nspp = 64\nstrategy = \"brute-force\"\nseed = 3",
+    ),
+    (
+        "lightfield",
+        "failure/headlight-wall",
+        "frames = 2\nstrategy = \"uniform\"\nseed = 3",
+    ),
+    (
+        "lightfield",
+        "failure/headlight-wall",
+        "frames = 2\nstrategy = \"precomputed\"\nseed = 3",
+    ),
+    (
+        "lightfield",
+        "failure/headlight-wall",
+        "frames = 2\nshared_samples = true\nseed = 3",
+    ),
 ];
 
 fn fnv1a(hash: &mut u64, bytes: &[u8]) {
