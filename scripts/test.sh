@@ -60,5 +60,6 @@ if [ "$#" -eq 0 ]; then
   IRAD_FORCE_STAGING=1 LP_NATIVE_VECTOR_WIDTH=128 cargo test --locked \
     --test prefix_sum --test bvh --test buffers --test reference --test ir --test bir \
     --test bundles --test env --test lightfield --test tables --test pixel_hashes \
+    --test custom_method \
     -- --exact "${skips[@]}"
 fi
