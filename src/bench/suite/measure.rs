@@ -31,6 +31,18 @@ impl From<RunError> for MeasureError {
     }
 }
 
+/// The sample standard deviation of `values`, or None below two values or where one is not
+/// finite.
+pub fn spread(values: &[f64]) -> Option<f64> {
+    let n = values.len();
+    if n < 2 || values.iter().any(|v| !v.is_finite()) {
+        return None;
+    }
+    let mean = values.iter().sum::<f64>() / n as f64;
+    let ss: f64 = values.iter().map(|v| (v - mean) * (v - mean)).sum();
+    Some((ss / (n - 1) as f64).sqrt())
+}
+
 pub struct Measured {
     /// The first timed repeat's image (seed = the method's seed).
     pub image: Image,
@@ -43,6 +55,10 @@ pub struct Measured {
     /// to the reference's, minus 1: signed, so noise averages out over the images (the bias
     /// figure averages each image's absolute offset). NaN where an image has NaN/Inf.
     pub image_mean_offset: f64,
+    /// The standard deviation over the K images of the image mean relative to the reference's
+    /// (the spread a user sees from one render to the next), or None below two images or
+    /// where an image has NaN/Inf.
+    pub image_mean_spread: Option<f64>,
     pub gpu_ms: Option<f64>,
     pub pass_gpu_ms: BTreeMap<String, Option<f64>>,
     pub wall_ms: f64,
@@ -117,11 +133,15 @@ pub fn measure(
         None
     };
     let channel_mean = |im: &Image| im.mean().iter().sum::<f64>() / 3.0;
-    let images_mean = images.iter().map(channel_mean).sum::<f64>() / images.len() as f64;
-    let image_mean_offset = images_mean / channel_mean(reference) - 1.0;
+    let relative: Vec<f64> = images
+        .iter()
+        .map(|im| channel_mean(im) / channel_mean(reference))
+        .collect();
+    let image_mean_offset = relative.iter().sum::<f64>() / relative.len() as f64 - 1.0;
     Ok(Measured {
         metrics: Metrics::mean(&scores),
         image_mean_offset,
+        image_mean_spread: spread(&relative),
         scored: k,
         flicker,
         gpu_ms: median_of(&gpu),
@@ -134,4 +154,18 @@ pub fn measure(
         stats,
         image: images.swap_remove(0),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::spread;
+
+    #[test]
+    fn spread_is_the_sample_standard_deviation() {
+        // Means 0.8, 1.0, 1.2: deviations -0.2, 0, 0.2; sum of squares 0.08 over 2.
+        let s = spread(&[0.8, 1.0, 1.2]).unwrap();
+        assert!((s - 0.2).abs() < 1e-12, "{s}");
+        assert_eq!(spread(&[1.0]), None);
+        assert_eq!(spread(&[1.0, f64::NAN]), None);
+    }
 }

@@ -332,6 +332,7 @@ fn run_one(
         metrics: None,
         flicker: None,
         image_mean_offset: None,
+        image_mean_spread: None,
         nonfinite_estimates: 0,
         reference_spp: reference_spp(&suite_scene.reference),
         reference_seed: suite_scene.reference.seed(),
@@ -426,6 +427,7 @@ fn run_one(
     record.reference_rel_mse = *reference_rel_mse;
     record.flicker = m.flicker;
     record.image_mean_offset = Some(m.image_mean_offset).filter(|o| o.is_finite());
+    record.image_mean_spread = m.image_mean_spread;
     record.nonfinite_estimates = m.nonfinite_estimates;
     record.stats = m.stats;
     record.image = Some(image_name);

@@ -193,23 +193,25 @@ fn equal_time_table(runs: &[&RunRecord]) -> String {
             md,
             "Equal time, {budget} GPU ms ({HOME_MARK}: the scene's home method; image mean: the \
              mean over the run's images (successive seeds) of the image mean against the \
-             reference's; net relMSE: relMSE less the reference's own, estimated from its two \
+             reference's; spread: the standard deviation of those images' means, how far one \
+             render's brightness moves from the next's; net relMSE: relMSE less the reference's own, estimated from its two \
              halves, so an estimate of the error against the converged image (- where the \
              reference's noise swamps it); speed: the path tracer's net relMSE x GPU time over \
              the run's, both from this device):\n"
         );
-        md += "| | method | count | GPU ms | relMSE | net relMSE | image mean | outliers |";
+        md +=
+            "| | method | count | GPU ms | relMSE | net relMSE | image mean | spread | outliers |";
         for r in &references {
             let _ = write!(md, " speed vs {} |", r.label);
         }
-        md += "\n|---|---|---:|---:|---:|---:|---:|---:|";
+        md += "\n|---|---|---:|---:|---:|---:|---:|---:|---:|";
         md += &"---:|".repeat(references.len());
         md += "\n";
         for r in &at {
             let m = r.metrics;
             let _ = write!(
                 md,
-                "| {} | {} | {} | {} | {} | {} | {} | {} |",
+                "| {} | {} | {} | {} | {} | {} | {} | {} | {} |",
                 if r.home { HOME_MARK } else { "" },
                 r.label,
                 r.calibrated_count
@@ -224,6 +226,7 @@ fn equal_time_table(runs: &[&RunRecord]) -> String {
                     },
                 sci(net_rel_mse(r).filter(|e| *e > 0.0)),
                 signed_percent(r.image_mean_offset),
+                percent(r.image_mean_spread),
                 percent(m.map(|m| m.outliers)),
             );
             for reference in &references {

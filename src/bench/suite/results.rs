@@ -99,6 +99,10 @@ pub struct RunRecord {
     /// reference's, minus 1 (signed; measure.rs).
     #[serde(default)]
     pub image_mean_offset: Option<f64>,
+    /// The standard deviation over the scored images of the image mean relative to the
+    /// reference's (measure.rs): how far one render's brightness moves from the next's.
+    #[serde(default)]
+    pub image_mean_spread: Option<f64>,
     /// Per-pixel estimates the method dropped as NaN or Inf, over all repeats (0 when right).
     pub nonfinite_estimates: u64,
     pub reference_spp: u32,
@@ -310,6 +314,7 @@ const COLUMNS: &[Column] = &[
     }),
     ("flicker", |r| figure(r.flicker)),
     ("image_mean_offset", |r| figure(r.image_mean_offset)),
+    ("image_mean_spread", |r| figure(r.image_mean_spread)),
     ("nonfinite_estimates", |r| r.nonfinite_estimates.to_string()),
     ("reference_spp", |r| r.reference_spp.to_string()),
     ("reference_seed", |r| r.reference_seed.to_string()),
@@ -441,6 +446,7 @@ mod tests {
             }),
             flicker: None,
             image_mean_offset: None,
+            image_mean_spread: None,
             nonfinite_estimates: 0,
             reference_spp: 1,
             reference_seed: 9,
@@ -521,6 +527,7 @@ mod tests {
         a.wall_ms = Some(f64::NAN);
         a.flicker = Some(0.002);
         a.image_mean_offset = Some(-0.01);
+        a.image_mean_spread = Some(0.05);
         a.reference_rel_mse = Some(1e-5);
         a.image = Some("images/a.png".into());
         a.note = "two\nlines".into();
@@ -563,7 +570,7 @@ mod tests {
              status,\
              expected_failure,home,pareto,width,height,seed,warmup,repeats,flicker_frames,scored,\
              gpu_ms,wall_ms,rel_mse,rmse,lab_error,bias,outliers,nan_inf,flicker,\
-             image_mean_offset,nonfinite_estimates,reference_spp,reference_seed,\
+             image_mean_offset,image_mean_spread,nonfinite_estimates,reference_spp,reference_seed,\
              reference_rel_mse,device,driver,scene_hash,note,param:spp,param:strategy,\
              param:vpls,pass_ms:shade,pass_ms:trace,stat:kept"
         );
@@ -584,10 +591,10 @@ mod tests {
         assert_eq!(
             rows,
             "3,cornell-box/12.5/0.031,cornell-box,embedded:cornell-box,reference,pt,time 20ms,\
-             20,7,false,ok,false,true,true,1,1,0,0,1,0,1,12.5,,0.031,0,0,0,0,0,0.002,-0.01,0,1,9,0.00001,\
+             20,7,false,ok,false,true,true,1,1,0,0,1,0,1,12.5,,0.031,0,0,0,0,0,0.002,-0.01,0.05,0,1,9,0.00001,\
              \"gpu, \"\"fast\"\"\",,,\"two\nlines\",,bir,64,,3.25,0.75\n\
              4,veach/1/0.5,veach,,reference,pt,,,,false,declined,true,false,false,1,1,0,0,1,0,1,,,,,,,,,,\
-             ,0,1,9,,cpu,,,,16,,,,,\n"
+             ,,0,1,9,,cpu,,,,16,,,,,\n"
         );
     }
 }
