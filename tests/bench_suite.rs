@@ -89,6 +89,15 @@ fn check_outputs(out: &Path) -> SuiteResults {
                 (cx - p.cx).abs() < 1e-2 && (cy - p.cy).abs() < 1e-2,
                 "{p:?}"
             );
+            // The bar spans the run's seeds: the lowest and highest relMSE of its images, the
+            // mean between them.
+            let range = (
+                row["rel_mse_min"].parse::<f64>().unwrap(),
+                row["rel_mse_max"].parse::<f64>().unwrap(),
+            );
+            let ((low, high), _) = p.bar.unwrap_or_else(|| panic!("{}: no bar", row["id"]));
+            assert_eq!((low, high), range, "{}", row["id"]);
+            assert!(low <= p.y && p.y <= high, "{}: {p:?}", row["id"]);
         }
     }
     // The report names every scene and links only images that exist and decode.

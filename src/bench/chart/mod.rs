@@ -22,6 +22,10 @@ pub use read::read_svg;
 pub struct Point {
     pub x: f64,
     pub y: f64,
+    /// The spread behind `y` where it is a mean over seeds: the lowest and highest of the
+    /// values averaged, drawn as a vertical bar through the point (left out where either end
+    /// cannot sit on the log axis).
+    pub y_range: Option<(f64, f64)>,
     pub label: String,
     pub run_id: String,
 }
@@ -49,6 +53,9 @@ pub struct PlottedPoint {
     pub label: String,
     pub x: f64,
     pub y: f64,
+    /// The bar drawn through the point, as values (low, high) and pixel rows (top, bottom
+    /// end: `cy` of high, of low).
+    pub bar: Option<((f64, f64), (f64, f64))>,
     pub cx: f64,
     pub cy: f64,
 }
@@ -93,6 +100,7 @@ mod fixtures {
         Point {
             x,
             y,
+            y_range: None,
             label: label.into(),
             run_id: run_id.into(),
         }

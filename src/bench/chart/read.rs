@@ -133,6 +133,8 @@ pub fn read_svg(svg: &str) -> Result<(Axes, Vec<PlottedPoint>), String> {
     }
     let mut axes = None;
     let mut points = Vec::new();
+    // Spread bars as read, each written just before its point's circle.
+    let mut bars: Vec<(String, (f64, f64), (f64, f64))> = Vec::new();
     let mut rest = doc;
     while let Some(open) = rest.find('<') {
         let after = &rest[open + 1..];
@@ -169,6 +171,11 @@ pub fn read_svg(svg: &str) -> Result<(Axes, Vec<PlottedPoint>), String> {
                 }
                 axes = Some(a);
             }
+            "line" if tag.get("class") == Some("spread") => {
+                let (low, high) = (tag.finite("data-low")?, tag.finite("data-high")?);
+                let rows = (tag.finite("y1")?, tag.finite("y2")?);
+                bars.push((tag.req("data-run")?.to_string(), (low, high), rows));
+            }
             "circle" if tag.get("class") == Some("point") => {
                 let x = tag.finite("data-x")?;
                 let y = tag.finite("data-y")?;
@@ -181,6 +188,11 @@ pub fn read_svg(svg: &str) -> Result<(Axes, Vec<PlottedPoint>), String> {
                     label: tag.req("data-label")?.to_string(),
                     x,
                     y,
+                    bar: bars
+                        .iter()
+                        .rev()
+                        .find(|b| Some(b.0.as_str()) == tag.get("data-run"))
+                        .map(|b| (b.1, b.2)),
                     cx: tag.finite("cx")?,
                     cy: tag.finite("cy")?,
                 });

@@ -58,6 +58,12 @@ impl Out {
     }
 }
 
+/// A point's spread bar (low, high) where both ends can sit on the log axis.
+fn bar(p: &Point) -> Option<(f64, f64)> {
+    p.y_range
+        .filter(|&(lo, hi)| lo > 0.0 && hi >= lo && hi.is_finite())
+}
+
 impl Chart {
     /// The chart as a self-contained SVG document.
     pub fn to_svg(&self) -> String {
@@ -73,7 +79,10 @@ impl Chart {
             .collect();
         let any = charted.iter().any(|s| !s.is_empty());
         let (x_log_min, x_log_max) = decade_range(charted.iter().flatten().map(|p| p.x));
-        let (y_log_min, y_log_max) = decade_range(charted.iter().flatten().map(|p| p.y));
+        let (y_log_min, y_log_max) = decade_range(charted.iter().flatten().flat_map(|p| {
+            let (lo, hi) = bar(p).unwrap_or((p.y, p.y));
+            [p.y, lo, hi]
+        }));
         let axes = Axes {
             x_log_min,
             x_log_max,
@@ -195,6 +204,14 @@ impl Chart {
                 ));
             }
             for (p, &(cx, cy)) in points.iter().zip(px) {
+                if let Some((lo, hi)) = bar(p) {
+                    let (_, y_lo) = axes.to_px(p.x, lo);
+                    let (_, y_hi) = axes.to_px(p.x, hi);
+                    out.line(format_args!(
+                        r#"<line class="spread" x1="{cx:.3}" y1="{y_hi:.3}" x2="{cx:.3}" y2="{y_lo:.3}" stroke-width="1.5" data-run="{}" data-low="{lo}" data-high="{hi}"/>"#,
+                        esc(&p.run_id),
+                    ));
+                }
                 out.line(format_args!(
                     r#"<circle class="point" cx="{cx:.3}" cy="{cy:.3}" r="{RADIUS}" stroke="white" stroke-width="1" data-series="{}" data-run="{}" data-label="{}" data-x="{}" data-y="{}"><title>{}</title></circle>"#,
                     esc(&s.name),
@@ -461,6 +478,37 @@ mod tests {
         assert_eq!(at("b1").series, "b");
         assert!(at("b1").cy < at("b2").cy, "larger relMSE is higher up");
         assert_eq!(count(&svg, "<polyline"), 2);
+    }
+
+    /// A point that is a mean over seeds carries a bar from the lowest to the highest value,
+    /// drawn at the point's x, the axes widened to hold it; a bar whose low end cannot sit on
+    /// the log axis is left out, the point kept.
+    #[test]
+    fn a_mean_over_seeds_is_drawn_with_its_range() {
+        let mut a = point(10.0, 0.02, "t=2s", "a");
+        a.y_range = Some((0.005, 0.2));
+        let mut b = point(20.0, 0.01, "t=8s", "b");
+        b.y_range = Some((0.0, 0.03));
+        let svg = chart(vec![Series {
+            name: "bir".into(),
+            points: vec![a, b],
+        }])
+        .to_svg();
+        let (axes, plotted) = read_svg(&svg).unwrap();
+        assert_eq!(plotted.len(), 2);
+        let at = |run: &str| plotted.iter().find(|p| p.run_id == run).unwrap().clone();
+        let ((low, high), (top, bottom)) = at("a").bar.expect("a's bar");
+        assert_eq!((low, high), (0.005, 0.2));
+        let (_, y_low) = axes.to_px(10.0, 0.005);
+        let (_, y_high) = axes.to_px(10.0, 0.2);
+        assert!((top - y_high).abs() < 1e-3 && (bottom - y_low).abs() < 1e-3);
+        assert!(
+            top < at("a").cy && at("a").cy < bottom,
+            "the bar passes through the point"
+        );
+        assert!(axes.y_log_min <= 0.005f64.log10() && 0.2f64.log10() <= axes.y_log_max);
+        assert_eq!(at("b").bar, None);
+        assert_eq!(count(&svg, "class=\"spread\""), 1);
     }
 
     #[test]

@@ -59,6 +59,8 @@ pub struct Measured {
     /// (the spread a user sees from one render to the next), or None below two images or
     /// where an image has NaN/Inf.
     pub image_mean_spread: Option<f64>,
+    /// The lowest and highest relMSE of the K images (`metrics` has their mean).
+    pub rel_mse_range: Option<(f64, f64)>,
     pub gpu_ms: Option<f64>,
     pub pass_gpu_ms: BTreeMap<String, Option<f64>>,
     pub wall_ms: f64,
@@ -142,6 +144,13 @@ pub fn measure(
         metrics: Metrics::mean(&scores),
         image_mean_offset,
         image_mean_spread: spread(&relative),
+        rel_mse_range: scores
+            .iter()
+            .map(|m| m.rel_mse)
+            .filter(|e| e.is_finite())
+            .fold(None, |r: Option<(f64, f64)>, e| {
+                Some(r.map_or((e, e), |(lo, hi)| (lo.min(e), hi.max(e))))
+            }),
         scored: k,
         flicker,
         gpu_ms: median_of(&gpu),

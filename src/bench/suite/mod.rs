@@ -333,6 +333,8 @@ fn run_one(
         flicker: None,
         image_mean_offset: None,
         image_mean_spread: None,
+        rel_mse_min: None,
+        rel_mse_max: None,
         nonfinite_estimates: 0,
         reference_spp: reference_spp(&suite_scene.reference),
         reference_seed: suite_scene.reference.seed(),
@@ -428,6 +430,7 @@ fn run_one(
     record.flicker = m.flicker;
     record.image_mean_offset = Some(m.image_mean_offset).filter(|o| o.is_finite());
     record.image_mean_spread = m.image_mean_spread;
+    (record.rel_mse_min, record.rel_mse_max) = m.rel_mse_range.unzip();
     record.nonfinite_estimates = m.nonfinite_estimates;
     record.stats = m.stats;
     record.image = Some(image_name);

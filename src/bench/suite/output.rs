@@ -77,6 +77,7 @@ pub fn chart(results: &SuiteResults, scene: &str) -> Chart {
         let point = Point {
             x: r.gpu_ms.unwrap_or(f64::NAN),
             y: r.metrics.map(|m| m.rel_mse).unwrap_or(f64::NAN),
+            y_range: r.rel_mse_min.zip(r.rel_mse_max),
             label: r.budget.clone(),
             run_id: r.id.clone(),
         };

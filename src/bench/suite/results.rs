@@ -103,6 +103,12 @@ pub struct RunRecord {
     /// reference's (measure.rs): how far one render's brightness moves from the next's.
     #[serde(default)]
     pub image_mean_spread: Option<f64>,
+    /// The lowest and highest relMSE of the scored images (`metrics.rel_mse` is their mean):
+    /// the bar through the run's point in its scene's chart.
+    #[serde(default)]
+    pub rel_mse_min: Option<f64>,
+    #[serde(default)]
+    pub rel_mse_max: Option<f64>,
     /// Per-pixel estimates the method dropped as NaN or Inf, over all repeats (0 when right).
     pub nonfinite_estimates: u64,
     pub reference_spp: u32,
@@ -305,6 +311,8 @@ const COLUMNS: &[Column] = &[
     ("gpu_ms", |r| figure(r.gpu_ms)),
     ("wall_ms", |r| figure(r.wall_ms)),
     ("rel_mse", |r| figure(r.metrics.map(|m| m.rel_mse))),
+    ("rel_mse_min", |r| figure(r.rel_mse_min)),
+    ("rel_mse_max", |r| figure(r.rel_mse_max)),
     ("rmse", |r| figure(r.metrics.map(|m| m.rmse))),
     ("lab_error", |r| figure(r.metrics.map(|m| m.lab_error))),
     ("bias", |r| figure(r.metrics.map(|m| m.bias))),
@@ -447,6 +455,8 @@ mod tests {
             flicker: None,
             image_mean_offset: None,
             image_mean_spread: None,
+            rel_mse_min: None,
+            rel_mse_max: None,
             nonfinite_estimates: 0,
             reference_spp: 1,
             reference_seed: 9,
@@ -528,6 +538,7 @@ mod tests {
         a.flicker = Some(0.002);
         a.image_mean_offset = Some(-0.01);
         a.image_mean_spread = Some(0.05);
+        (a.rel_mse_min, a.rel_mse_max) = (Some(0.02), Some(0.04));
         a.reference_rel_mse = Some(1e-5);
         a.image = Some("images/a.png".into());
         a.note = "two\nlines".into();
@@ -569,7 +580,7 @@ mod tests {
             "index,id,scene,scene_path,method,label,budget,time_ms,calibrated_count,budget_missed,\
              status,\
              expected_failure,home,pareto,width,height,seed,warmup,repeats,flicker_frames,scored,\
-             gpu_ms,wall_ms,rel_mse,rmse,lab_error,bias,outliers,nan_inf,flicker,\
+             gpu_ms,wall_ms,rel_mse,rel_mse_min,rel_mse_max,rmse,lab_error,bias,outliers,nan_inf,flicker,\
              image_mean_offset,image_mean_spread,nonfinite_estimates,reference_spp,reference_seed,\
              reference_rel_mse,device,driver,scene_hash,note,param:spp,param:strategy,\
              param:vpls,pass_ms:shade,pass_ms:trace,stat:kept"
@@ -591,10 +602,11 @@ mod tests {
         assert_eq!(
             rows,
             "3,cornell-box/12.5/0.031,cornell-box,embedded:cornell-box,reference,pt,time 20ms,\
-             20,7,false,ok,false,true,true,1,1,0,0,1,0,1,12.5,,0.031,0,0,0,0,0,0.002,-0.01,0.05,0,1,9,0.00001,\
+             20,7,false,ok,false,true,true,1,1,0,0,1,0,1,12.5,,0.031,0.02,0.04,0,0,0,0,0,0.002,-0.01,0.05,0,1,9,\
+             0.00001,\
              \"gpu, \"\"fast\"\"\",,,\"two\nlines\",,bir,64,,3.25,0.75\n\
              4,veach/1/0.5,veach,,reference,pt,,,,false,declined,true,false,false,1,1,0,0,1,0,1,,,,,,,,,,\
-             ,,0,1,9,,cpu,,,,16,,,,,\n"
+             ,,,,0,1,9,,cpu,,,,16,,,,,\n"
         );
     }
 }
