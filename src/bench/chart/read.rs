@@ -133,8 +133,10 @@ pub fn read_svg(svg: &str) -> Result<(Axes, Vec<PlottedPoint>), String> {
     }
     let mut axes = None;
     let mut points = Vec::new();
-    // Spread bars as read, each written just before its point's circle.
-    let mut bars: Vec<(String, (f64, f64), (f64, f64))> = Vec::new();
+    // Spread bars as read, each written just before its point's circle: run, values (low,
+    // high), rows (top, bottom).
+    type Bar = (String, (f64, f64), (f64, f64));
+    let mut bars: Vec<Bar> = Vec::new();
     let mut rest = doc;
     while let Some(open) = rest.find('<') {
         let after = &rest[open + 1..];
