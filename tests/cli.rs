@@ -164,6 +164,33 @@ fn a_missing_validation_layer_says_what_to_install() {
     assert_clean_error(&o, &["validation layer", "vulkan-validationlayers"]);
 }
 
+/// Output piped into a reader that has gone (`irad methods | head`) ends irad quietly, as
+/// other tools end, not with a panic in `println!`.
+#[test]
+fn a_closed_output_pipe_ends_irad_quietly() {
+    use std::io::Read;
+    use std::process::Stdio;
+    let mut child = Command::new(env!("CARGO_BIN_EXE_irad"))
+        .arg("methods")
+        .arg("bir")
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // No reader is left before irad writes its first line.
+    drop(child.stdout.take());
+    let mut err = String::new();
+    child
+        .stderr
+        .take()
+        .unwrap()
+        .read_to_string(&mut err)
+        .unwrap();
+    child.wait().unwrap();
+    assert!(!err.contains("panicked"), "{err}");
+    assert_eq!(err, "");
+}
+
 #[test]
 fn help_explains_the_commands() {
     let o = irad(&["--help"], &[]);

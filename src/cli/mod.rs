@@ -79,7 +79,19 @@ enum Command {
     Export(export::ExportCommand),
 }
 
+/// `irad methods | head` closes the pipe early: like other command-line tools, irad then ends
+/// quietly (SIGPIPE's default action) instead of panicking in `println!` on EPIPE. irad
+/// writes to no socket, where that default would matter.
+fn quiet_on_closed_pipe() {
+    #[cfg(unix)]
+    // SAFETY: restores a signal's default disposition at startup, before any thread exists.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
+}
+
 pub fn main() -> ExitCode {
+    quiet_on_closed_pipe();
     logger::install();
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
