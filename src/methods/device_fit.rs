@@ -109,6 +109,23 @@ fn scene_file(scene: &Scene) -> String {
     )
 }
 
+/// Refuses `value` where `bytes(value)` (increasing in the value) passes `limit`: the error is
+/// `message(over, largest)`, with `over` the bytes against the limit in words (`over`) and
+/// `largest` the largest value that fits.
+pub fn check_size(
+    value: u64,
+    limit: u64,
+    bytes: impl Fn(u64) -> u64,
+    message: impl FnOnce(String, u64) -> String,
+) -> Result<(), String> {
+    let b = bytes(value);
+    if b <= limit {
+        return Ok(());
+    }
+    let largest = largest_fitting(value, limit, &bytes);
+    Err(message(over(b, limit), largest))
+}
+
 /// The clamp compensation's per-pixel vertex lists (ir, bir: compensation.rs allocates them
 /// where it compensates a clamp other than 0) against `limit`.
 pub fn check_compensation(clamp: &ClampSettings, scene: &Scene, limit: u64) -> Result<(), String> {

@@ -324,6 +324,15 @@ pub struct Bir {
     compensation: ClampCompensation,
 }
 
+/// VPLs per frame and per batch for `vpls` and the `batch` setting (0: the whole frame).
+fn batching(vpls: u32, batch: u32) -> (u32, u32) {
+    let per_frame = vpls.max(2);
+    match batch {
+        0 => (per_frame, per_frame),
+        b => (per_frame, b.clamp(2, per_frame)),
+    }
+}
+
 /// The smallest weight an adaptive side weight takes: neither side is ever dropped.
 pub const MIN_SIDE_WEIGHT: f32 = 0.1;
 
@@ -378,28 +387,20 @@ impl RenderMethod for Bir {
     fn fits(s: &BirSettings, scene: &Scene, limit: u64) -> Result<(), String> {
         device_fit::check_compensation(&s.clamp, scene, limit)?;
         // Vpls: the standard walk's slots for a batch's light paths (set_up).
+        let rho = mean_albedo(scene);
         let bytes = |vpls: u64| {
-            let vpls_per_frame = (vpls as u32).max(2);
-            let batch = if s.batch == 0 {
-                vpls_per_frame
-            } else {
-                s.batch.clamp(2, vpls_per_frame)
-            };
-            let rho = mean_albedo(scene);
+            let (_, batch) = batching(vpls as u32, s.batch);
             let split = Split::new(s.strategy, batch, rho);
             Schedule::new(split.light_paths, rho, Absorption::Fractional).slot_count as u64
                 * size_of::<Vpl>() as u64
         };
         let vpls = s.vpls as u64;
-        if bytes(vpls) > limit {
-            let largest = device_fit::largest_fitting(vpls, limit, bytes);
-            return Err(format!(
-                "bir: vpls = {vpls} (--vpls): the standard VPLs {}; the largest that fits is \
-                 {largest} (or a smaller batch)",
-                device_fit::over(bytes(vpls), limit)
-            ));
-        }
-        Ok(())
+        device_fit::check_size(vpls, limit, bytes, |over, largest| {
+            format!(
+                "bir: vpls = {vpls} (--vpls): the standard VPLs {over}; the largest that fits \
+                 is {largest} (or a smaller batch)"
+            )
+        })
     }
 
     /// The render's split of VPLs into batches and sides, its VPL buffers, resampling buffers,
@@ -412,12 +413,7 @@ impl RenderMethod for Bir {
         settings: &'a BirSettings,
     ) -> GpuResult<Box<dyn MethodFrames + 'a>> {
         let rho = mean_albedo(scene);
-        let vpls_per_frame = settings.vpls.max(2);
-        let batch = if settings.batch == 0 {
-            vpls_per_frame
-        } else {
-            settings.batch.clamp(2, vpls_per_frame)
-        };
+        let (vpls_per_frame, batch) = batching(settings.vpls, settings.batch);
         let batches = vpls_per_frame.div_ceil(batch);
         let split = Split::new(settings.strategy, batch, rho);
         let resampling = settings.ratio > 0;

@@ -402,17 +402,13 @@ impl RenderMethod for Bundles {
             hits.max(iterations * slots * size_of::<light_vertices::LightVertex>() as u64)
         };
         let n = s.iterations as u64;
-        if bytes(n) > limit {
-            let largest = device_fit::largest_fitting(n, limit, bytes);
-            return Err(format!(
-                "bundles: iterations = {n} (--iterations): the bundles' hits at {}x{} pixels \
-                 {}; the largest that fits is {largest}",
-                scene.camera.width,
-                scene.camera.height,
-                device_fit::over(bytes(n), limit)
-            ));
-        }
-        Ok(())
+        let (w, h) = (scene.camera.width, scene.camera.height);
+        device_fit::check_size(n, limit, bytes, |over, largest| {
+            format!(
+                "bundles: iterations = {n} (--iterations): the bundles' hits at {w}x{h} pixels \
+                 {over}; the largest that fits is {largest}"
+            )
+        })
     }
 
     /// The render's light vertices, bundle directions, hits and shading settings.

@@ -283,15 +283,12 @@ impl RenderMethod for Env {
         // bounded by MAX_WINDOWED_SAMPLES whatever spp is.
         let bytes = |r: u64| 6 * r * r * size_of::<f32>() as u64;
         let r = s.face_resolution as u64;
-        if bytes(r) > limit {
-            let largest = device_fit::largest_fitting(r, limit, bytes);
-            return Err(format!(
-                "env: face_resolution = {r} (--face-resolution): the cube map's table {}; \
-                 the largest that fits is {largest}",
-                device_fit::over(bytes(r), limit)
-            ));
-        }
-        Ok(())
+        device_fit::check_size(r, limit, bytes, |over, largest| {
+            format!(
+                "env: face_resolution = {r} (--face-resolution): the cube map's table {over}; \
+                 the largest that fits is {largest}"
+            )
+        })
     }
 
     /// The render's sampling tables (cube map, latitude-longitude, pyramid) and per-pixel

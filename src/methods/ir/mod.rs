@@ -204,14 +204,11 @@ impl RenderMethod for InstantRadiosity {
             Self::schedule(scene, &settings).slot_count as u64 * size_of::<Vpl>() as u64
         };
         let paths = s.paths as u64;
-        if bytes(paths) > limit {
-            let largest = device_fit::largest_fitting(paths, limit, bytes);
-            return Err(format!(
-                "ir: vpls = {paths} (--vpls): the VPLs {}; the largest that fits is {largest}",
-                device_fit::over(bytes(paths), limit)
-            ));
-        }
-        Ok(())
+        device_fit::check_size(paths, limit, bytes, |over, largest| {
+            format!(
+                "ir: vpls = {paths} (--vpls): the VPLs {over}; the largest that fits is {largest}"
+            )
+        })
     }
 
     /// The render's VPL buffers, the clamp and the interleave's radiance.
