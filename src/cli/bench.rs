@@ -110,6 +110,12 @@ pub enum Bench {
     /// report.md (tables, Pareto-optimal runs, thumbnails and error maps) into the output
     /// folder, rewritten after every run, so an interrupted suite leaves readable results.
     Suite(super::suite::SuiteArgs),
+    /// Render or extend the converged references of a suite's scenes: rendered once, in
+    /// chunks, to a net relMSE of at most 0.01 (judged by split halves), and stored in the
+    /// repository beside each scene (<scene folder>/converged/), where the suite finds them
+    /// in place of its cached references when the scene and reference settings match.
+    /// Resumable: stop it any time (Ctrl-C, --minutes) and the same command goes on.
+    References(super::references::ReferencesArgs),
     /// Merge the output folders of a suite's shards into one set of results, charts and report.
     Merge {
         /// Output folders of `irad bench suite --shard`.
@@ -202,6 +208,7 @@ pub fn run(options: &ContextOptions, bench: Bench) -> Result<()> {
             run_lightfield(options, &scene, &spp, &strategies, k_max, frames, repeats)
         }
         Bench::Suite(args) => super::suite::run(options, args),
+        Bench::References(args) => super::references::run(options, args),
         Bench::Merge {
             parts,
             out,

@@ -7,6 +7,7 @@ mod logger;
 mod luminaire;
 mod method_flags;
 mod methods;
+mod references;
 mod render;
 mod selfcheck;
 mod shader_tree;

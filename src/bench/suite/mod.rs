@@ -8,6 +8,7 @@
 //! runs part of a suite; `merge` combines parts.
 
 pub mod calibrate;
+pub mod converged;
 pub mod eta;
 pub mod file;
 pub mod measure;
@@ -231,13 +232,83 @@ fn prepare_scene(
     let scene = &suite_scene.scene;
     let gpu_scene =
         GpuScene::upload(ctx, scene).map_err(|e| format!("uploading the scene: {e}"))?;
+    let found = found_reference(ctx, renderers, suite_scene, &gpu_scene, options, on)?;
+    let image_name = format!("images/{}.reference.png", file::file_safe(&scene.name));
+    let thumb = preview::downscale(
+        &found.image,
+        preview::factor_for(found.image.width, THUMBNAIL_WIDTH),
+    );
+    image::png::write(&options.out.join(&image_name), &thumb, 0.0).map_err(|e| format!("{e:#}"))?;
+    let failure = scene.failure.as_ref();
+    results.references.insert(
+        scene.name.clone(),
+        ReferenceSummary {
+            spp: found.spp,
+            image: image_name,
+            cache: found.path.display().to_string(),
+            seed: found.seed,
+            gpu_ms: found.gpu_ms,
+            rel_mse: found.rel_mse,
+            converged: found.converged,
+            expected_to_fail: failure.map(|f| f.methods.clone()).unwrap_or_default(),
+            why: failure.map(|f| f.why.clone()).unwrap_or_default(),
+            source: failure.map(|f| f.source.clone()).unwrap_or_default(),
+        },
+    );
+    Ok((gpu_scene, found.image, found.rel_mse))
+}
+
+/// A scene's reference image as the suite found it.
+struct FoundReference {
+    image: Image,
+    spp: u32,
+    seed: u32,
+    gpu_ms: Option<f64>,
+    /// Its own relMSE, from its halves; None for a 1-sample reference.
+    rel_mse: Option<f64>,
+    /// The file it was read from (or written to).
+    path: PathBuf,
+    /// Stored beside the scene by `irad bench references` (converged.rs), not the cache's.
+    converged: bool,
+}
+
+/// The converged reference stored beside the scene when its key matches and it has at least
+/// the samples the suite asks for; else the cached one, rendered now when missing.
+fn found_reference(
+    ctx: &Context,
+    renderers: &Renderers,
+    suite_scene: &file::SuiteScene,
+    gpu_scene: &GpuScene,
+    options: &SuiteOptions,
+    on: &mut impl FnMut(Event),
+) -> std::result::Result<FoundReference, String> {
+    let scene = &suite_scene.scene;
+    let stored = converged::lookup(scene, &suite_scene.reference).map_err(|e| format!("{e:#}"))?;
+    if let Some(c) = stored {
+        on(Event::Reference {
+            scene: &scene.name,
+            done: 1,
+            total: 1,
+            cached: true,
+        });
+        let (image, rel_mse) = c.image();
+        return Ok(FoundReference {
+            image,
+            spp: u32::try_from(c.record.total_spp()).unwrap_or(u32::MAX),
+            seed: converged::SEED_BASE,
+            gpu_ms: Some(c.record.gpu_ms),
+            rel_mse: Some(rel_mse),
+            path: c.halves_path(),
+            converged: true,
+        });
+    }
     // Progress comes only while rendering; a cache hit is reported once it is known.
     let reference = references::get_or_render(
         ctx,
         renderers,
         &options.cache,
         scene,
-        &gpu_scene,
+        gpu_scene,
         &suite_scene.reference,
         |done, total| {
             on(Event::Reference {
@@ -257,28 +328,15 @@ fn prepare_scene(
             cached: true,
         });
     }
-    let image_name = format!("images/{}.reference.png", file::file_safe(&scene.name));
-    let thumb = preview::downscale(
-        &reference.image,
-        preview::factor_for(reference.image.width, THUMBNAIL_WIDTH),
-    );
-    image::png::write(&options.out.join(&image_name), &thumb, 0.0).map_err(|e| format!("{e:#}"))?;
-    let failure = scene.failure.as_ref();
-    results.references.insert(
-        scene.name.clone(),
-        ReferenceSummary {
-            spp: reference_spp(&suite_scene.reference),
-            image: image_name,
-            cache: reference.exr.display().to_string(),
-            seed: suite_scene.reference.seed(),
-            gpu_ms: reference.record.gpu_ms,
-            rel_mse: reference.record.rel_mse,
-            expected_to_fail: failure.map(|f| f.methods.clone()).unwrap_or_default(),
-            why: failure.map(|f| f.why.clone()).unwrap_or_default(),
-            source: failure.map(|f| f.source.clone()).unwrap_or_default(),
-        },
-    );
-    Ok((gpu_scene, reference.image, reference.record.rel_mse))
+    Ok(FoundReference {
+        spp: reference_spp(&suite_scene.reference),
+        seed: suite_scene.reference.seed(),
+        gpu_ms: reference.record.gpu_ms,
+        rel_mse: reference.record.rel_mse,
+        path: reference.exr,
+        image: reference.image,
+        converged: false,
+    })
 }
 
 fn reference_spp(method: &Method) -> u32 {

@@ -26,7 +26,7 @@ use crate::gpu::Context;
 use crate::image::metrics::REL_MSE_EPSILON;
 use crate::image::{exr, Image};
 use crate::methods::lightfield::{Lightfield, LightfieldSettings, Strategy as LightfieldStrategy};
-use crate::methods::reference::Reference;
+use crate::methods::reference::{Reference, ReferenceSettings};
 use crate::methods::{reference, Method, Renderers};
 use crate::scene::gpu::GpuScene;
 use crate::scene::hash::fnv1a64;
@@ -136,35 +136,7 @@ pub fn get_or_render(
     let n_a = (total / 2).max(1);
     let n_b = total - n_a;
     let context = || format!("rendering the reference of {}", scene.name);
-    // The path tracer does not model light-field luminaires: for a scene that places some,
-    // the reference is lightfield's restricted strategy (unbiased, tested against the brute
-    // force in tests/lightfield.rs) with 64 samples per image and frame on average and no
-    // K_max, one frame per reference sample. The brute force (uniform over every whole image
-    // plane) is unbiased too but, where a point sees a small window of each image, wastes
-    // nearly every sample: its error at equal samples was 50x and more on the faceted
-    // headlights.
-    let luminaire_images = scene
-        .luminaires
-        .iter()
-        .map(|l| l.luminaire.images.len() as u32)
-        .max();
-    let half = |spp: u32, seed: u32| match luminaire_images {
-        Some(images) => Method::new::<Lightfield>(LightfieldSettings {
-            spp: 64 * images,
-            frames: spp,
-            k_max: 64 * images,
-            strategy: LightfieldStrategy::Restricted,
-            seed,
-            pixels: settings.pixels,
-            ..Default::default()
-        }),
-        None => {
-            let mut s = *settings;
-            s.spp = spp;
-            s.seed = seed;
-            Method::new::<Reference>(s)
-        }
-    };
+    let half = |spp: u32, seed: u32| samples_of(scene, settings, spp, seed);
     let a = renderers
         .run(ctx, &half(n_a, settings.seed), scene, gpu_scene, |d, _| {
             progress(d, total)
@@ -183,7 +155,7 @@ pub fn get_or_render(
                 |d, _| progress(n_a + d, total),
             )
             .with_context(context)?;
-        let (image, rel_mse) = combine(&a.image, &b.image, n_a, n_b);
+        let (image, rel_mse) = combine(&a.image, &b.image, n_a as u64, n_b as u64);
         let gpu = a
             .passes
             .total_gpu_ms()
@@ -222,9 +194,41 @@ pub fn get_or_render(
     })
 }
 
+/// The method that renders `spp` reference samples of `scene` with `seed`: the path tracer
+/// with `settings`, or, for a scene that places light-field luminaires (which the path tracer
+/// does not model), lightfield's restricted strategy (unbiased, tested against the brute force
+/// in tests/lightfield.rs) with 64 samples per image and frame on average and no K_max, one
+/// frame per reference sample. The brute force (uniform over every whole image plane) is
+/// unbiased too but, where a point sees a small window of each image, wastes nearly every
+/// sample: its error at equal samples was 50x and more on the faceted headlights.
+pub fn samples_of(scene: &Scene, settings: &ReferenceSettings, spp: u32, seed: u32) -> Method {
+    let luminaire_images = scene
+        .luminaires
+        .iter()
+        .map(|l| l.luminaire.images.len() as u32)
+        .max();
+    match luminaire_images {
+        Some(images) => Method::new::<Lightfield>(LightfieldSettings {
+            spp: 64 * images,
+            frames: spp,
+            k_max: 64 * images,
+            strategy: LightfieldStrategy::Restricted,
+            seed,
+            pixels: settings.pixels,
+            ..Default::default()
+        }),
+        None => {
+            let mut s = *settings;
+            s.spp = spp;
+            s.seed = seed;
+            Method::new::<Reference>(s)
+        }
+    }
+}
+
 /// The weighted mean of halves `a` (n_a samples) and `b` (n_b samples), and the estimate of
 /// its own relMSE from their difference (module doc).
-pub fn combine(a: &Image, b: &Image, n_a: u32, n_b: u32) -> (Image, f64) {
+pub fn combine(a: &Image, b: &Image, n_a: u64, n_b: u64) -> (Image, f64) {
     let n = (n_a + n_b) as f64;
     let (wa, wb) = (n_a as f64 / n, n_b as f64 / n);
     let mut image = Image::new(a.width, a.height);
@@ -242,7 +246,7 @@ pub fn combine(a: &Image, b: &Image, n_a: u32, n_b: u32) -> (Image, f64) {
 }
 
 /// Host name, process id and time: unique across the machines sharing a cache.
-fn unique_suffix() -> String {
+pub(super) fn unique_suffix() -> String {
     let host = fs::read_to_string("/proc/sys/kernel/hostname")
         .or_else(|_| fs::read_to_string("/etc/hostname"))
         .map(|h| file_safe(h.trim()))
@@ -254,7 +258,7 @@ fn unique_suffix() -> String {
     format!("{host}.{}.{nanos}.tmp", std::process::id())
 }
 
-fn rename(from: &Path, to: &Path) -> Result<()> {
+pub(super) fn rename(from: &Path, to: &Path) -> Result<()> {
     fs::rename(from, to).with_context(|| format!("renaming {} to {}", from.display(), to.display()))
 }
 
@@ -290,7 +294,7 @@ mod tests {
         };
         let (n_a, n_b) = (4, 12);
         let (a, b) = (half(n_a), half(n_b));
-        let (r, estimate) = combine(&a, &b, n_a, n_b);
+        let (r, estimate) = combine(&a, &b, n_a as u64, n_b as u64);
         let actual: f64 = r
             .pixels
             .iter()

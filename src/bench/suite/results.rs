@@ -159,6 +159,10 @@ pub struct ReferenceSummary {
     pub gpu_ms: Option<f64>,
     /// The reference's own relMSE, estimated from its two halves (references.rs).
     pub rel_mse: Option<f64>,
+    /// Read from the converged reference stored beside the scene (`irad bench references`)
+    /// rather than the cache.
+    #[serde(default)]
+    pub converged: bool,
     /// The scene's `[failure]` table: methods expected to fail, why, and the paper figure.
     pub expected_to_fail: Vec<String>,
     pub why: String,

@@ -1,0 +1,392 @@
+//! Converged references, stored in the repository beside their scene: for scenes whose cached
+//! reference (references.rs: a few thousand samples, rendered in minutes) is too noisy to judge
+//! a run's outliers or a small relMSE, `irad bench references` renders one reference once, to a
+//! net relMSE of at most 0.01, in chunks it can stop and resume, and the suite uses it in place
+//! of the cache whenever the scene and the reference's settings match.
+//!
+//! Layout: `<scene folder>/converged/<W>x<H>-<key hash>/` holds `reference.json` (the record)
+//! and `halves-<chunks>.exr`, the two independent halves A (top) and B (bottom) stacked in one
+//! float32 image, each the mean of its samples. Chunk i renders `chunk_spp` samples with seed
+//! `SEED_BASE + i` into the half with fewer samples, so the halves stay independent and within
+//! one chunk of each other; the reference is their weighted mean and its own relMSE is
+//! estimated from their difference (`references::combine`). Every chunk is saved at once: the
+//! new halves under a new name, then the record that names them (write, then rename), then
+//! the old halves are removed, so an interrupted run never leaves a record that names
+//! anything but complete halves, and at most one chunk is lost.
+//!
+//! The key is what changes the expected image: the scene (its content hash), the resolution
+//! and every reference parameter but the sample count and the seed. Unlike the cache's key, it
+//! leaves out the hashes of the kernels and of the Rust sources: a converged reference is an
+//! estimate of the scene's expected image, which a correct path tracer does not change (the
+//! tests keep it unbiased), and one that went stale at every edit of the renderer could never
+//! be kept in the repository. The record names the device, driver and commit of each session
+//! that added to it.
+
+use std::collections::BTreeMap;
+use std::fs;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Instant;
+
+use anyhow::{bail, Context as _, Result};
+use serde::{Deserialize, Serialize};
+
+use crate::gpu::Context;
+use crate::image::{exr, Image};
+use crate::methods::reference::Reference;
+use crate::methods::{Method, Renderers};
+use crate::scene::gpu::GpuScene;
+use crate::scene::hash::fnv1a64;
+use crate::scene::Scene;
+
+use super::references::{combine, rename, samples_of, unique_suffix};
+
+/// The folder, beside a scene file, that holds its converged references.
+pub const FOLDER: &str = "converged";
+
+/// Chunk i's seed is `SEED_BASE + i`: far from the small seeds runs use and from the cache's
+/// `REFERENCE_SEED`, so no run or cached reference shares random numbers with a chunk.
+pub const SEED_BASE: u32 = 0x5851_f42d;
+
+/// The net relMSE a converged reference is rendered to (issue 32).
+pub const TARGET_REL_MSE: f64 = 0.01;
+
+/// What a converged reference estimates; equal keys mean the same expected image.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ConvergedKey {
+    pub scene: String,
+    pub scene_hash: String,
+    pub resolution: [u32; 2],
+    /// The reference method's parameters but its sample count and seed.
+    pub parameters: BTreeMap<String, serde_json::Value>,
+}
+
+impl ConvergedKey {
+    pub fn new(scene: &Scene, reference: &Method) -> ConvergedKey {
+        let mut parameters = reference.parameters();
+        parameters.remove(reference.count_key());
+        ConvergedKey {
+            scene: scene.name.clone(),
+            scene_hash: format!("{:016x}", scene.content_hash),
+            resolution: [scene.camera.width, scene.camera.height],
+            parameters,
+        }
+    }
+
+    /// The entry's folder under a scene's `converged/` folder.
+    pub fn dir(&self, scene_folder: &Path) -> PathBuf {
+        let text = serde_json::to_string(self).expect("a key serializes");
+        let [w, h] = self.resolution;
+        scene_folder
+            .join(FOLDER)
+            .join(format!("{w}x{h}-{:08x}", fnv1a64(text.as_bytes()) >> 32))
+    }
+}
+
+/// One run of `irad bench references` that added chunks.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Session {
+    pub device: String,
+    pub driver: String,
+    /// `git describe --always --dirty` of the checkout the scene is in, when it is one.
+    pub commit: String,
+    /// Seconds since 1970 when the session started.
+    pub started_unix: u64,
+    pub chunks: u32,
+    pub spp: u64,
+    /// GPU time of the session's chunks (the device's timestamps; on a CPU device such as
+    /// lavapipe, wall time of the kernels on a machine that may have been busy).
+    pub gpu_ms: f64,
+    pub wall_ms: f64,
+}
+
+/// The record beside a converged reference's halves.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ConvergedRecord {
+    pub key: ConvergedKey,
+    /// The stacked halves' file, in the same folder.
+    pub halves: String,
+    /// Samples per pixel in half A and half B.
+    pub spp: [u64; 2],
+    /// Chunks rendered; chunk i used seed `SEED_BASE + i`.
+    pub chunks: u32,
+    /// The reference's own relMSE, from its halves; None before both halves have samples.
+    pub rel_mse: Option<f64>,
+    pub gpu_ms: f64,
+    pub wall_ms: f64,
+    pub nonfinite_estimates: u64,
+    pub sessions: Vec<Session>,
+}
+
+impl ConvergedRecord {
+    pub fn total_spp(&self) -> u64 {
+        self.spp[0] + self.spp[1]
+    }
+}
+
+/// A converged reference: its record and halves.
+#[derive(Clone, Debug)]
+pub struct Converged {
+    pub dir: PathBuf,
+    pub record: ConvergedRecord,
+    pub halves: [Image; 2],
+}
+
+impl Converged {
+    /// The reference image (the halves' weighted mean) and its own relMSE.
+    pub fn image(&self) -> (Image, f64) {
+        let [a, b] = &self.halves;
+        combine(a, b, self.record.spp[0], self.record.spp[1])
+    }
+
+    /// The halves' file.
+    pub fn halves_path(&self) -> PathBuf {
+        self.dir.join(&self.record.halves)
+    }
+}
+
+/// The folder a scene's converged references live under: its file's folder; None for a scene
+/// built in code.
+pub fn scene_folder(scene: &Scene) -> Option<&Path> {
+    scene.source.as_deref()?.parent()
+}
+
+/// The converged reference in `dir`, if one is there; an error when one is there but does not
+/// read back whole (a damaged entry is reported, not silently replaced).
+pub fn load(dir: &Path) -> Result<Option<Converged>> {
+    let record_path = dir.join("reference.json");
+    if !record_path.exists() {
+        return Ok(None);
+    }
+    let text = fs::read_to_string(&record_path)
+        .with_context(|| format!("reading {}", record_path.display()))?;
+    let record: ConvergedRecord = serde_json::from_str(&text)
+        .with_context(|| format!("parsing {} as a converged reference", record_path.display()))?;
+    let path = dir.join(&record.halves);
+    let stacked = exr::read(&path)?;
+    let [w, h] = record.key.resolution;
+    if [stacked.width, stacked.height] != [w, 2 * h] {
+        bail!(
+            "{}: {}x{}, but {} names a {w}x{h} image, whose two halves stack to {w}x{}",
+            path.display(),
+            stacked.width,
+            stacked.height,
+            record_path.display(),
+            2 * h
+        );
+    }
+    if let Some(i) = stacked.pixels.iter().position(|p| !p.iter().all(|v| v.is_finite())) {
+        bail!(
+            "{}: pixel ({}, {}) is not finite",
+            path.display(),
+            i as u32 % w,
+            i as u32 / w
+        );
+    }
+    let n = (w * h) as usize;
+    let half = |k: usize| Image {
+        width: w,
+        height: h,
+        pixels: stacked.pixels[k * n..(k + 1) * n].to_vec(),
+    };
+    Ok(Some(Converged {
+        dir: dir.to_path_buf(),
+        halves: [half(0), half(1)],
+        record,
+    }))
+}
+
+/// The converged reference for `scene` and `reference` (a reference method) when one is stored
+/// beside the scene with a matching key and at least as many samples as `reference` asks for.
+pub fn lookup(scene: &Scene, reference: &Method) -> Result<Option<Converged>> {
+    let Some(folder) = scene_folder(scene) else {
+        return Ok(None);
+    };
+    let key = ConvergedKey::new(scene, reference);
+    let Some(found) = load(&key.dir(folder))? else {
+        return Ok(None);
+    };
+    if found.record.key != key || found.record.rel_mse.is_none() {
+        return Ok(None);
+    }
+    Ok((found.record.total_spp() >= reference.samples()).then_some(found))
+}
+
+/// When `extend` stops adding chunks.
+pub struct ExtendOptions<'a> {
+    /// Stop once the net relMSE is at most this.
+    pub target_rel_mse: f64,
+    /// Stop after the chunk that ends past this instant.
+    pub deadline: Option<Instant>,
+    /// Samples per pixel of one chunk.
+    pub chunk_spp: u32,
+    /// Stop after the chunk under way once this is set (Ctrl-C).
+    pub stop: Option<&'a AtomicBool>,
+}
+
+/// What `extend` reports.
+pub enum Progress<'a> {
+    /// `done` of the chunk's `total` samples rendered.
+    Rendering { done: u32, total: u32 },
+    /// A chunk is saved; `ms_per_spp` is this session's GPU time per sample so far.
+    Saved {
+        record: &'a ConvergedRecord,
+        ms_per_spp: f64,
+    },
+}
+
+/// Extends (or starts) the converged reference of `scene` with `reference`'s settings, chunk
+/// by chunk, until its net relMSE reaches the target, the deadline passes or `stop` is set.
+pub fn extend(
+    ctx: &Context,
+    renderers: &Renderers,
+    scene: &Scene,
+    gpu_scene: &GpuScene,
+    reference: &Method,
+    options: &ExtendOptions,
+    mut on: impl FnMut(Progress),
+) -> Result<Converged> {
+    let Some(settings) = reference.settings_of::<Reference>() else {
+        bail!(
+            "a reference is rendered by the reference method, not {}",
+            reference.name()
+        );
+    };
+    let Some(folder) = scene_folder(scene) else {
+        bail!(
+            "{} is built into irad, not read from a file: a converged reference is stored beside its scene file",
+            scene.name
+        );
+    };
+    let key = ConvergedKey::new(scene, reference);
+    let dir = key.dir(folder);
+    let mut current = match load(&dir)? {
+        Some(found) if found.record.key == key => found,
+        Some(found) => bail!(
+            "{} holds a converged reference of other settings ({}); move it away to start a new one",
+            dir.display(),
+            serde_json::to_string(&found.record.key).unwrap_or_default()
+        ),
+        None => {
+            let [w, h] = key.resolution;
+            Converged {
+                dir: dir.clone(),
+                record: ConvergedRecord {
+                    key: key.clone(),
+                    halves: String::new(),
+                    spp: [0, 0],
+                    chunks: 0,
+                    rel_mse: None,
+                    gpu_ms: 0.0,
+                    wall_ms: 0.0,
+                    nonfinite_estimates: 0,
+                    sessions: Vec::new(),
+                },
+                halves: [Image::new(w, h), Image::new(w, h)],
+            }
+        }
+    };
+    let info = ctx.info();
+    let session = Session {
+        device: info.name.clone(),
+        driver: info.driver.clone(),
+        commit: commit_of(folder),
+        started_unix: std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(0, |d| d.as_secs()),
+        chunks: 0,
+        spp: 0,
+        gpu_ms: 0.0,
+        wall_ms: 0.0,
+    };
+    let mut session_index = None;
+    let stopped = || options.stop.is_some_and(|s| s.load(Ordering::SeqCst));
+    let past_deadline = || options.deadline.is_some_and(|d| Instant::now() >= d);
+    let converged = |r: &ConvergedRecord| r.rel_mse.is_some_and(|e| e <= options.target_rel_mse);
+    while !converged(&current.record) && !stopped() && !past_deadline() {
+        let record = &mut current.record;
+        let half = usize::from(record.spp[1] < record.spp[0]);
+        let seed = SEED_BASE.wrapping_add(record.chunks);
+        let chunk = options.chunk_spp;
+        let method = samples_of(scene, settings, chunk, seed);
+        let out = renderers
+            .run(ctx, &method, scene, gpu_scene, |done, total| {
+                on(Progress::Rendering { done, total })
+            })
+            .with_context(|| format!("rendering chunk {} of {}", record.chunks, scene.name))?;
+        // The half's mean over its old and new samples, kept as f32 in memory exactly as on
+        // disk, so a resumed run adds to the same bits an uninterrupted one would.
+        let n = record.spp[half] as f64;
+        let k = chunk as f64;
+        for (m, x) in current.halves[half].pixels.iter_mut().zip(&out.image.pixels) {
+            for c in 0..3 {
+                m[c] = ((n * m[c] as f64 + k * x[c] as f64) / (n + k)) as f32;
+            }
+        }
+        let gpu_ms = out.passes.total_gpu_ms().unwrap_or(out.wall_ms);
+        record.spp[half] += chunk as u64;
+        record.chunks += 1;
+        record.gpu_ms += gpu_ms;
+        record.wall_ms += out.wall_ms;
+        record.nonfinite_estimates += out.nonfinite_estimates as u64;
+        let i = *session_index.get_or_insert_with(|| {
+            record.sessions.push(session.clone());
+            record.sessions.len() - 1
+        });
+        let s = &mut record.sessions[i];
+        s.chunks += 1;
+        s.spp += chunk as u64;
+        s.gpu_ms += gpu_ms;
+        s.wall_ms += out.wall_ms;
+        let ms_per_spp = s.gpu_ms / s.spp as f64;
+        if record.spp[0] > 0 && record.spp[1] > 0 {
+            let [a, b] = &current.halves;
+            record.rel_mse = Some(combine(a, b, record.spp[0], record.spp[1]).1);
+        }
+        save(&mut current)?;
+        on(Progress::Saved {
+            record: &current.record,
+            ms_per_spp,
+        });
+    }
+    Ok(current)
+}
+
+/// Writes the halves under a new name, then the record naming them, then removes the old
+/// halves (module doc).
+fn save(current: &mut Converged) -> Result<()> {
+    let dir = &current.dir;
+    fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    let [a, b] = &current.halves;
+    let mut stacked = Image::new(a.width, 2 * a.height);
+    stacked.pixels = a.pixels.iter().chain(&b.pixels).copied().collect();
+    let name = format!("halves-{:06}.exr", current.record.chunks);
+    let unique = unique_suffix();
+    let tmp = dir.join(format!("{name}.{unique}.exr"));
+    exr::write(&tmp, &stacked)?;
+    rename(&tmp, &dir.join(&name))?;
+    let old = std::mem::replace(&mut current.record.halves, name);
+    let mut text = serde_json::to_string_pretty(&current.record)?;
+    text.push('\n');
+    let json_tmp = dir.join(format!("reference.json.{unique}"));
+    fs::write(&json_tmp, text).with_context(|| format!("writing {}", json_tmp.display()))?;
+    rename(&json_tmp, &dir.join("reference.json"))?;
+    if !old.is_empty() && old != current.record.halves {
+        let _ = fs::remove_file(dir.join(old));
+    }
+    Ok(())
+}
+
+/// `git describe --always --dirty` in `folder`, or why there is none.
+fn commit_of(folder: &Path) -> String {
+    std::process::Command::new("git")
+        .arg("-C")
+        .arg(folder)
+        .args(["describe", "--always", "--dirty", "--abbrev=12"])
+        .output()
+        .ok()
+        .filter(|o| o.status.success())
+        .and_then(|o| String::from_utf8(o.stdout).ok())
+        .map(|s| s.trim().to_string())
+        .unwrap_or_else(|| "unknown (not a git checkout)".into())
+}

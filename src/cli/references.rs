@@ -1,0 +1,154 @@
+//! `irad bench references`: renders or extends the converged references of a suite's scenes
+//! (irad::bench::suite::converged), with a progress bar per scene and Ctrl-C handling.
+
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
+
+use anyhow::{bail, Context as _, Result};
+
+use irad::bench::suite::converged::{self, ExtendOptions, Progress, TARGET_REL_MSE};
+use irad::bench::suite::Suite;
+use irad::gpu::{Context, ContextOptions};
+use irad::methods::Renderers;
+use irad::scene::gpu::GpuScene;
+
+use super::{device_line, progress};
+
+#[derive(clap::Args)]
+pub struct ReferencesArgs {
+    /// Suite TOML file: its scenes at its resolution, with its reference settings.
+    suite: PathBuf,
+    /// Only these scenes (by name, as the suite lists them; repeat the flag for several).
+    /// Default: every scene of the suite.
+    #[arg(long = "scene", value_name = "NAME")]
+    scenes: Vec<String>,
+    /// Stop a scene once its net relMSE, estimated from its two halves, is at most this.
+    #[arg(long, default_value_t = TARGET_REL_MSE, value_parser = parse_target)]
+    target: f64,
+    /// Stop a scene after this many minutes of this run (the chunk under way finishes);
+    /// the same command later goes on where it stopped. Default: no limit.
+    #[arg(long, value_parser = parse_minutes)]
+    minutes: Option<f64>,
+    /// Samples per pixel of one chunk: a chunk is saved as soon as it is rendered, so an
+    /// interruption loses at most one.
+    #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(1..=65536))]
+    chunk_spp: u32,
+}
+
+fn parse_target(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if v > 0.0 && v.is_finite() => Ok(v),
+        _ => Err(format!("{s}: the target relMSE is a number above 0 (such as 0.01)")),
+    }
+}
+
+fn parse_minutes(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if v > 0.0 && v <= 7.0 * 24.0 * 60.0 => Ok(v),
+        _ => Err(format!("{s}: minutes are a number above 0 and at most a week (10080)")),
+    }
+}
+
+pub fn run(options: &ContextOptions, args: ReferencesArgs) -> Result<()> {
+    let suite = Suite::load(&args.suite)?;
+    let known: Vec<&str> = suite.scenes.iter().map(|s| s.scene.name.as_str()).collect();
+    if let Some(bad) = args.scenes.iter().find(|n| !known.contains(&n.as_str())) {
+        bail!(
+            "{}: no scene named {bad} (its scenes: {})",
+            args.suite.display(),
+            known.join(", ")
+        );
+    }
+    let chosen: Vec<_> = suite
+        .scenes
+        .iter()
+        .filter(|s| args.scenes.is_empty() || args.scenes.contains(&s.scene.name))
+        .collect();
+    let ctx = Context::new(options)?;
+    println!(
+        "converged references of {} scene(s) of {} to a net relMSE of {}, chunks of {} spp, on {}",
+        chosen.len(),
+        args.suite.display(),
+        args.target,
+        args.chunk_spp,
+        device_line(ctx.info())
+    );
+    static STOP: AtomicBool = AtomicBool::new(false);
+    ctrlc::set_handler(|| {
+        if STOP.swap(true, Ordering::SeqCst) {
+            std::process::exit(130);
+        }
+        eprintln!("\ninterrupted: stopping after the chunk under way (Ctrl-C again to quit now; at most that chunk is lost)");
+    })
+    .context("installing the Ctrl-C handler")?;
+    let renderers = Renderers::default();
+    for suite_scene in chosen {
+        if STOP.load(Ordering::SeqCst) {
+            break;
+        }
+        let scene = &suite_scene.scene;
+        let cam = &scene.camera;
+        let gpu_scene = GpuScene::upload(&ctx, scene)
+            .with_context(|| format!("uploading {}", scene.name))?;
+        let extend = ExtendOptions {
+            target_rel_mse: args.target,
+            deadline: args
+                .minutes
+                .map(|m| Instant::now() + Duration::from_secs_f64(60.0 * m)),
+            chunk_spp: args.chunk_spp,
+            stop: Some(&STOP),
+        };
+        let bar = progress(1, &format!("{} {}x{}", scene.name, cam.width, cam.height));
+        let mut chunk_base = 0u64;
+        let result = converged::extend(
+            &ctx,
+            &renderers,
+            scene,
+            &gpu_scene,
+            &suite_scene.reference,
+            &extend,
+            |event| match event {
+                Progress::Rendering { done, .. } => bar.set_position(chunk_base + done as u64),
+                Progress::Saved { record, ms_per_spp } => {
+                    // Bar: samples so far against those the target needs (relMSE falls
+                    // as 1 / samples).
+                    let spp = record.total_spp();
+                    let needed = record
+                        .rel_mse
+                        .map_or(2 * spp, |e| (spp as f64 * e / args.target).ceil() as u64);
+                    bar.set_length(needed.max(spp + 1));
+                    bar.set_position(spp);
+                    chunk_base = spp;
+                    bar.set_message(format!(
+                        "spp, relMSE {}, {:.1} ms GPU/spp",
+                        record.rel_mse.map_or("-".into(), |e| format!("{e:.4}")),
+                        ms_per_spp
+                    ));
+                }
+            },
+        );
+        bar.finish_and_clear();
+        super::logger::on_screen(None);
+        let done = result?;
+        let r = &done.record;
+        let reached = r.rel_mse.is_some_and(|e| e <= args.target);
+        println!(
+            "{}: {} spp, net relMSE {} ({}), {:.0} s GPU in all; {}",
+            scene.name,
+            r.total_spp(),
+            r.rel_mse.map_or("-".into(), |e| format!("{e:.4}")),
+            if reached {
+                "target reached"
+            } else {
+                "target not reached yet: the same command goes on"
+            },
+            r.gpu_ms / 1000.0,
+            done.dir.join("reference.json").display()
+        );
+    }
+    if STOP.load(Ordering::SeqCst) {
+        std::process::exit(130);
+    }
+    Ok(())
+}
