@@ -977,3 +977,127 @@ fn bad_suite_files_name_file_field_and_value() {
     );
     assert!(!err.contains("panicked"), "{err}");
 }
+
+/// `irad bench references` (converged.rs): chunks stopped and resumed give the same bits as
+/// one uninterrupted run; the record counts every sample and its relMSE is the halves'; the
+/// suite reads the stored reference in place of the cache when the key matches and it has at
+/// least the samples asked for, and falls back to the cache otherwise.
+#[test]
+fn converged_references_resume_bit_exactly_and_the_suite_uses_them() {
+    use irad::bench::suite::converged::{self, ExtendOptions, Progress};
+    use irad::methods::Renderers;
+    use irad::scene::gpu::GpuScene;
+    use std::sync::atomic::{AtomicBool, Ordering};
+
+    let dir = temp_dir("converged");
+    let copy_scene = |to: &Path| {
+        fs::create_dir_all(to).unwrap();
+        for f in [
+            "scene.toml",
+            "point-light-plane.obj",
+            "point-light-plane.mtl",
+        ] {
+            fs::copy(scenes_dir().join("point-light-plane").join(f), to.join(f)).unwrap();
+        }
+    };
+    let text = r#"
+name = "converged"
+width = 8
+warmup = 0
+repeats = 1
+[reference]
+spp = 8
+[[scene]]
+path = "plane/scene.toml"
+[[method]]
+method = "reference"
+budgets = [{ spp = 1 }]
+"#;
+    common::with_gpu(|ctx| {
+        let renderers = Renderers::default();
+        // Stops after `chunks` chunks in all (the record's count, so a resumed run stops at
+        // the same total).
+        let extend = |base: &Path, chunks: u32| {
+            let suite = Suite::parse("converged.toml", text, base).unwrap();
+            let s = &suite.scenes[0];
+            let gpu = GpuScene::upload(ctx, &s.scene).unwrap();
+            let stop = AtomicBool::new(false);
+            let options = ExtendOptions {
+                target_rel_mse: 1e-12,
+                deadline: None,
+                chunk_spp: 3,
+                stop: Some(&stop),
+            };
+            converged::extend(
+                ctx,
+                &renderers,
+                &s.scene,
+                &gpu,
+                &s.reference,
+                &options,
+                |e| {
+                    if let Progress::Saved { record, .. } = e {
+                        if record.chunks >= chunks {
+                            stop.store(true, Ordering::SeqCst);
+                        }
+                    }
+                },
+            )
+            .unwrap()
+        };
+        let (whole, parts) = (dir.join("whole"), dir.join("parts"));
+        copy_scene(&whole.join("plane"));
+        copy_scene(&parts.join("plane"));
+        let straight = extend(&whole, 5);
+        extend(&parts, 2);
+        let resumed = extend(&parts, 5);
+        assert_eq!(straight.record.spp, [9, 6]);
+        assert_eq!(resumed.record.spp, straight.record.spp);
+        assert_eq!(resumed.record.chunks, 5);
+        assert_eq!(resumed.record.sessions.len(), 2);
+        for (a, b) in resumed.halves.iter().zip(&straight.halves) {
+            let bits = |i: &irad::image::Image| -> Vec<u32> {
+                i.pixels.iter().flatten().map(|v| v.to_bits()).collect()
+            };
+            assert_eq!(
+                bits(a),
+                bits(b),
+                "a resumed run differs from an uninterrupted one"
+            );
+        }
+        let (image, rel_mse) = resumed.image();
+        assert_eq!(resumed.record.rel_mse, Some(rel_mse));
+        assert!(image.pixels.iter().flatten().all(|v| v.is_finite()));
+        // Only the last halves are kept.
+        let files: Vec<_> = fs::read_dir(&resumed.dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().into_string().unwrap())
+            .collect();
+        assert_eq!(files.len(), 2, "{files:?}");
+        // The suite reads it (8 spp asked, 15 stored) instead of rendering into the cache.
+        let suite = Suite::parse("converged.toml", text, &parts).unwrap();
+        let cache = dir.join("cache");
+        let used = run_suite(ctx, &suite, &dir.join("a"), &cache, Shard::WHOLE);
+        let r = used.references.values().next().unwrap();
+        assert!(r.converged);
+        assert_eq!(r.spp, 15);
+        assert_eq!(r.rel_mse, Some(rel_mse));
+        assert!(
+            !cache.exists(),
+            "the cache was used beside a matching converged reference"
+        );
+        // More samples asked than stored, or other settings: the cache.
+        for edit in ["spp = 16", "spp = 8\nmax_depth = 2"] {
+            let other =
+                Suite::parse("converged.toml", &text.replace("spp = 8", edit), &parts).unwrap();
+            let fell_back = run_suite(ctx, &other, &dir.join("b"), &cache, Shard::WHOLE);
+            assert!(
+                !fell_back.references.values().next().unwrap().converged,
+                "{edit}"
+            );
+            let _ = fs::remove_dir_all(dir.join("b"));
+        }
+        assert!(cache.exists());
+    });
+    let _ = fs::remove_dir_all(&dir);
+}

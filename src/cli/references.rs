@@ -39,14 +39,18 @@ pub struct ReferencesArgs {
 fn parse_target(s: &str) -> Result<f64, String> {
     match s.parse::<f64>() {
         Ok(v) if v > 0.0 && v.is_finite() => Ok(v),
-        _ => Err(format!("{s}: the target relMSE is a number above 0 (such as 0.01)")),
+        _ => Err(format!(
+            "{s}: the target relMSE is a number above 0 (such as 0.01)"
+        )),
     }
 }
 
 fn parse_minutes(s: &str) -> Result<f64, String> {
     match s.parse::<f64>() {
         Ok(v) if v > 0.0 && v <= 7.0 * 24.0 * 60.0 => Ok(v),
-        _ => Err(format!("{s}: minutes are a number above 0 and at most a week (10080)")),
+        _ => Err(format!(
+            "{s}: minutes are a number above 0 and at most a week (10080)"
+        )),
     }
 }
 
@@ -89,8 +93,8 @@ pub fn run(options: &ContextOptions, args: ReferencesArgs) -> Result<()> {
         }
         let scene = &suite_scene.scene;
         let cam = &scene.camera;
-        let gpu_scene = GpuScene::upload(&ctx, scene)
-            .with_context(|| format!("uploading {}", scene.name))?;
+        let gpu_scene =
+            GpuScene::upload(&ctx, scene).with_context(|| format!("uploading {}", scene.name))?;
         let extend = ExtendOptions {
             target_rel_mse: args.target,
             deadline: args

@@ -175,7 +175,11 @@ pub fn load(dir: &Path) -> Result<Option<Converged>> {
             2 * h
         );
     }
-    if let Some(i) = stacked.pixels.iter().position(|p| !p.iter().all(|v| v.is_finite())) {
+    if let Some(i) = stacked
+        .pixels
+        .iter()
+        .position(|p| !p.iter().all(|v| v.is_finite()))
+    {
         bail!(
             "{}: pixel ({}, {}) is not finite",
             path.display(),
@@ -318,7 +322,11 @@ pub fn extend(
         // disk, so a resumed run adds to the same bits an uninterrupted one would.
         let n = record.spp[half] as f64;
         let k = chunk as f64;
-        for (m, x) in current.halves[half].pixels.iter_mut().zip(&out.image.pixels) {
+        for (m, x) in current.halves[half]
+            .pixels
+            .iter_mut()
+            .zip(&out.image.pixels)
+        {
             for c in 0..3 {
                 m[c] = ((n * m[c] as f64 + k * x[c] as f64) / (n + k)) as f32;
             }
