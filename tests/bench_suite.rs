@@ -345,6 +345,35 @@ fn scenes_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes")
 }
 
+/// Copies the point-light plane scene into `to` (a scene folder of a test's own: editing it
+/// changes its content hash, and converged references are written beside it).
+fn copy_plane_scene(to: &Path) {
+    fs::create_dir_all(to).unwrap();
+    for f in [
+        "scene.toml",
+        "point-light-plane.obj",
+        "point-light-plane.mtl",
+    ] {
+        fs::copy(scenes_dir().join("point-light-plane").join(f), to.join(f)).unwrap();
+    }
+}
+
+/// A suite of the copied plane (`plane/scene.toml`) with an 8-sample reference; NAME is
+/// replaced by the suite's name.
+const PLANE_SUITE: &str = r#"
+name = "NAME"
+width = 8
+warmup = 0
+repeats = 1
+[reference]
+spp = 8
+[[scene]]
+path = "plane/scene.toml"
+[[method]]
+method = "reference"
+budgets = [{ spp = 1 }]
+"#;
+
 fn run_suite(
     ctx: &irad::gpu::Context,
     suite: &Suite,
@@ -464,31 +493,8 @@ fn references_are_cached_and_never_reused_stale() {
     let cache = dir.join("cache");
     // A scene folder of our own, so editing it changes its content hash.
     let scene_dir = dir.join("scenes/plane");
-    fs::create_dir_all(&scene_dir).unwrap();
-    for f in [
-        "scene.toml",
-        "point-light-plane.obj",
-        "point-light-plane.mtl",
-    ] {
-        fs::copy(
-            scenes_dir().join("point-light-plane").join(f),
-            scene_dir.join(f),
-        )
-        .unwrap();
-    }
-    let text = r#"
-name = "cache"
-width = 8
-warmup = 0
-repeats = 1
-[reference]
-spp = 8
-[[scene]]
-path = "plane/scene.toml"
-[[method]]
-method = "reference"
-budgets = [{ spp = 1 }]
-"#;
+    copy_plane_scene(&scene_dir);
+    let text = &PLANE_SUITE.replace("NAME", "cache");
     let entries = |cache: &Path| -> Vec<PathBuf> {
         let mut found = Vec::new();
         for scene in fs::read_dir(cache).unwrap() {
@@ -990,29 +996,7 @@ fn converged_references_resume_bit_exactly_and_the_suite_uses_them() {
     use std::sync::atomic::{AtomicBool, Ordering};
 
     let dir = temp_dir("converged");
-    let copy_scene = |to: &Path| {
-        fs::create_dir_all(to).unwrap();
-        for f in [
-            "scene.toml",
-            "point-light-plane.obj",
-            "point-light-plane.mtl",
-        ] {
-            fs::copy(scenes_dir().join("point-light-plane").join(f), to.join(f)).unwrap();
-        }
-    };
-    let text = r#"
-name = "converged"
-width = 8
-warmup = 0
-repeats = 1
-[reference]
-spp = 8
-[[scene]]
-path = "plane/scene.toml"
-[[method]]
-method = "reference"
-budgets = [{ spp = 1 }]
-"#;
+    let text = &PLANE_SUITE.replace("NAME", "converged");
     common::with_gpu(|ctx| {
         let renderers = Renderers::default();
         // Stops after `chunks` chunks in all (the record's count, so a resumed run stops at
@@ -1046,8 +1030,8 @@ budgets = [{ spp = 1 }]
             .unwrap()
         };
         let (whole, parts) = (dir.join("whole"), dir.join("parts"));
-        copy_scene(&whole.join("plane"));
-        copy_scene(&parts.join("plane"));
+        copy_plane_scene(&whole.join("plane"));
+        copy_plane_scene(&parts.join("plane"));
         let straight = extend(&whole, 5);
         extend(&parts, 2);
         let resumed = extend(&parts, 5);
