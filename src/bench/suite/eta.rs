@@ -65,11 +65,11 @@ impl Eta {
     }
 }
 
-/// A time-budget run's seconds: its renders at the budget each, plus about half a budget of
-/// calibration (calibrate.rs).
+/// A time-budget run's seconds: its renders at the budget each, plus about three quarters of a
+/// budget of calibration (calibrate.rs: trials up to a quarter of it, each aimed at a third).
 fn time_left(suite: &Suite, run: &RunSpec) -> Option<f64> {
     let renders = (suite.warmup + suite.repeats.max(suite.flicker_frames)) as f64;
-    run.time_ms.map(|ms| (renders + 0.5) * ms / 1e3)
+    run.time_ms.map(|ms| (renders + 0.75) * ms / 1e3)
 }
 
 #[cfg(test)]
