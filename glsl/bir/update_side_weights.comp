@@ -9,10 +9,24 @@
 // Both sides' candidates estimate the same total camera power: T_s, the sum of the standard
 // candidates' power estimates, and T_r, the reverse ones'. A starving side is one whose mean
 // rests on rare huge batches, so its typical batch brings less than the other side's: after
-// each batch this kernel counts whether T_s > T_r (a tie counts 1/2) and sets a_s to the
-// fraction of the batches so far in which the standard side brought more, clamped to
+// each batch this kernel counts whether T_s > T_r (a tie counts 1/2), takes the fraction f of
+// the batches so far in which the standard side brought more (with a prior of two batches at
+// 1/2: f = (wins + 2) / (batches + 4)), and sets a_s = f^4 / (f^4 + (1 - f)^4), clamped to
 // [min_weight, 1 - min_weight] so neither side is ever dropped. Where the sides are alike
-// (the Cornell box) the fraction hovers about 1/2; where one starves it goes to the clamp.
+// (the Cornell box) f hovers about 1/2; where one starves a_s goes to the clamp.
+//
+// Why sharpened: the resampling draws each side's VPLs in proportion to its weight, so a side
+// of weight a gets about a of the draws and brings a^2 x (its variance with all draws) / a:
+// the union's variance is about a_s V_s + a_r V_r, linear in a_s, least at the better side
+// alone. Measured (irad bench suite, 128x96, 8 seeds, lavapipe; spread = standard deviation
+// of the renders' image means; relMSE against the converged reference):
+//   u-office, 2 s / 8 s: plain win fraction (a_s 0.21-0.28): spread 28.6% / 9.1%, relMSE
+//     0.123 / 0.054; reverse side alone 10.9% / 4.4%, 0.048 / 0.021; standard alone 80% / 20%;
+//   halogen-office: win fraction (a_s 0.82-0.87) 11.3% / 9.3%, relMSE 0.18 / 0.20; standard
+//     alone 1.5% / 0.9%, 0.20 / 0.19; reverse alone 45% / 29%.
+// The win fraction picks the better side on both offices but weighs the other one too much;
+// sharpened, a_s after 40 batches at f = 0.25 is 0.012 (clamped to min_weight), at f = 0.85
+// 0.997 (clamped).
 // Tried first and measured worse: the share of the summed powers (follows the rare huge
 // batches back to 1/2), the mean per-batch share (the halogen office's half-starved reverse
 // side still brings a third of a typical batch, and at a third of the weight its dark typical
@@ -50,7 +64,11 @@ void main() {
         s.z += standard_total > reverse_total ? 1.0
              : (standard_total == reverse_total ? 0.5 : 0.0);
         s.w += 1.0;
-        float a = clamp(s.z / s.w, params.min_weight, 1.0 - params.min_weight);
+        // The win fraction with two batches' prior toward 1/2, sharpened (module comment).
+        float f = (s.z + 2.0) / (s.w + 4.0);
+        float f4 = f * f * f * f;
+        float g = 1.0 - f;
+        float a = clamp(f4 / (f4 + g * g * g * g), params.min_weight, 1.0 - params.min_weight);
         s.x = a;
         s.y = 1.0 - a;
     }

@@ -87,10 +87,10 @@ pub struct BirSettings {
     /// Start light paths by each light's measured contribution to the camera (Section 4.1)
     /// instead of by its power.
     pub light_cdf: bool,
-    /// `both` with resampling: the standard side's weight is the fraction of earlier batches in
-    /// which it brought more camera power than the reverse side (update_side_weights.comp), so
-    /// a side whose batches usually bring less (a starving one) weighs less, instead of the
-    /// paper's fixed 1/2.
+    /// `both` with resampling: the standard side's weight follows the fraction of earlier
+    /// batches in which it brought more camera power than the reverse side, sharpened
+    /// (update_side_weights.comp), so a side whose batches usually bring less (a starving one)
+    /// weighs almost nothing, instead of the paper's fixed 1/2.
     pub adaptive: bool,
     /// The gather's geometry-term clamp and its bias compensation (default: b from the scene
     /// and the kept VPL count, compensated; src/methods/compensation.rs).
@@ -259,7 +259,7 @@ pub const SETTINGS: &[Setting<BirSettings>] = &[
         Kind::Switch,
         Switch,
         "With strategy both and resampling (ratio > 0): side weights that follow how often each side brought more camera \
-         power in earlier batches, or the paper's fixed 1/2 (false).",
+         power in earlier batches (sharpened toward the side that usually wins), or the paper's fixed 1/2 (false).",
         // The side weights are the resampling's.
         needs: &[Need::OneOf("strategy", &["both"]), Need::Not("ratio", "0")],
     ),
@@ -334,7 +334,7 @@ fn batching(vpls: u32, batch: u32) -> (u32, u32) {
 }
 
 /// The smallest weight an adaptive side weight takes: neither side is ever dropped.
-pub const MIN_SIDE_WEIGHT: f32 = 0.1;
+pub const MIN_SIDE_WEIGHT: f32 = 0.02;
 
 /// Below this many light entries a camera-driven table cannot differ from the power-based one.
 const LIGHT_CDF_MIN_ENTRIES: usize = 2;
