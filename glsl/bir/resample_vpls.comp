@@ -26,7 +26,8 @@ layout(set = 0, binding = 19, std430) readonly buffer Scanned { float scanned[];
 layout(set = 0, binding = 20, std430) readonly buffer RowTotals { float totals[]; };
 // Draws kept per side, over the whole render (for the report).
 layout(set = 0, binding = 21, std430) buffer ResampleStats { uint kept_standard; uint kept_reverse; };
-// x, y: the standard and reverse sides' weights (sum 1); z, w: their running power sums.
+// x, y: the standard and reverse sides' weights (sum 1); z, w: batches the standard side won
+// and batches counted (update_side_weights.comp).
 layout(set = 0, binding = 24, std430) readonly buffer SideWeights { vec4 side; };
 
 layout(push_constant) uniform ResampleParams {

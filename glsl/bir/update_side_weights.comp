@@ -10,23 +10,27 @@
 // candidates' power estimates, and T_r, the reverse ones'. A starving side is one whose mean
 // rests on rare huge batches, so its typical batch brings less than the other side's: after
 // each batch this kernel counts whether T_s > T_r (a tie counts 1/2), takes the fraction f of
-// the batches so far in which the standard side brought more (with a prior of two batches at
-// 1/2: f = (wins + 2) / (batches + 4)), and sets a_s = f^4 / (f^4 + (1 - f)^4), clamped to
+// the batches so far in which the standard side brought more (with a prior of two wins and two
+// losses: f = (wins + 2) / (batches + 4)), and sets a_s = f^4 / (f^4 + (1 - f)^4), clamped to
 // [min_weight, 1 - min_weight] so neither side is ever dropped. Where the sides are alike
 // (the Cornell box) f hovers about 1/2; where one starves a_s goes to the clamp.
 //
-// Why sharpened: the resampling draws each side's VPLs in proportion to its weight, so a side
-// of weight a gets about a of the draws and brings a^2 x (its variance with all draws) / a:
-// the union's variance is about a_s V_s + a_r V_r, linear in a_s, least at the better side
-// alone. Measured (irad bench suite, 128x96, 8 seeds, lavapipe; spread = standard deviation
+// Why sharpened: the resampling draws each side's VPLs about in proportion to its weight times
+// its power total (plus the floor), so the resampling's part of the union's variance is about
+// a_s V_s + a_r V_r, linear in a_s and least at the better side alone; the candidates' own
+// variance, a_s^2 Var(S) + a_r^2 Var(R), is least at inverse-variance weights in between. Which
+// dominates is measured, not derived: on the offices the better side alone beats the union.
+// Not yet handled: a standard VPL no reverse VPL can reach keeps weight 1 (resample_vpls.comp)
+// but is drawn in proportion to a_s w, so at a small a_s its draws carry up to 1 / a_s more
+// power; on the U office this may be part of the union's remaining spread. Measured (irad bench suite, 128x96, 8 seeds, lavapipe; spread = standard deviation
 // of the renders' image means; relMSE against the converged reference):
 //   u-office, 2 s / 8 s: plain win fraction (a_s 0.21-0.28): spread 28.6% / 9.1%, relMSE
 //     0.123 / 0.054; reverse side alone 10.9% / 4.4%, 0.048 / 0.021; standard alone 80% / 20%;
 //   halogen-office: win fraction (a_s 0.82-0.87) 11.3% / 9.3%, relMSE 0.18 / 0.20; standard
 //     alone 1.5% / 0.9%, 0.20 / 0.19; reverse alone 45% / 29%.
 // The win fraction picks the better side on both offices but weighs the other one too much;
-// sharpened, a_s after 40 batches at f = 0.25 is 0.012 (clamped to min_weight), at f = 0.85
-// 0.997 (clamped).
+// sharpened, after 40 batches of which 10 won (f = 12 / 44) a_s is 0.019 (clamped to
+// min_weight 0.02), after 34 won of 40 (f = 36 / 44) 0.998 (clamped to 0.98).
 // Tried first and measured worse: the share of the summed powers (follows the rare huge
 // batches back to 1/2), the mean per-batch share (the halogen office's half-starved reverse
 // side still brings a third of a typical batch, and at a third of the weight its dark typical
@@ -34,7 +38,7 @@
 // arrives, the starving side's near-zero totals look like low variance). Inverse mean squared
 // deviations from the pooled mean of both sides (which a starving side's near-zero batches do
 // show) measured no better: 11-frame renders at 64x48, 40 seeds, image-mean spread 0.297
-// against this rule's 0.285 on the U office (final a_s 0.29, the same as here: the candidates'
+// against the plain win fraction's 0.285 on the U office (final a_s 0.29, the same: the candidates'
 // camera-power totals do not see the standard side's tail the image shows) and 0.383 against
 // 0.244 on the halogen office. A batch only uses
 // weights set from earlier batches, whose random numbers are independent of its own.

@@ -66,7 +66,8 @@ impl Eta {
 }
 
 /// A time-budget run's seconds: its renders at the budget each, plus about three quarters of a
-/// budget of calibration (calibrate.rs: trials up to a quarter of it, each aimed at a third).
+/// budget of calibration, a typical figure (calibrate.rs: a warm-up, then trials until one
+/// takes a quarter of it, each aimed at a third).
 fn time_left(suite: &Suite, run: &RunSpec) -> Option<f64> {
     let renders = (suite.warmup + suite.repeats.max(suite.flicker_frames)) as f64;
     run.time_ms.map(|ms| (renders + 0.75) * ms / 1e3)

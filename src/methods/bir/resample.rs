@@ -223,9 +223,9 @@ impl ResampleVpls {
     }
 }
 
-/// glsl/bir/update_side_weights.comp: after a batch, `both`'s standard weight becomes the fraction
-/// of the batches so far in which the standard candidates brought more camera power than the
-/// reverse ones, clamped to [min_weight, 1 - min_weight].
+/// glsl/bir/update_side_weights.comp: after a batch, `both`'s standard weight follows the
+/// fraction of the batches so far in which the standard candidates brought more camera power
+/// than the reverse ones, sharpened and clamped to [min_weight, 1 - min_weight].
 pub struct UpdateSideWeights(Kernel);
 
 impl UpdateSideWeights {
