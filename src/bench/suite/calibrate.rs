@@ -62,9 +62,13 @@ pub fn calibrate(
     let mut trials: Vec<Trial> = Vec::new();
     let mut count = 1u32;
     // The warm-up: first use is not part of the line (module comment).
-    renderers.run(ctx, &method.with_count(1).with_seed(seed), scene, gpu_scene, |d, t| {
-        progress(0, d, t)
-    })?;
+    renderers.run(
+        ctx,
+        &method.with_count(1).with_seed(seed),
+        scene,
+        gpu_scene,
+        |d, t| progress(0, d, t),
+    )?;
     loop {
         let m = method.with_count(count).with_seed(seed);
         let render = trials.len() as u32 + 1;

@@ -164,7 +164,10 @@ pub const SETTINGS: &[Setting<EnvSettings>] = &[
          table over the whole map, as pbrt and Mitsuba; MIS with BRDF), hierarchical (a \
          luminance mip pyramid descended 2x2 per level, as Falcor and Mitsuba 3; MIS with \
          BRDF), alpha (dynamic's samplers split per pixel by Lu 14 ch. 5's estimated alpha; \
-         writes OUT.alpha.{exr,png}: red light samples, green BRDF samples). At equal time          (README \"env\"): dynamic wins by 2.2-2.9x over latlong on sun-behind; latlong by          1.4x on glossy geometry under an open sky (glossy-env) and 1.5x on the dynamic          moving-sun.",
+         writes OUT.alpha.{exr,png}: red light samples, green BRDF samples). At equal time \
+         (README \"env\"): dynamic wins by 2.2-2.9x over latlong on sun-behind; latlong by \
+         1.4x on glossy geometry under an open sky (glossy-env) and 1.5x on the dynamic \
+         moving-sun.",
         |s| Some(Value::Name(s.strategy.name())),
         |s, v| {
             s.strategy = Strategy::from_name(v.name()).expect("a checked name");
