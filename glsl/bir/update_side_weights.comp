@@ -20,9 +20,9 @@
 // a_s V_s + a_r V_r, linear in a_s and least at the better side alone; the candidates' own
 // variance, a_s^2 Var(S) + a_r^2 Var(R), is least at inverse-variance weights in between. Which
 // dominates is measured, not derived: on the offices the better side alone beats the union.
-// Not yet handled: a standard VPL no reverse VPL can reach keeps weight 1 (resample_vpls.comp)
-// but is drawn in proportion to a_s w, so at a small a_s its draws carry up to 1 / a_s more
-// power; on the U office this may be part of the union's remaining spread. Measured (irad bench suite, 128x96, 8 seeds, lavapipe; spread = standard deviation
+// A standard VPL no reverse VPL can reach keeps weight 1 (resample_vpls.comp) but is drawn in
+// proportion to a_s w, so at a small a_s its draws carry up to 1 / a_s more power; drawing it
+// at weight 1 instead measured worse on the U office (resample_vpls.comp). Measured (irad bench suite, 128x96, 8 seeds, lavapipe; spread = standard deviation
 // of the renders' image means; relMSE against the converged reference):
 //   u-office, 2 s / 8 s: plain win fraction (a_s 0.21-0.28): spread 28.6% / 9.1%, relMSE
 //     0.123 / 0.054; reverse side alone 10.9% / 4.4%, 0.048 / 0.021; standard alone 80% / 20%;
