@@ -22,7 +22,9 @@
 // dominates is measured, not derived: on the offices the better side alone beats the union.
 // A standard VPL no reverse VPL can reach keeps weight 1 (resample_vpls.comp) but is drawn in
 // proportion to a_s w, so at a small a_s its draws carry up to 1 / a_s more power; drawing it
-// at weight 1 instead measured worse on the U office (resample_vpls.comp). Measured (irad bench suite, 128x96, 8 seeds, lavapipe; spread = standard deviation
+// at weight 1 instead measured worse on the U office (resample_vpls.comp). So did four
+// unrecorded pilot batches before frame 0 that set the weights before any frame is shaded at
+// the prior's 1/2 (scenes/suites/bir-convergence.toml, sixth run). Measured (irad bench suite, 128x96, 8 seeds, lavapipe; spread = standard deviation
 // of the renders' image means; relMSE against the converged reference):
 //   u-office, 2 s / 8 s: plain win fraction (a_s 0.21-0.28): spread 28.6% / 9.1%, relMSE
 //     0.123 / 0.054; reverse side alone 10.9% / 4.4%, 0.048 / 0.021; standard alone 80% / 20%;
