@@ -90,11 +90,9 @@ void main() {
         v = vpls[params.standard_begin + c];
         // No reverse VPL could land where find_uncovered_vpls.comp marked: weight 1. The draw
         // probability q need not follow the weight; any q > 0 keeps the draw unbiased. Drawing
-        // them at weight 1 too (a third scanned row of their powers, so q follows a = 1) was
-        // measured worse and dropped: u-office, 128x96, 8 seeds (irad bench suite, lavapipe),
-        // spread 2 s / 8 s 45.1% / 16.9%, relMSE 0.284 / 0.043, against 23.1% / 12.7%,
-        // 0.095 / 0.031 as here; their power estimates are the noisy ones (few camera points
-        // see them), and at weight 1 the draws follow that noise a_s^-1 times more.
+        // them at weight 1 too (q following a = 1) measured worse on u-office and was dropped
+        // (scenes/suites/bir-convergence.toml, fifth run): their power estimates are the noisy
+        // ones (few camera points see them), and the draws would follow that noise 1/a_s more.
         if (v.incident.w > 0.5) a = 1.0;
         atomicAdd(kept_standard, 1u);
     } else {

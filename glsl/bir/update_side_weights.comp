@@ -24,8 +24,9 @@
 // proportion to a_s w, so at a small a_s its draws carry up to 1 / a_s more power; drawing it
 // at weight 1 instead measured worse on the U office (resample_vpls.comp). So did four
 // unrecorded pilot batches before frame 0 that set the weights before any frame is shaded at
-// the prior's 1/2 (scenes/suites/bir-convergence.toml, sixth run). Measured (irad bench suite, 128x96, 8 seeds, lavapipe; spread = standard deviation
-// of the renders' image means; relMSE against the converged reference):
+// the prior's 1/2 (scenes/suites/bir-convergence.toml, sixth run). Measured (irad bench suite,
+// 128x96, 8 seeds, lavapipe; spread = standard deviation of the renders' image means; relMSE
+// against the converged reference):
 //   u-office, 2 s / 8 s: plain win fraction (a_s 0.21-0.28): spread 28.6% / 9.1%, relMSE
 //     0.123 / 0.054; reverse side alone 10.9% / 4.4%, 0.048 / 0.021; standard alone 80% / 20%;
 //   halogen-office: win fraction (a_s 0.82-0.87) 11.3% / 9.3%, relMSE 0.18 / 0.20; standard
@@ -33,17 +34,17 @@
 // The win fraction picks the better side on both offices but weighs the other one too much;
 // sharpened, after 40 batches of which 10 won (f = 12 / 44) a_s is 0.019 (clamped to
 // min_weight 0.02), after 34 won of 40 (f = 36 / 44) 0.998 (clamped to 0.98).
-// Tried first and measured worse: the share of the summed powers (follows the rare huge
-// batches back to 1/2), the mean per-batch share (the halogen office's half-starved reverse
-// side still brings a third of a typical batch, and at a third of the weight its dark typical
-// renders darkened the image by 18% in two renders), and inverse-variance weights (before the rare hit
-// arrives, the starving side's near-zero totals look like low variance). Inverse mean squared
-// deviations from the pooled mean of both sides (which a starving side's near-zero batches do
-// show) measured no better: 11-frame renders at 64x48, 40 seeds, image-mean spread 0.297
-// against the plain win fraction's 0.285 on the U office (final a_s 0.29, the same: the candidates'
-// camera-power totals do not see the standard side's tail the image shows) and 0.383 against
-// 0.244 on the halogen office. A batch only uses
-// weights set from earlier batches, whose random numbers are independent of its own.
+// Tried first and measured worse: the share of the summed powers (follows the rare huge batches
+// back to 1/2), the mean per-batch share (the halogen office's half-starved reverse side still
+// brings a third of a typical batch, and at a third of the weight its dark typical renders darkened
+// the image by 18% in two renders), and inverse-variance weights (before the rare hit arrives, the
+// starving side's near-zero totals look like low variance). Inverse mean squared deviations from
+// the pooled mean of both sides (which a starving side's near-zero batches do show) measured no
+// better: 11-frame renders at 64x48, 40 seeds, image-mean spread 0.297 against the plain win
+// fraction's 0.285 on the U office (final a_s 0.29, the same: the candidates' camera-power totals
+// do not see the standard side's tail the image shows) and 0.383 against 0.244 on the halogen
+// office. A batch only uses weights set from earlier batches, whose random numbers are independent
+// of its own.
 //
 // SideWeights: [0] = (a_s, a_r, batches the standard side won, batches counted).
 
