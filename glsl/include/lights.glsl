@@ -1,5 +1,6 @@
 // Next-event estimation: pick one light from LightEntries in proportion to its power (CPU
-// table, src/scene/gpu.rs), then sample it: a uniform point on an emissive triangle (area
+// table, src/scene/gpu.rs; light_bvh.glsl picks it through the light BVH instead), then
+// sample it: a uniform point on an emissive triangle (area
 // pdf converted to solid angle, pbrt-v4 Section 4.3 / 12.2), the delta direction of a point
 // or spot light, or a direction from the environment map. The pdfs of the non-delta lights
 // are also what MIS needs when a BSDF-sampled ray hits them (light_pdf_triangle, envmap).
@@ -45,21 +46,16 @@ float spot_falloff(Light l, vec3 from_light) {
     return smoothstep(edge0, edge1, cos_theta);
 }
 
-// Samples a light for shading point p; false when the sample carries nothing (a triangle seen
-// from behind, zero pdf). The 31-bit integer r_select picks the light, r_texel the
-// environment's texel, u places the point on the chosen light; all independent.
-// sample_light_among draws from the first `count` entries only, r_select below the upper bound
-// of the last of them, whose share of the table is `mass` (the pdfs are divided by it).
-bool sample_light_among(vec3 p, uint r_select, uint count, float mass, uint r_texel, vec2 u,
+// Samples entry e of the light table, chosen with `probability`, for shading point p; false
+// when the sample carries nothing (a triangle seen from behind, zero pdf). r_texel picks the
+// environment's texel, u places the point on the light.
+bool sample_light_entry(LightEntry e, float probability, vec3 p, uint r_texel, vec2 u,
                         out LightSample s) {
     s.delta = false;
     s.radiance = vec3(0.0);
     s.pdf = 0.0;
     s.distance = 0.0;
     s.direction = vec3(0.0, 1.0, 0.0);
-    if (count == 0u || !(mass > 0.0)) return false;
-    LightEntry e = light_entries[select_light_among(r_select, count)];
-    e.probability /= mass;
     if (e.kind == 0u) {
         EmitterTriangle t = emitter_triangles[e.index];
         vec2 b = sample_uniform_triangle(u);
@@ -74,12 +70,12 @@ bool sample_light_among(vec3 p, uint r_select, uint count, float mass, uint r_te
         if (cos_light <= 0.0) return false;
         uint m = floatBitsToUint(t.normal.w);
         s.radiance = materials[m].ke.rgb;
-        s.pdf = e.probability * dist2 / (cos_light * t.e2.w);
+        s.pdf = probability * dist2 / (cos_light * t.e2.w);
         return s.pdf > 0.0;
     }
     if (SCENE_HAS_ENVIRONMENT && e.kind == 3u) {
         s.direction = env_sample(r_texel, u, s.radiance, s.pdf);
-        s.pdf *= e.probability;
+        s.pdf *= probability;
         s.distance = infinity();
         return s.pdf > 0.0;
     }
@@ -94,24 +90,47 @@ bool sample_light_among(vec3 p, uint r_select, uint count, float mass, uint r_te
         s.direction = d / s.distance;
         float falloff = e.kind == 2u ? spot_falloff(l, -s.direction) : 1.0;
         s.radiance = l.intensity.rgb * (falloff / dist2);
-        s.pdf = e.probability;
+        s.pdf = probability;
         s.delta = true;
         return falloff > 0.0;
     }
     return false;
 }
 
+// Samples a light for shading point p by the power table; false when the sample carries
+// nothing. The 31-bit integer r_select picks the light, r_texel the environment's texel, u
+// places the point on the chosen light; all independent. sample_light_among draws from the
+// first `count` entries only, r_select below the upper bound of the last of them, whose share
+// of the table is `mass` (the pdfs are divided by it).
+bool sample_light_among(vec3 p, uint r_select, uint count, float mass, uint r_texel, vec2 u,
+                        out LightSample s) {
+    s.delta = false;
+    s.radiance = vec3(0.0);
+    s.pdf = 0.0;
+    s.distance = 0.0;
+    s.direction = vec3(0.0, 1.0, 0.0);
+    if (count == 0u || !(mass > 0.0)) return false;
+    LightEntry e = light_entries[select_light_among(r_select, count)];
+    return sample_light_entry(e, e.probability / mass, p, r_texel, u, s);
+}
+
 bool sample_light(vec3 p, uint r_select, uint r_texel, vec2 u, out LightSample s) {
     return sample_light_among(p, r_select, scene.size.z, 1.0, r_texel, u, s);
+}
+
+// Solid-angle pdf of the point hit at distance t along unit direction d on triangle st, chosen
+// with `probability` (the power table's, or the light BVH's), from the emitting side.
+float light_pdf_triangle_chosen(ShadingTriangle st, vec3 d, float t, float probability) {
+    float cos_light = -dot(d, st.geometric_normal.xyz);
+    if (cos_light <= 0.0) return 0.0;
+    return probability * t * t / (cos_light * st.n2.w);
 }
 
 // Solid-angle pdf with which sample_light picks the point hit at distance t along unit
 // direction d on triangle st (loaded once per hit by the caller: on lavapipe every
 // storage-buffer load is a loop over the lanes), from the emitting side.
 float light_pdf_shading_triangle(ShadingTriangle st, vec3 d, float t) {
-    float cos_light = -dot(d, st.geometric_normal.xyz);
-    if (cos_light <= 0.0) return 0.0;
-    return st.n1.w * t * t / (cos_light * st.n2.w);
+    return light_pdf_triangle_chosen(st, d, t, st.n1.w);
 }
 
 // The same for GPU triangle `triangle`.

@@ -1,7 +1,8 @@
 #version 450
 // The reference: one unidirectional path per pixel per frame from the G-buffer's first hit
 // (pbrt-v4 PathIntegrator, Pharr et al. 2023 Section 13.4): emission, next-event estimation
-// of one light chosen by power (lights.glsl), BSDF sampling (bsdf.glsl), the two combined by
+// of one light chosen by power (lights.glsl) or through the light BVH (light_bvh.glsl, the
+// constant LIGHT_BVH), BSDF sampling (bsdf.glsl), the two combined by
 // the power heuristic (Veach 1997 Section 9.2), Russian roulette from bounce 3 on. Delta
 // lights are reached by next-event estimation only, with weight 1.
 //
@@ -43,6 +44,7 @@ layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 #include "sampling.glsl"
 #include "bsdf.glsl"
 #include "lights.glsl"
+#include "light_bvh.glsl"
 #include "gbuffer.glsl"
 #include "camera.glsl"
 #include "radiance.glsl"
@@ -69,6 +71,9 @@ layout(push_constant) uniform PathParams {
 // params.camera_samples camera rays traced here. A constant, not a push constant: gallivm
 // would run the other mode's copy of the path loop too, masked (scene.glsl says why).
 layout(constant_id = 3) const bool CAMERA_STARTS = false;
+// How next-event estimation chooses its light (src/methods/paths.rs specializes it): false, by
+// power (the light table); true, through the light BVH. A constant for the same reason.
+layout(constant_id = 4) const bool LIGHT_BVH = false;
 
 const uint DIMENSIONS_PER_BOUNCE = 8u;
 
@@ -123,7 +128,10 @@ vec3 path_radiance(uint index, uint sample_index, vec3 dir, bool found, vec3 p, 
             // Rescaled below the bound (select_light_among keeps it among the first entries).
             r_select = bound == 0u ? 0u : min(uint(float(r_select) * mass), bound - 1u);
         }
-        if (sample_light_among(p, r_select, entries, mass, r_texel, u_light, ls)) {
+        bool sampled = LIGHT_BVH
+            ? sample_light_bvh(p, n, r_select, mass, r_texel, u_light, ls)
+            : sample_light_among(p, r_select, entries, mass, r_texel, u_light, ls);
+        if (sampled) {
             float cos_i = dot(ls.direction, n);
             if (cos_i > 0.0 && dot(ls.direction, side) > 0.0) {
                 vec3 f = bsdf_eval(m, n, wo, ls.direction);
@@ -161,6 +169,9 @@ vec3 path_radiance(uint index, uint sample_index, vec3 dir, bool found, vec3 p, 
 
         RayHit hit;
         dir = wi;
+        // The vertex the light BVH chose its light for, which its pmf on a hit needs.
+        vec3 p_light = p;
+        vec3 n_light = n;
         found = trace_closest(origin, wi, infinity(), hit);
         if (!found) {
             if (params.environment != 0u && SCENE_HAS_ENVIRONMENT) {
@@ -178,7 +189,14 @@ vec3 path_radiance(uint index, uint sample_index, vec3 dir, bool found, vec3 p, 
         ng = st.geometric_normal.xyz;
         m = materials[floatBitsToUint(st.n0.w)];
         if (m.ke.w > 0.0 && dot(-dir, ng) > 0.0) {
-            float light_pdf = mass > 0.0 ? light_pdf_shading_triangle(st, dir, t) / mass : 0.0;
+            float light_pdf = 0.0;
+            if (mass > 0.0) {
+                light_pdf = LIGHT_BVH
+                    ? light_pdf_triangle_chosen(st, dir, t,
+                                                light_bvh_triangle_probability(st, p_light, n_light))
+                    : light_pdf_shading_triangle(st, dir, t);
+                light_pdf /= mass;
+            }
             L += beta * m.ke.rgb * power_heuristic(bsdf_pdf_prev, light_pdf);
         }
         if (depth + 1u >= params.max_depth) break;

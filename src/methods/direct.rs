@@ -8,7 +8,7 @@ use crate::scene::gpu::GpuScene;
 
 use super::accumulation::Accumulation;
 use super::gbuffer::{GBuffer, PixelSampling, WriteGBuffer};
-use super::paths::{PathStarts, TracePaths};
+use super::paths::{LightSampler, PathStarts, TracePaths};
 
 /// The most `--direct-spp` accepts: more direct samples than a frame's VPL gather costs
 /// rays is never the budget's best split.
@@ -73,6 +73,7 @@ impl GBufferAndDirectLight {
                 u32::MAX,
                 options.reflected_environment,
                 starts,
+                LightSampler::Power,
             )
         })
     }

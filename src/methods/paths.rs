@@ -55,14 +55,29 @@ pub enum PathStarts {
     Camera { samples: u32, pixels: PixelSampling },
 }
 
+/// How next-event estimation chooses its light (the kernel's constant LIGHT_BVH).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum LightSampler {
+    /// In proportion to power, from the light table (src/scene/gpu.rs).
+    #[default]
+    Power,
+    /// Through the light BVH (glsl/include/light_bvh.glsl, src/sampling/light_bvh.rs).
+    Bvh,
+}
+
+crate::methods::settings::named_choices!(LightSampler {
+    Power => "power",
+    Bvh => "bvh",
+});
+
 /// Camera samples per pixel in one dispatch: lavapipe stops an invocation's loops silently
 /// after 65535 iterations in all (docs/DESIGN.md "The loop budget"); a depth-1 sample traces
 /// three rays, each a traversal loop of up to a few hundred iterations in the largest scenes,
 /// so 16 samples stay well inside the budget and more are split across dispatches.
 const CAMERA_SAMPLES_PER_DISPATCH: u32 = 16;
 
-/// The kernel, specialized to each scene's features and to where paths start (its constant
-/// CAMERA_STARTS).
+/// The kernel, specialized to each scene's features, to where paths start (its constant
+/// CAMERA_STARTS) and to how lights are chosen (LIGHT_BVH).
 pub struct TracePaths(SceneKernel);
 
 impl TracePaths {
@@ -83,11 +98,14 @@ impl TracePaths {
         roulette_depth: u32,
         reflected_environment: bool,
         starts: PathStarts,
+        sampler: LightSampler,
     ) -> GpuResult<()> {
-        let kernel = self
-            .0
-            .get_with(scene.features, starts != PathStarts::GBuffer)?;
+        let kernel = self.0.get_with_pair(
+            scene.features,
+            [starts != PathStarts::GBuffer, sampler == LightSampler::Bvh],
+        )?;
         let mut bindings = scene.bindings();
+        bindings.extend(scene.light_bvh_bindings());
         bindings.push(bind("GBuffer", &gbuffer.texels));
         bindings.extend(accumulation.bindings());
         let mut params = PathParams {

@@ -13,7 +13,7 @@ use super::driver::{Extras, MethodFrames, Shared};
 use super::envmap;
 use super::gbuffer::PixelSampling;
 use super::interface::{Lights, RenderMethod, SharedPasses, Support};
-use super::paths::PathStarts;
+use super::paths::{LightSampler, PathStarts};
 use super::settings::{common_settings, field_setting, Kind, Need, Setting, Value};
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -29,6 +29,8 @@ pub struct ReferenceSettings {
     /// light and BSDF sampling, estimated over the first M frames (glsl/shared/shade_direct_alpha.comp)
     /// instead of the power heuristic's one sample of each.
     pub alpha_frames: Option<u32>,
+    /// How next-event estimation chooses its light: by power or through the light BVH.
+    pub light_sampler: LightSampler,
     pub pixels: PixelSampling,
 }
 
@@ -40,6 +42,7 @@ impl Default for ReferenceSettings {
             max_depth: 1024,
             roulette_depth: 3,
             alpha_frames: None,
+            light_sampler: LightSampler::Power,
             pixels: PixelSampling::Jittered,
         }
     }
@@ -95,6 +98,19 @@ pub const SETTINGS: &[Setting<ReferenceSettings>] = &[
     .unset("off (the power heuristic's one light and one BSDF sample)")
     // It splits the direct light only.
     .needs(&[Need::OneOf("max_depth", &["1"])]),
+    Setting::<ReferenceSettings>::new(
+        "light_sampler",
+        Kind::Choice(LightSampler::NAMES),
+        "How next-event estimation chooses its light: power (in proportion to each light's \
+         power, one table for every point) or bvh (pbrt-v4's light BVH: by each light's bound \
+         on what it sends to the shading point; the environment map keeps its power share).",
+        |s| Some(Value::Name(s.light_sampler.name())),
+        |s, v| {
+            s.light_sampler = LightSampler::from_name(v.name()).expect("a checked name");
+        },
+    )
+    // alpha's direct light draws its own light samples by power.
+    .needs(&[Need::Unset("alpha_frames")]),
     common_settings!(pixel_centres),
 ];
 
@@ -189,6 +205,7 @@ impl MethodFrames for ReferenceFrames<'_> {
                 settings.roulette_depth,
                 true,
                 PathStarts::GBuffer,
+                settings.light_sampler,
             )
         })
     }

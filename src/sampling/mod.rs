@@ -3,6 +3,7 @@
 pub mod cubemap;
 pub mod distribution;
 pub mod environment;
+pub mod light_bvh;
 pub mod luminaire;
 pub mod pcg;
 pub mod restricted;

@@ -13,6 +13,7 @@ use crate::bvh::{Bvh, GpuBvh};
 use crate::gpu::{bind, Binding, Buffer, Commands, Context, GpuBuffer, GpuError, GpuResult};
 use crate::sampling::distribution::Distribution1D;
 use crate::sampling::environment::{luminance, sampling_weights, texel_solid_angle};
+use crate::sampling::light_bvh::{LightBounds, LightBvh, LightNode};
 
 use super::{Environment, Light, Scene};
 
@@ -151,6 +152,11 @@ pub struct GpuScene {
     pub lights: Buffer<GpuLight>,
     pub light_entries: Buffer<LightEntry>,
     pub emitter_triangles: Buffer<EmitterTriangle>,
+    /// The light BVH over every light but the environment (glsl/include/light_bvh.glsl), and
+    /// each light-table entry's bit trail in it (two uints: depths 0-31, 32-63).
+    pub light_nodes: Buffer<LightNode>,
+    pub light_trails: Buffer<[u32; 2]>,
+    pub light_bvh: LightBvh,
     pub env_texels: Buffer<Vec4>,
     pub env_cdf: Buffer<u32>,
     /// A dynamic map's frames, copied into env_texels and env_cdf per frame.
@@ -347,18 +353,66 @@ fn shading_triangles(scene: &Scene, bvh: &Bvh) -> TriangleData {
     }
 }
 
-/// `shading` with each emissive triangle's selection probability (the light table's) in n1.w.
+/// `shading` with each emissive triangle's selection probability (the light table's) in n1.w
+/// and its entry in the table in geometric_normal.w's bits (the light BVH's pmf needs it;
+/// u32::MAX for a triangle the table does not hold).
 fn with_emitter_probabilities(
     mut shading: Vec<ShadingTriangle>,
     emitter_gpu_index: &[usize],
     table: &LightTable,
 ) -> Vec<ShadingTriangle> {
-    for entry in &table.entries {
+    for t in &mut shading {
+        t.geometric_normal.w = f32::from_bits(u32::MAX);
+    }
+    for (i, entry) in table.entries.iter().enumerate() {
         if entry.kind == LIGHT_TRIANGLE {
-            shading[emitter_gpu_index[entry.index as usize]].n1.w = entry.probability;
+            let t = &mut shading[emitter_gpu_index[entry.index as usize]];
+            t.n1.w = entry.probability;
+            t.geometric_normal.w = f32::from_bits(i as u32);
         }
     }
     shading
+}
+
+/// The light BVH over the table's entries but the environment (pbrt-v4's bounds: an emissive
+/// triangle's power and normal cone; a point light's 4 pi Y(I) in every direction; a spot's
+/// 4 pi Y(I) within its cone and falloff).
+fn light_bvh(scene: &Scene, table: &LightTable, emitters: &[EmitterTriangle]) -> LightBvh {
+    let mut lights = Vec::new();
+    for (i, entry) in table.entries.iter().enumerate() {
+        let bounds = match entry.kind {
+            LIGHT_TRIANGLE => {
+                let t = &emitters[entry.index as usize];
+                let p0 = t.p0.truncate();
+                let positions = [p0, p0 + t.e1.truncate(), p0 + t.e2.truncate()];
+                let ke = scene.materials[t.normal.w.to_bits() as usize].ke;
+                let power = PI * t.e2.w as f64 * luminance(ke);
+                LightBounds::triangle(positions, t.normal.truncate(), power)
+            }
+            LIGHT_POINT | LIGHT_SPOT => match &scene.lights[entry.index as usize] {
+                Light::Point {
+                    position,
+                    intensity,
+                } => LightBounds::point(*position, 4.0 * PI * luminance(*intensity)),
+                Light::Spot {
+                    position,
+                    intensity,
+                    direction,
+                    cone_angle,
+                    falloff_angle,
+                } => LightBounds::spot(
+                    *position,
+                    *direction,
+                    *cone_angle,
+                    *falloff_angle,
+                    4.0 * PI * luminance(*intensity),
+                ),
+            },
+            _ => continue,
+        };
+        lights.push((i as u32, bounds));
+    }
+    LightBvh::build(&lights, table.entries.len())
 }
 
 /// The point and spot lights, and their powers, in the scene's order.
@@ -522,6 +576,12 @@ impl GpuScene {
             &triangles.emitter_gpu_index,
             &light_table,
         );
+        let light_bvh = light_bvh(scene, &light_table, &triangles.emitters);
+        let trails: Vec<[u32; 2]> = light_bvh
+            .trails
+            .iter()
+            .map(|t| [*t as u32, (*t >> 32) as u32])
+            .collect();
         let materials = gpu_materials(scene);
         let constants = scene_constants(
             scene,
@@ -547,6 +607,13 @@ impl GpuScene {
                 "EmitterTriangles",
                 &or_placeholder(triangles.emitters, EmitterTriangle::zeroed()),
             )?,
+            light_nodes: Buffer::from_slice(
+                ctx,
+                "LightBvhNodes",
+                &or_placeholder(light_bvh.nodes.clone(), LightNode::zeroed()),
+            )?,
+            light_trails: Buffer::from_slice(ctx, "LightTrails", &or_placeholder(trails, [0; 2]))?,
+            light_bvh,
             env_texels: Buffer::from_slice(ctx, "EnvTexels", &env.texels)?,
             env_cdf: Buffer::from_slice(ctx, "EnvCdf", &env.cdf)?,
             env_frames: env.frames,
@@ -594,6 +661,14 @@ impl GpuScene {
         let mut b: Vec<Binding<'_>> = self.bvh.bindings().into_iter().collect();
         b.extend(self.scene_bindings());
         b
+    }
+
+    /// light_bvh.glsl's bindings, for kernels that choose lights through the light BVH.
+    pub fn light_bvh_bindings(&self) -> [Binding<'_>; 2] {
+        [
+            bind("LightBvhNodes", &self.light_nodes),
+            bind("LightTrails", &self.light_trails),
+        ]
     }
 
     /// scene.glsl's bindings alone, for kernels that trace no rays.
