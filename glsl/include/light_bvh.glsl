@@ -164,25 +164,31 @@ bool sample_light_bvh(vec3 p, vec3 n, uint r_select, float mass, uint r_texel, v
     s.pdf = 0.0;
     s.distance = 0.0;
     s.direction = vec3(0.0, 1.0, 0.0);
+    s.entry = 0u;
     uint tree = light_bvh_bound();
     if (!(mass > 0.0)) return false;
     if (r_select >= tree) {
         // The environment's own range of the table.
         LightEntry e = light_entries[scene.size.z - 1u];
-        return sample_light_entry(e, e.probability / mass, p, r_texel, u, s);
+        bool found = sample_light_entry(e, e.probability / mass, p, r_texel, u, s);
+        s.entry = scene.size.z - 1u;
+        return found;
     }
     float share = float(tree) / 2147483648.0;
     float u_tree = min(float(r_select) / float(tree), ONE_MINUS_EPSILON);
     uint entry;
     float pmf;
     if (!light_bvh_select(p, n, u_tree, entry, pmf)) return false;
-    return sample_light_entry(light_entries[entry], pmf * share / mass, p, r_texel, u, s);
+    bool found = sample_light_entry(light_entries[entry], pmf * share / mass, p, r_texel, u, s);
+    s.entry = entry;
+    return found;
 }
 
 // The selection probability of emissive GPU triangle `st` (the tree's pmf times its share of
 // the table) for a path at (p, n), to be divided by the caller's mass.
 float light_bvh_triangle_probability(ShadingTriangle st, vec3 p, vec3 n) {
     uint entry = floatBitsToUint(st.geometric_normal.w);
+    if (entry >= scene.size.z) return 0.0;
     return light_bvh_pmf(p, n, entry) * (float(light_bvh_bound()) / 2147483648.0);
 }
 

@@ -17,6 +17,8 @@ struct LightSample {
     vec3 radiance;   // Le (area, environment) or I * falloff / d^2 (delta lights)
     float pdf;       // selection probability times the solid-angle pdf (delta: selection only)
     bool delta;
+    uint entry;      // the light's entry in LightEntries (set by sample_light_among and
+                     // sample_light_bvh)
 };
 
 // The entry among the first `count` whose range holds r (r below the count-th's lower bound).
@@ -109,9 +111,13 @@ bool sample_light_among(vec3 p, uint r_select, uint count, float mass, uint r_te
     s.pdf = 0.0;
     s.distance = 0.0;
     s.direction = vec3(0.0, 1.0, 0.0);
+    s.entry = 0u;
     if (count == 0u || !(mass > 0.0)) return false;
-    LightEntry e = light_entries[select_light_among(r_select, count)];
-    return sample_light_entry(e, e.probability / mass, p, r_texel, u, s);
+    uint entry = select_light_among(r_select, count);
+    LightEntry e = light_entries[entry];
+    bool found = sample_light_entry(e, e.probability / mass, p, r_texel, u, s);
+    s.entry = entry;
+    return found;
 }
 
 bool sample_light(vec3 p, uint r_select, uint r_texel, vec2 u, out LightSample s) {

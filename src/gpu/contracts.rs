@@ -147,6 +147,7 @@ pub(crate) fn mirrors() -> Vec<&'static GpuLayout> {
         m::lightfield::GPU_LAYOUTS,
         m::lightfield::tables::GPU_LAYOUTS,
         m::paths::GPU_LAYOUTS,
+        m::restir::kernels::GPU_LAYOUTS,
         crate::sampling::light_bvh::GPU_LAYOUTS,
     ]
     .into_iter()

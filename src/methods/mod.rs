@@ -21,6 +21,7 @@ pub mod method;
 pub mod paths;
 pub mod progressive;
 pub mod rebuild;
+pub mod restir;
 pub mod reference;
 pub mod registry;
 pub mod renderers;

@@ -17,7 +17,7 @@ use crate::scene::Scene;
 use super::interface::{self, RenderMethod};
 use super::lights::Lights;
 use super::settings::{self, ParamError, SettingDoc, Value};
-use super::{bir, bundles, envmap, ir, lightfield, reference};
+use super::{bir, bundles, envmap, ir, lightfield, reference, restir};
 use super::{Method, RenderOutput, Renderers, RunError};
 
 /// irad's methods, in the order `irad methods` lists them. A new method of irad's is one
@@ -30,6 +30,7 @@ fn builtin_registry() -> Registry {
         .with::<bundles::Bundles>()
         .with::<envmap::Env>()
         .with::<lightfield::Lightfield>()
+        .with::<restir::Restir>()
 }
 
 /// Methods by name.

@@ -1,0 +1,155 @@
+// ReSTIR DI's reservoirs and target function (Bitterli et al. 2020, "Spatiotemporal reservoir
+// resampling for real-time ray tracing with dynamic direct lighting"), shared by
+// glsl/restir/*.comp. A reservoir holds one light sample y (a light-table entry and a point
+// on the light, the light's position, or a direction for the environment), its unbiased
+// contribution weight W, its confidence M (the candidates behind it) and its target at its
+// own surface. Invariant of every stored reservoir: W = 0 unless y is visible from the
+// reservoir's own surface, so the target function reuse works with is p^ V (what ReSTIR calls
+// visibility reuse) and shading needs no shadow ray of its own.
+//
+// Measures. p^(y) = Y(f Le cos_i G), G = cos_l / d^2 for a point on an emissive triangle (area
+// measure), 1 for the environment (solid angle) and 1 / d^2 for a point or spot light (Le
+// standing for the intensity): each sample's own measure is fixed by its light, so reservoirs
+// of different pixels combine. Candidate weights are ratios of densities at one point, the same
+// in either measure; W is in y's measure.
+//
+// Bindings 13-15. Needs scene.glsl, sampling.glsl, bsdf.glsl, lights.glsl, gbuffer.glsl, and
+// bvh.glsl unless RESTIR_NO_TRACE is defined (restir_visible left out).
+#ifndef RESTIR_GLSL
+#define RESTIR_GLSL
+
+struct Reservoir {
+    vec4 sample_point;  // xyz: the point on the light (emissive triangle), its position (point,
+                        // spot) or the direction to it (environment); w bits: light entry
+    vec4 weights;       // x: W, y: M, z: p^(y) at the reservoir's own surface, w: unused
+};
+
+// A pixel's surface of the previous frame (the G-buffer's is re-jittered every frame).
+struct RestirSurface {
+    vec4 position;  // xyz; w bits: material, 0xffffffff where the camera ray missed
+    vec4 normal;    // shading normal on the viewer's side
+    vec4 side;      // geometric normal on the viewer's side
+};
+
+// This frame's reservoirs: the candidates' after the temporal pass.
+layout(set = 0, binding = 13, std430) buffer Reservoirs { Reservoir reservoirs[]; };
+// Each frame's final reservoirs (after spatial reuse), what the next frame's temporal pass reuses.
+layout(set = 0, binding = 14, std430) buffer FinalReservoirs { Reservoir final_reservoirs[]; };
+layout(set = 0, binding = 15, std430) buffer PreviousSurfaces { RestirSurface previous_surfaces[]; };
+
+const uint NO_LIGHT = 0xffffffffu;
+
+// A shading point as reuse sees it.
+struct RestirPoint {
+    vec3 p;
+    vec3 n;     // shading normal, viewer's side
+    vec3 side;  // geometric normal, viewer's side
+    vec3 wo;    // toward the camera
+    uint material;
+    bool valid;
+};
+
+RestirPoint restir_point_from_gbuffer(uint pixel) {
+    GBufferTexel g = gbuffer[pixel];
+    RestirPoint s;
+    s.valid = gbuffer_surface(g, s.wo, s.side, s.n);
+    s.p = g.position.xyz;
+    s.material = floatBitsToUint(g.shading_normal.w);
+    return s;
+}
+
+RestirPoint restir_point_from_surface(RestirSurface r) {
+    RestirPoint s;
+    s.p = r.position.xyz;
+    s.n = r.normal.xyz;
+    s.side = r.side.xyz;
+    s.material = floatBitsToUint(r.position.w);
+    s.valid = s.material != NO_LIGHT;
+    // Camera rays start at the camera's position (camera.glsl).
+    vec3 to_camera = scene.camera_position.xyz - s.p;
+    float len2 = dot(to_camera, to_camera);
+    s.wo = len2 > 0.0 ? to_camera * inversesqrt(len2) : s.n;
+    return s;
+}
+
+RestirSurface restir_surface(RestirPoint s) {
+    RestirSurface r;
+    r.position = vec4(s.p, uintBitsToFloat(s.valid ? s.material : NO_LIGHT));
+    r.normal = vec4(s.n, 0.0);
+    r.side = vec4(s.side, 0.0);
+    return r;
+}
+
+Reservoir empty_reservoir(float m) {
+    Reservoir r;
+    r.sample_point = vec4(0.0, 0.0, 0.0, uintBitsToFloat(NO_LIGHT));
+    r.weights = vec4(0.0, m, 0.0, 0.0);
+    return r;
+}
+
+// f Le cos_i G of light sample (entry, y) at s, in y's measure (see the header); zero where the
+// light sends nothing toward s or s reflects nothing of it. wi and dist: toward the light (dist
+// infinite for the environment); to_area: the factor that turns a solid-angle density at s into
+// y's measure (cos_l / d^2 on a triangle, else 1).
+vec3 restir_contribution(RestirPoint s, uint entry, vec3 y, out vec3 wi, out float dist,
+                         out float to_area) {
+    wi = vec3(0.0, 1.0, 0.0);
+    dist = 0.0;
+    to_area = 1.0;
+    if (!s.valid || entry >= scene.size.z) return vec3(0.0);
+    LightEntry e = light_entries[entry];
+    vec3 le_g = vec3(0.0);
+    if (SCENE_HAS_ENVIRONMENT && e.kind == 3u) {
+        wi = y;
+        dist = infinity();
+        le_g = env_radiance(y);
+    } else {
+        vec3 d = y - s.p;
+        float dist2 = dot(d, d);
+        if (!(dist2 > 0.0)) return vec3(0.0);
+        dist = sqrt(dist2);
+        wi = d / dist;
+        if (e.kind == 0u) {
+            EmitterTriangle t = emitter_triangles[e.index];
+            float cos_light = -dot(wi, t.normal.xyz);
+            if (cos_light <= 0.0) return vec3(0.0);
+            to_area = cos_light / dist2;
+            le_g = materials[floatBitsToUint(t.normal.w)].ke.rgb * to_area;
+        } else if (SCENE_HAS_DELTA_LIGHTS) {
+            Light l = lights[e.index];
+            float falloff = e.kind == 2u ? spot_falloff(l, -wi) : 1.0;
+            le_g = l.intensity.rgb * (falloff / dist2);
+        }
+    }
+    float cos_i = dot(wi, s.n);
+    if (cos_i <= 0.0 || dot(wi, s.side) <= 0.0) return vec3(0.0);
+    Material m = materials[s.material];
+    return bsdf_eval(m, s.n, s.wo, wi) * cos_i * le_g;
+}
+
+float restir_target(RestirPoint s, uint entry, vec3 y) {
+    vec3 wi;
+    float dist, to_area;
+    return luminance(restir_contribution(s, entry, y, wi, dist, to_area));
+}
+
+#ifndef RESTIR_NO_TRACE
+// Whether light sample (entry, y) is visible from s (one shadow ray; the environment's toward
+// direction y, a finite light's stopping just short of it).
+bool restir_visible(RestirPoint s, uint entry, vec3 y) {
+    if (!s.valid || entry >= scene.size.z) return false;
+    bool distant = SCENE_HAS_ENVIRONMENT && light_entries[entry].kind == 3u;
+    vec3 origin = offset_origin(s.p, s.side);
+    vec3 to_light = distant ? y : y - origin;
+    return !trace_any(origin, to_light, distant ? infinity() : 0.9999);
+}
+#endif
+
+// Streaming weighted selection (Bitterli et al. Alg. 2 without the M bookkeeping): candidate
+// with weight w replaces the current choice with probability w / (sum so far).
+bool reservoir_take(inout float weight_sum, float w, float u) {
+    weight_sum += w;
+    return w > 0.0 && u * weight_sum < w;
+}
+
+#endif

@@ -1,0 +1,141 @@
+#version 450
+// ReSTIR DI's initial candidates (Bitterli et al. 2020, Section 3 and Alg. 3), per pixel and
+// frame: M light candidates (light_sampler: through the light BVH, the constant LIGHT_BVH, or
+// by power; the environment by its share of the light table in both) and B BSDF candidates (a
+// BSDF-sampled ray's emissive hit or, escaping, the environment), combined by multiple
+// importance resampling (Talbot et al. 2005): candidate y of either strategy has weight
+// p^(y) / (M p_light(y) + B p_bsdf(y)), the balance heuristic over both, so W = (sum of the
+// weights) / p^(y) needs no 1 / M. The chosen sample's shadow ray zeroes W where it is hidden
+// (visibility reuse; restir.glsl's invariant).
+//
+// Loop budget (docs/DESIGN.md "The loop budget"): at most 512 light candidates (the setting's
+// range), each a descent of at most 64 levels, and at most 16 BSDF candidates, each one
+// traversal, plus one shadow ray.
+//
+// Random dimensions per (seed, pixel, frame): light candidate j uses 16 + 8 j .. 16 + 8 j + 5
+// (selection, texel, position 2, resampling); BSDF candidate j uses 8 + 8 (512 + j) .. +4.
+
+#extension GL_GOOGLE_include_directive : require
+
+layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
+
+#include "bvh.glsl"
+#include "scene.glsl"
+#include "sampling.glsl"
+#include "bsdf.glsl"
+#include "lights.glsl"
+#include "light_bvh.glsl"
+#include "gbuffer.glsl"
+#include "restir.glsl"
+
+layout(push_constant) uniform CandidateParams {
+    uint frame;
+    uint seed;
+    uint light_candidates;
+    uint bsdf_candidates;
+} params;
+
+// How light candidates are drawn (src/methods/restir/candidates.rs specializes it): through
+// the light BVH (true) or by power (false).
+layout(constant_id = 3) const bool LIGHT_BVH = true;
+
+const uint LIGHT_DIMENSIONS = 16u;
+const uint BSDF_DIMENSIONS = 16u + 8u * 512u;
+
+void main() {
+    uvec2 pixel = gl_GlobalInvocationID.xy;
+    if (pixel.x >= scene.size.x || pixel.y >= scene.size.y) return;
+    uint index = pixel.y * scene.size.x + pixel.x;
+    float m_light = float(params.light_candidates);
+    float m_bsdf = float(params.bsdf_candidates);
+    RestirPoint s = restir_point_from_gbuffer(index);
+    if (!s.valid) {
+        reservoirs[index] = empty_reservoir(0.0);
+        return;
+    }
+    Material m = materials[s.material];
+    uint seed = params.seed;
+    uint frame = params.frame;
+
+    float weight_sum = 0.0;
+    uint chosen_entry = NO_LIGHT;
+    vec3 chosen_y = vec3(0.0);
+    float chosen_target = 0.0;
+
+    // A do-while (bvh.glsl's triangle loop says why); light_candidates is at least 1.
+    uint j = 0u;
+    do {
+        uint dim = LIGHT_DIMENSIONS + 8u * j;
+        uint r_select = random_u31(seed, index, frame, dim);
+        uint r_texel = random_u31(seed, index, frame, dim + 1u);
+        vec2 u = vec2(random(seed, index, frame, dim + 2u), random(seed, index, frame, dim + 3u));
+        LightSample ls;
+        bool sampled = LIGHT_BVH ? sample_light_bvh(s.p, s.n, r_select, 1.0, r_texel, u, ls)
+                                 : sample_light(s.p, r_select, r_texel, u, ls);
+        if (sampled) {
+            vec3 y = isinf(ls.distance) ? ls.direction : s.p + ls.direction * ls.distance;
+            vec3 wi;
+            float dist, to_area;
+            float target = luminance(restir_contribution(s, ls.entry, y, wi, dist, to_area));
+            if (target > 0.0) {
+                float p_bsdf = ls.delta ? 0.0 : bsdf_pdf(m, s.n, s.wo, wi);
+                float w = target / ((m_light * ls.pdf + m_bsdf * p_bsdf) * to_area);
+                if (reservoir_take(weight_sum, w, random(seed, index, frame, dim + 4u))) {
+                    chosen_entry = ls.entry;
+                    chosen_y = y;
+                    chosen_target = target;
+                }
+            }
+        }
+        ++j;
+    } while (j < params.light_candidates);
+
+    vec3 origin = offset_origin(s.p, s.side);
+    for (uint k = 0u; k < params.bsdf_candidates; ++k) {
+        uint dim = BSDF_DIMENSIONS + 8u * k;
+        vec3 u = vec3(random(seed, index, frame, dim), random(seed, index, frame, dim + 1u),
+                      random(seed, index, frame, dim + 2u));
+        vec3 wi;
+        if (!bsdf_sample(m, s.n, s.wo, u, wi)) continue;
+        float p_bsdf = bsdf_pdf(m, s.n, s.wo, wi);
+        if (!(p_bsdf > 0.0) || dot(wi, s.side) <= 0.0) continue;
+        RayHit hit;
+        bool found = trace_closest(origin, wi, infinity(), hit);
+        uint entry = NO_LIGHT;
+        vec3 y = wi;
+        float p_light = 0.0;
+        if (found) {
+            ShadingTriangle st = shading_triangles[hit.triangle];
+            Material hm = materials[floatBitsToUint(st.n0.w)];
+            if (hm.ke.w > 0.0 && dot(wi, st.geometric_normal.xyz) < 0.0) {
+                entry = floatBitsToUint(st.geometric_normal.w);
+                y = origin + hit.t * wi;
+                float probability = LIGHT_BVH ? light_bvh_triangle_probability(st, s.p, s.n)
+                                              : st.n1.w;
+                p_light = light_pdf_triangle_chosen(st, wi, hit.t, probability);
+            }
+        } else if (SCENE_HAS_ENVIRONMENT && scene.env.x > 0.0) {
+            entry = scene.size.z - 1u;
+            p_light = light_pdf_environment(wi);
+        }
+        if (entry >= scene.size.z) continue;
+        vec3 w_dir;
+        float dist, to_area;
+        float target = luminance(restir_contribution(s, entry, y, w_dir, dist, to_area));
+        if (!(target > 0.0)) continue;
+        float w = target / ((m_light * p_light + m_bsdf * p_bsdf) * to_area);
+        if (reservoir_take(weight_sum, w, random(seed, index, frame, dim + 3u))) {
+            chosen_entry = entry;
+            chosen_y = y;
+            chosen_target = target;
+        }
+    }
+
+    Reservoir r = empty_reservoir(m_light + m_bsdf);
+    if (chosen_entry != NO_LIGHT && weight_sum > 0.0 && !isinf(weight_sum)) {
+        r.sample_point = vec4(chosen_y, uintBitsToFloat(chosen_entry));
+        r.weights.z = chosen_target;
+        r.weights.x = restir_visible(s, chosen_entry, chosen_y) ? weight_sum / chosen_target : 0.0;
+    }
+    reservoirs[index] = r;
+}
