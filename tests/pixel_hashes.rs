@@ -38,6 +38,18 @@ const CASES: &[(&str, &str, &str)] = &[
     ("env", "glossy-env", "frames = 2\nspp = 8\nseed = 3"),
     ("env", "failure/sun-behind", "frames = 2\nspp = 8\nseed = 3"),
     ("lightfield", "car-headlights", "frames = 2\nseed = 3"),
+    ("restir", "cornell-box", "frames = 2\nseed = 3"),
+    ("restir", "glossy-env", "frames = 2\nseed = 3"),
+    (
+        "restir",
+        "spot-light",
+        "frames = 2\ncombination = \"biased\"\nlight_sampler = \"power\"\nseed = 3",
+    ),
+    (
+        "reference",
+        "spot-light",
+        "spp = 4\nlight_sampler = \"bvh\"\nseed = 3",
+    ),
     (
         "lightfield",
         "failure/headlight-wall",

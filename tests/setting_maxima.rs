@@ -138,6 +138,14 @@ fn plan(method: &str, key: &str) -> Option<Run> {
             run: "spp = 65536\nframes = 1",
             why: "",
         },
+        // One frame: the candidates' loop (a light-BVH descent each) in one invocation.
+        ("restir", "candidates") => one_frame(),
+        ("restir", "bsdf_candidates") => one_frame(),
+        ("restir", "neighbours") => max(),
+        ("restir", "radius") => Skip("a radius places the neighbours; no loop grows with it"),
+        ("restir", "temporal_cap") => {
+            Skip("a cap on a reservoir's M: a weight, no loop counts it")
+        }
         ("lightfield", "spp") => max(),
         ("lightfield", "k_max") => At {
             value: "MAX",
@@ -160,6 +168,7 @@ fn base(method: &str) -> (&'static str, &'static str) {
         "bundles" => ("spot-light", "frames = 8"),
         "env" => ("glossy-env", "spp = 1024\nframes = 2"),
         "lightfield" => ("failure/headlight-wall", "frames = 1"),
+        "restir" => ("cornell-box", "frames = 4"),
         _ => unreachable!("a method this test does not know: {method}"),
     }
 }

@@ -171,18 +171,19 @@ mod tests {
             why("env", &cornell).unwrap(),
             "env does not render emissive triangles (this scene has 2): it shades the \
              environment map's direct light only; and it needs an environment map, which this \
-             scene lacks; use --method reference, ir or bir"
+             scene lacks; use --method reference, ir, bir or restir"
         );
         assert_eq!(
             why("bundles", &cornell).unwrap(),
             "bundles does not render emissive triangles (this scene has 2): Tokuyoshi 12 \
-             Section 4 starts VPLs from point lights; use --method reference, ir or bir"
+             Section 4 starts VPLs from point lights; use --method reference, ir, bir or \
+             restir"
         );
         assert_eq!(
             why("lightfield", &cornell).unwrap(),
             "lightfield needs a light-field luminaire (it renders light-field luminaires' \
              direct light), and this scene has none: add a [[luminaire]], or use --method \
-             reference, ir or bir"
+             reference, ir, bir or restir"
         );
         // A map, no emissive triangles, one point light.
         let mut sky = cornell.clone();
@@ -202,13 +203,13 @@ mod tests {
         assert_eq!(
             why("ir", &sky).unwrap(),
             "ir does not render environment maps (this scene has one): the quasi-random walk \
-             starts on emissive triangles, point and spot lights; use --method reference or \
-             bundles"
+             starts on emissive triangles, point and spot lights; use --method reference, \
+             bundles or restir"
         );
         assert_eq!(
             why("env", &sky).unwrap(),
             "env does not render point and spot lights (this scene has 1): it shades the \
-             environment map's direct light only; use --method reference or bundles"
+             environment map's direct light only; use --method reference, bundles or restir"
         );
         // Luminaires are named first, and a light the method needs is not offered as a fix
         // where the scene would still be declined.
