@@ -19,6 +19,8 @@ struct LightSample {
     bool delta;
     uint entry;      // the light's entry in LightEntries (set by sample_light_among and
                      // sample_light_bvh)
+    float to_area;   // cos_light / distance^2 on an emissive triangle (a solid-angle density
+                     // times it is the density over the light's area), 1 for other lights
 };
 
 // The entry among the first `count` whose range holds r (r below the count-th's lower bound).
@@ -58,6 +60,7 @@ bool sample_light_entry(LightEntry e, float probability, vec3 p, uint r_texel, v
     s.pdf = 0.0;
     s.distance = 0.0;
     s.direction = vec3(0.0, 1.0, 0.0);
+    s.to_area = 1.0;
     if (e.kind == 0u) {
         EmitterTriangle t = emitter_triangles[e.index];
         vec2 b = sample_uniform_triangle(u);
@@ -73,6 +76,7 @@ bool sample_light_entry(LightEntry e, float probability, vec3 p, uint r_texel, v
         uint m = floatBitsToUint(t.normal.w);
         s.radiance = materials[m].ke.rgb;
         s.pdf = probability * dist2 / (cos_light * t.e2.w);
+        s.to_area = cos_light / dist2;
         return s.pdf > 0.0;
     }
     if (SCENE_HAS_ENVIRONMENT && e.kind == 3u) {

@@ -46,6 +46,7 @@ struct RestirPoint {
     vec3 side;  // geometric normal, viewer's side
     vec3 wo;    // toward the camera
     uint material;
+    Material m; // loaded once (gallivm runs a storage-buffer load as a loop over the lanes)
     bool valid;
 };
 
@@ -55,6 +56,7 @@ RestirPoint restir_point_from_gbuffer(uint pixel) {
     s.valid = gbuffer_surface(g, s.wo, s.side, s.n);
     s.p = g.position.xyz;
     s.material = floatBitsToUint(g.shading_normal.w);
+    s.m = materials[s.valid ? s.material : 0u];
     return s;
 }
 
@@ -65,6 +67,7 @@ RestirPoint restir_point_from_surface(RestirSurface r) {
     s.side = r.side.xyz;
     s.material = floatBitsToUint(r.position.w);
     s.valid = s.material != NO_LIGHT;
+    s.m = materials[s.valid ? s.material : 0u];
     // Camera rays start at the camera's position (camera.glsl).
     vec3 to_camera = scene.camera_position.xyz - s.p;
     float len2 = dot(to_camera, to_camera);
@@ -123,8 +126,7 @@ vec3 restir_contribution(RestirPoint s, uint entry, vec3 y, out vec3 wi, out flo
     }
     float cos_i = dot(wi, s.n);
     if (cos_i <= 0.0 || dot(wi, s.side) <= 0.0) return vec3(0.0);
-    Material m = materials[s.material];
-    return bsdf_eval(m, s.n, s.wo, wi) * cos_i * le_g;
+    return bsdf_eval(s.m, s.n, s.wo, wi) * cos_i * le_g;
 }
 
 float restir_target(RestirPoint s, uint entry, vec3 y) {

@@ -12,8 +12,10 @@
 // range), each a descent of at most 64 levels, and at most 16 BSDF candidates, each one
 // traversal, plus one shadow ray.
 //
-// Random dimensions per (seed, pixel, frame): light candidate j uses 16 + 8 j .. 16 + 8 j + 5
-// (selection, texel, position 2, resampling); BSDF candidate j uses 8 + 8 (512 + j) .. +4.
+// Random numbers per (seed, pixel, frame): light candidate j hashes dimension 16 + j once and
+// draws its selection, texel, position (2) and resampling numbers from that hash, PCG-hashed
+// with 0..4 (one hash4 a candidate instead of five); BSDF candidate j uses dimensions
+// 16 + 4096 + 8 j .. +3 (direction 3, resampling).
 
 #extension GL_GOOGLE_include_directive : require
 
@@ -53,7 +55,7 @@ void main() {
         reservoirs[index] = empty_reservoir(0.0);
         return;
     }
-    Material m = materials[s.material];
+    Material m = s.m;
     uint seed = params.seed;
     uint frame = params.frame;
 
@@ -62,28 +64,30 @@ void main() {
     vec3 chosen_y = vec3(0.0);
     float chosen_target = 0.0;
 
-    // A do-while (bvh.glsl's triangle loop says why); light_candidates is at least 1.
+    // A do-while (bvh.glsl's triangle loop says why); light_candidates is at least 1. The
+    // target is evaluated from the light sample itself (solid angle; the candidate weight is a
+    // ratio of densities, the same in any measure) and turned into the light's measure only
+    // for the chosen sample: the light's data is loaded once.
     uint j = 0u;
     do {
-        uint dim = LIGHT_DIMENSIONS + 8u * j;
-        uint r_select = random_u31(seed, index, frame, dim);
-        uint r_texel = random_u31(seed, index, frame, dim + 1u);
-        vec2 u = vec2(random(seed, index, frame, dim + 2u), random(seed, index, frame, dim + 3u));
+        uint h = hash4(seed, index, frame, LIGHT_DIMENSIONS + j);
+        uint r_select = pcg_hash(h) >> 1u;
+        uint r_texel = pcg_hash(h ^ 0x1u) >> 1u;
+        vec2 u = vec2(unit_float(pcg_hash(h ^ 0x2u)), unit_float(pcg_hash(h ^ 0x3u)));
         LightSample ls;
         bool sampled = LIGHT_BVH ? sample_light_bvh(s.p, s.n, r_select, 1.0, r_texel, u, ls)
                                  : sample_light(s.p, r_select, r_texel, u, ls);
-        if (sampled) {
-            vec3 y = isinf(ls.distance) ? ls.direction : s.p + ls.direction * ls.distance;
-            vec3 wi;
-            float dist, to_area;
-            float target = luminance(restir_contribution(s, ls.entry, y, wi, dist, to_area));
+        float cos_i = dot(ls.direction, s.n);
+        if (sampled && cos_i > 0.0 && dot(ls.direction, s.side) > 0.0) {
+            float target = luminance(bsdf_eval(m, s.n, s.wo, ls.direction) * cos_i * ls.radiance);
             if (target > 0.0) {
-                float p_bsdf = ls.delta ? 0.0 : bsdf_pdf(m, s.n, s.wo, wi);
-                float w = target / ((m_light * ls.pdf + m_bsdf * p_bsdf) * to_area);
-                if (reservoir_take(weight_sum, w, random(seed, index, frame, dim + 4u))) {
+                float p_bsdf = ls.delta ? 0.0 : bsdf_pdf(m, s.n, s.wo, ls.direction);
+                float w = target / (m_light * ls.pdf + m_bsdf * p_bsdf);
+                if (reservoir_take(weight_sum, w, unit_float(pcg_hash(h ^ 0x4u)))) {
                     chosen_entry = ls.entry;
-                    chosen_y = y;
-                    chosen_target = target;
+                    chosen_y = isinf(ls.distance) ? ls.direction
+                                                  : s.p + ls.direction * ls.distance;
+                    chosen_target = target * ls.to_area;
                 }
             }
         }
