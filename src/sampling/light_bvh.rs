@@ -487,7 +487,10 @@ pub fn importance(node: &LightNode, p: Vec3, n: Vec3) -> f32 {
     let cos_theta_x = cos_sub_clamped(sin_theta_w, cos_theta_w, sin_theta_o, cos_theta_o);
     let sin_theta_x = sin_sub_clamped(sin_theta_w, cos_theta_w, sin_theta_o, cos_theta_o);
     let cos_theta_p = cos_sub_clamped(sin_theta_x, cos_theta_x, sin_theta_b, cos_theta_b);
-    if cos_theta_p <= node.cos_theta_e() {
+    // Zero strictly beyond the falloff (pbrt tests `<=`): a hard-edged spot has cos theta_e = 1
+    // and cos theta' = 1 inside its cone, which `<=` would count as outside. At the boundary
+    // of a finite falloff the product below is what it is (0 for cos theta_e = 0).
+    if cos_theta_p < node.cos_theta_e() {
         return 0.0;
     }
     let mut importance = phi * cos_theta_p / d2;
@@ -704,6 +707,41 @@ mod tests {
             dead_total / points_checked as f64
         );
         assert!(points_checked > 800 && with_dead_ends < points_checked);
+    }
+
+    /// A hard-edged spot (cone_angle = falloff_angle, which scenes allow and lights.glsl
+    /// `spot_falloff` renders as a step) has theta_e = 0, cos theta_e = 1, and the importance
+    /// inside its cone is cos theta' = 1: it must not count as outside (`<=` did, and the BVH
+    /// never chose such a spot). Alone and among other lights, at points inside its cone.
+    #[test]
+    fn a_hard_edged_spot_can_be_chosen_inside_its_cone() {
+        let spot = LightBounds::spot(Vec3::ZERO, -Vec3::Y, 20.0, 20.0, 10.0);
+        let others = random_lights(3, 100, 6);
+        for with_others in [false, true] {
+            let mut lights = vec![(0u32, spot)];
+            if with_others {
+                lights.extend(others.iter().enumerate().map(|(i, l)| (i as u32 + 1, l.0)));
+            }
+            let bvh = LightBvh::build(&lights, lights.len());
+            for k in 0..50u32 {
+                // Inside the cone (up to 19 degrees off the axis), 1 to 10 units below.
+                let theta = 19f32.to_radians() * rand(5, k, 0);
+                let phi = std::f32::consts::TAU * rand(5, k, 1);
+                let dir = Vec3::new(theta.sin() * phi.cos(), -theta.cos(), theta.sin() * phi.sin());
+                let p = (1.0 + 9.0 * rand(5, k, 2)) * dir;
+                for n in [Vec3::ZERO, Vec3::Y] {
+                    assert!(
+                        bvh.pmf(p, n, 0) > 0.0,
+                        "with others {with_others}: the spot has pmf 0 at {p} (n {n}), inside its cone"
+                    );
+                }
+            }
+            // Outside it (30 degrees off the axis) it still sends nothing: pmf 0 when alone.
+            let p = 3.0 * Vec3::new(30f32.to_radians().sin(), -30f32.to_radians().cos(), 0.0);
+            if !with_others {
+                assert_eq!(bvh.pmf(p, Vec3::ZERO, 0), 0.0);
+            }
+        }
     }
 
     /// (b) `sample` returns, bit for bit, the pmf that `pmf` finds for its pick by re-walking
