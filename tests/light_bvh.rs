@@ -157,6 +157,8 @@ fn many_lights(quads: u32, size: u32) -> Scene {
 
 /// The CPU's pick for a query (`LightBvh::sample`), and whether its random number passed
 /// within `margin` (relative to the node's total importance) of a child boundary on the way.
+// (The negated comparisons are the descent's, which takes NaN as zero.)
+#[allow(clippy::neg_cmp_op_on_partial_ord)]
 fn cpu_pick(bvh: &LightBvh, p: Vec3, n: Vec3, u: f32, margin: f32) -> (Option<(u32, f32)>, bool) {
     let pick = bvh.sample(p, n, u);
     // The descent of `sample`, watching the boundaries.

@@ -545,7 +545,8 @@ mod tests {
 
     /// `triangles` emissive triangles (random sizes from 0.02 to 2, random orientations) in
     /// a 20-unit cube, and `deltas` point lights and as many spots (cones of 5 to 60 degrees,
-    /// falloffs up to 20 degrees wider), powers log-uniform over three orders of magnitude.
+    /// falloffs up to 20 degrees wider, every third hard-edged), powers log-uniform over three
+    /// orders of magnitude.
     fn random_lights(seed: u32, triangles: u32, deltas: u32) -> Vec<(LightBounds, Emitter)> {
         let mut out = Vec::new();
         for i in 0..triangles {
@@ -571,7 +572,8 @@ mod tests {
             let position = 20.0 * rand3(seed, j, 4) - Vec3::splat(10.0);
             let axis = direction(seed, j, 7);
             let cone = 5.0 + 55.0 * rand(seed, j, 9);
-            let falloff = cone + 20.0 * rand(seed, j, 10);
+            // Every third spot hard-edged (falloff = cone).
+            let falloff = if i % 3 == 2 { cone } else { cone + 20.0 * rand(seed, j, 10) };
             out.push((
                 LightBounds::spot(position, axis, cone, falloff, power(seed, j, 11)),
                 Emitter::Spot(position, axis, falloff),
