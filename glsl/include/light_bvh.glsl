@@ -65,7 +65,9 @@ float light_importance(LightNode nd, vec3 p, vec3 n) {
     float cos_theta_x = cos_sub_clamped(sin_theta_w, cos_theta_w, sin_theta_o, cos_theta_o);
     float sin_theta_x = sin_sub_clamped(sin_theta_w, cos_theta_w, sin_theta_o, cos_theta_o);
     float cos_theta_p = cos_sub_clamped(sin_theta_x, cos_theta_x, sin_theta_b, cos_theta_b);
-    if (cos_theta_p <= cosines.y) return 0.0;
+    // Zero strictly beyond the falloff (pbrt tests <=): a hard-edged spot has cos theta_e = 1
+    // and cos theta' = 1 inside its cone, which <= would count as outside.
+    if (cos_theta_p < cosines.y) return 0.0;
     float importance = phi * cos_theta_p / d2;
     if (n != vec3(0.0)) {
         float cos_theta_i = abs(dot(wi, n));

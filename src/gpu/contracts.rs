@@ -175,6 +175,11 @@ pub(crate) const WITHOUT_MIRROR: &[(&str, &str)] = &[
          Buffer<[f32; 4]> of 1",
     ),
     (
+        "LightQuery",
+        "sample_light_bvh.comp's input, a test kernel's: tests/light_bvh.rs writes it as \
+         [Vec4; 2] (p and u, n)",
+    ),
+    (
         "CdfState",
         "build_light_cdf.comp's carry between its dispatches, GPU-only: the host only zeroes it",
     ),
