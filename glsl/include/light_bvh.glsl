@@ -170,7 +170,8 @@ bool sample_light_bvh(vec3 p, vec3 n, uint r_select, float mass, uint r_texel, v
     uint tree = light_bvh_bound();
     if (!(mass > 0.0)) return false;
     if (r_select >= tree) {
-        // The environment's own range of the table.
+        // The environment's own range of the table (none: a scene without lights).
+        if (scene.size.z == 0u || tree == 0x80000000u) return false;
         LightEntry e = light_entries[scene.size.z - 1u];
         bool found = sample_light_entry(e, e.probability / mass, p, r_texel, u, s);
         s.entry = scene.size.z - 1u;

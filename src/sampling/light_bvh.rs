@@ -184,8 +184,8 @@ pub(crate) const GPU_LAYOUTS: &[crate::gpu::contracts::GpuLayout] = {
 
 impl LightNode {
     fn new(b: &LightBounds, link: u32) -> LightNode {
-        let cosines = f32_to_f16_down(b.cos_theta_o as f32) as u32
-            | (f32_to_f16_down(b.cos_theta_e as f32) as u32) << 16;
+        let cosines = f16_down(b.cos_theta_o) as u32
+            | (f16_down(b.cos_theta_e) as u32) << 16;
         LightNode {
             bounds_min: b.min.extend(b.phi as f32),
             bounds_max: b.max.extend(f32::from_bits(link)),
@@ -211,8 +211,9 @@ impl LightNode {
     }
 }
 
-/// The largest half float at most `x` (finite x in [-1, 1] here), as bits.
-pub fn f32_to_f16_down(x: f32) -> u16 {
+/// The largest half float at most `x` (finite x in [-1, 1] here), as bits. In f64, so the
+/// rounding is down from the exact cosine (an f32 on the way could round up).
+pub fn f16_down(x: f64) -> u16 {
     // Candidates: every half in [-1, 1] is sign | exponent | mantissa; search the ordered
     // encodings by bisection on their values (monotone within each sign).
     let x = x.clamp(-1.0, 1.0);
@@ -221,7 +222,7 @@ pub fn f32_to_f16_down(x: f32) -> u16 {
         let (mut lo, mut hi) = (0u16, 0x3c00u16); // 0 .. 1.0
         while lo < hi {
             let mid = lo + (hi - lo).div_ceil(2);
-            if f16_to_f32(mid) <= x {
+            if f16_to_f32(mid) as f64 <= x {
                 lo = mid;
             } else {
                 hi = mid - 1;
@@ -234,7 +235,7 @@ pub fn f32_to_f16_down(x: f32) -> u16 {
         let (mut lo, mut hi) = (0u16, 0x3c00u16);
         while lo < hi {
             let mid = lo + (hi - lo) / 2;
-            if f16_to_f32(mid) >= m {
+            if f16_to_f32(mid) as f64 >= m {
                 hi = mid;
             } else {
                 lo = mid + 1;
@@ -975,15 +976,15 @@ mod tests {
     #[test]
     fn half_floats_round_down_and_decode_exactly() {
         for x in [
-            1.0f32, 0.0, -1.0, 0.5, 0.70710677, -0.3, 0.9999, -0.9999, 1e-6,
+            1.0f64, 0.0, -1.0, 0.5, 0.70710677, -0.3, 0.9999, -0.9999, 1e-6,
         ] {
-            let h = f32_to_f16_down(x);
-            let y = f16_to_f32(h);
+            let h = f16_down(x);
+            let y = f16_to_f32(h) as f64;
             assert!(y <= x, "{x} -> {y}");
             assert!(x - y < 1e-3, "{x} -> {y}");
         }
-        assert_eq!(f16_to_f32(f32_to_f16_down(1.0)), 1.0);
-        assert_eq!(f16_to_f32(f32_to_f16_down(-1.0)), -1.0);
-        assert_eq!(f16_to_f32(f32_to_f16_down(0.0)), 0.0);
+        assert_eq!(f16_to_f32(f16_down(1.0)), 1.0);
+        assert_eq!(f16_to_f32(f16_down(-1.0)), -1.0);
+        assert_eq!(f16_to_f32(f16_down(0.0)), 0.0);
     }
 }
