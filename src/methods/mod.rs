@@ -21,10 +21,10 @@ pub mod method;
 pub mod paths;
 pub mod progressive;
 pub mod rebuild;
-pub mod restir;
 pub mod reference;
 pub mod registry;
 pub mod renderers;
+pub mod restir;
 pub mod scene_kernel;
 pub mod settings;
 

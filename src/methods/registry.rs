@@ -294,7 +294,15 @@ mod tests {
         let names = Registry::builtin().names();
         assert_eq!(
             names,
-            ["reference", "ir", "bir", "bundles", "env", "lightfield", "restir"]
+            [
+                "reference",
+                "ir",
+                "bir",
+                "bundles",
+                "env",
+                "lightfield",
+                "restir"
+            ]
         );
         for e in Registry::builtin().entries() {
             let m = e.method_from_toml(&toml::Table::new()).unwrap();

@@ -68,7 +68,13 @@ impl LightBounds {
     /// A spot light: full intensity within `cone_angle` of `axis`, falling off to zero at
     /// `falloff_angle` (degrees). pbrt's phi for a spot is its point light's 4 pi I, the cone
     /// being the importance's business.
-    pub fn spot(position: Vec3, axis: Vec3, cone_angle: f32, falloff_angle: f32, power: f64) -> LightBounds {
+    pub fn spot(
+        position: Vec3,
+        axis: Vec3,
+        cone_angle: f32,
+        falloff_angle: f32,
+        power: f64,
+    ) -> LightBounds {
         let theta_o = (cone_angle as f64).to_radians();
         let theta_e = ((falloff_angle - cone_angle).max(0.0) as f64).to_radians();
         LightBounds {
@@ -94,8 +100,10 @@ impl LightBounds {
         if other.phi == 0.0 {
             return *self;
         }
-        let (axis, cos_theta_o) =
-            cone_union((self.axis, self.cos_theta_o), (other.axis, other.cos_theta_o));
+        let (axis, cos_theta_o) = cone_union(
+            (self.axis, self.cos_theta_o),
+            (other.axis, other.cos_theta_o),
+        );
         LightBounds {
             min: self.min.min(other.min),
             max: self.max.max(other.max),
@@ -125,11 +133,16 @@ impl LightBounds {
         let pi = std::f64::consts::PI;
         let m_omega = 2.0 * pi * (1.0 - self.cos_theta_o)
             + pi / 2.0
-                * (2.0 * theta_w * sin_theta_o - (theta_o - 2.0 * theta_w).cos()
+                * (2.0 * theta_w * sin_theta_o
+                    - (theta_o - 2.0 * theta_w).cos()
                     - 2.0 * theta_o * sin_theta_o
                     + self.cos_theta_o);
         let d = parent_diagonal.as_dvec3();
-        let kr = if d[dim] > 0.0 { d.max_element() / d[dim] } else { 1.0 };
+        let kr = if d[dim] > 0.0 {
+            d.max_element() / d[dim]
+        } else {
+            1.0
+        };
         let e = (self.max - self.min).as_dvec3().max(glam::DVec3::ZERO);
         let area = 2.0 * (e.x * e.y + e.y * e.z + e.z * e.x);
         self.phi * m_omega * kr * area
@@ -184,8 +197,7 @@ pub(crate) const GPU_LAYOUTS: &[crate::gpu::contracts::GpuLayout] = {
 
 impl LightNode {
     fn new(b: &LightBounds, link: u32) -> LightNode {
-        let cosines = f16_down(b.cos_theta_o) as u32
-            | (f16_down(b.cos_theta_e) as u32) << 16;
+        let cosines = f16_down(b.cos_theta_o) as u32 | (f16_down(b.cos_theta_e) as u32) << 16;
         LightNode {
             bounds_min: b.min.extend(b.phi as f32),
             bounds_max: b.max.extend(f32::from_bits(link)),
@@ -272,8 +284,11 @@ impl LightBvh {
     /// Builds the tree over `lights`: (light-table entry, bounds); lights of zero power are
     /// left out (pbrt does so too). `entries` sizes the trail table.
     pub fn build(lights: &[(u32, LightBounds)], entries: usize) -> LightBvh {
-        let mut work: Vec<(u32, LightBounds)> =
-            lights.iter().copied().filter(|l| l.1.phi > 0.0 && l.1.phi.is_finite()).collect();
+        let mut work: Vec<(u32, LightBounds)> = lights
+            .iter()
+            .copied()
+            .filter(|l| l.1.phi > 0.0 && l.1.phi.is_finite())
+            .collect();
         let mut bvh = LightBvh {
             nodes: Vec::with_capacity(2 * work.len()),
             trails: vec![0; entries],
@@ -332,8 +347,12 @@ impl LightBvh {
                     buckets[i] = buckets[i].union(b);
                 }
                 for split in 1..BUCKETS - 1 {
-                    let below = buckets[..=split].iter().fold(LightBounds::EMPTY, |a, b| a.union(b));
-                    let above = buckets[split + 1..].iter().fold(LightBounds::EMPTY, |a, b| a.union(b));
+                    let below = buckets[..=split]
+                        .iter()
+                        .fold(LightBounds::EMPTY, |a, b| a.union(b));
+                    let above = buckets[split + 1..]
+                        .iter()
+                        .fold(LightBounds::EMPTY, |a, b| a.union(b));
                     let cost = below.cost(diagonal, dim) + above.cost(diagonal, dim);
                     if cost > 0.0 && best.is_none_or(|(c, _, _)| cost < c) {
                         best = Some((cost, dim, split));
@@ -408,7 +427,11 @@ impl LightBvh {
             return 0.0;
         };
         if root.is_leaf() {
-            return if root.link() == entry && importance(root, p, n) > 0.0 { 1.0 } else { 0.0 };
+            return if root.link() == entry && importance(root, p, n) > 0.0 {
+                1.0
+            } else {
+                0.0
+            };
         }
         let Some(&trail) = self.trails.get(entry as usize) else {
             return 0.0;
@@ -432,7 +455,11 @@ impl LightBvh {
                 node = c1;
             }
             if self.nodes[node].is_leaf() {
-                return if self.nodes[node].link() == entry { pmf } else { 0.0 };
+                return if self.nodes[node].link() == entry {
+                    pmf
+                } else {
+                    0.0
+                };
             }
         }
         0.0
@@ -472,7 +499,11 @@ pub fn importance(node: &LightNode, p: Vec3, n: Vec3) -> f32 {
     let half_diagonal = 0.5 * (bmax - bmin).length();
     // pbrt clamps d^2 below by half the diagonal's length (not its square).
     let d2 = dist2.max(half_diagonal);
-    let wi = if dist2 > 0.0 { to_p / dist2.sqrt() } else { Vec3::Z };
+    let wi = if dist2 > 0.0 {
+        to_p / dist2.sqrt()
+    } else {
+        Vec3::Z
+    };
     let cos_theta_w = node.axis.truncate().dot(wi);
     let sin_theta_w = safe_sqrt(1.0 - cos_theta_w * cos_theta_w);
     // The cone of directions from p that the node's bounding sphere subtends.
@@ -574,7 +605,11 @@ mod tests {
             let axis = direction(seed, j, 7);
             let cone = 5.0 + 55.0 * rand(seed, j, 9);
             // Every third spot hard-edged (falloff = cone).
-            let falloff = if i % 3 == 2 { cone } else { cone + 20.0 * rand(seed, j, 10) };
+            let falloff = if i % 3 == 2 {
+                cone
+            } else {
+                cone + 20.0 * rand(seed, j, 10)
+            };
             out.push((
                 LightBounds::spot(position, axis, cone, falloff, power(seed, j, 11)),
                 Emitter::Spot(position, axis, falloff),
@@ -730,7 +765,11 @@ mod tests {
                 // Inside the cone (up to 19 degrees off the axis), 1 to 10 units below.
                 let theta = 19f32.to_radians() * rand(5, k, 0);
                 let phi = std::f32::consts::TAU * rand(5, k, 1);
-                let dir = Vec3::new(theta.sin() * phi.cos(), -theta.cos(), theta.sin() * phi.sin());
+                let dir = Vec3::new(
+                    theta.sin() * phi.cos(),
+                    -theta.cos(),
+                    theta.sin() * phi.sin(),
+                );
                 let p = (1.0 + 9.0 * rand(5, k, 2)) * dir;
                 for n in [Vec3::ZERO, Vec3::Y] {
                     assert!(

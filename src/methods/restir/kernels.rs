@@ -151,7 +151,10 @@ pub struct GenerateCandidates(SceneKernel);
 
 impl GenerateCandidates {
     pub fn new(ctx: &Context) -> GpuResult<Self> {
-        Ok(GenerateCandidates(SceneKernel::new(ctx, "generate_restir_candidates")?))
+        Ok(GenerateCandidates(SceneKernel::new(
+            ctx,
+            "generate_restir_candidates",
+        )?))
     }
 
     pub fn record<'a>(
@@ -180,7 +183,10 @@ pub struct ReuseTemporal(SceneKernel);
 
 impl ReuseTemporal {
     pub fn new(ctx: &Context) -> GpuResult<Self> {
-        Ok(ReuseTemporal(SceneKernel::new(ctx, "reuse_restir_temporal")?))
+        Ok(ReuseTemporal(SceneKernel::new(
+            ctx,
+            "reuse_restir_temporal",
+        )?))
     }
 
     pub fn record<'a>(

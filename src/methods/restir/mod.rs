@@ -22,9 +22,7 @@ use super::gbuffer::PixelSampling;
 use super::interface::{Lights, RenderMethod, SharedPasses, Support};
 use super::lights::NO_LUMINAIRES;
 use super::paths::LightSampler;
-use super::settings::{
-    common_settings, field_setting, named_choices, Kind, Need, Setting, Value,
-};
+use super::settings::{common_settings, field_setting, named_choices, Kind, Need, Setting, Value};
 
 use kernels::{
     FrameInputs, GenerateCandidates, ReservoirBuffers, ReuseSpatial, ReuseTemporal, ShadeRestir,
