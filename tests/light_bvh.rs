@@ -4,7 +4,8 @@
 //! `gpu_picks_and_pmfs_match_the_cpu_mirror` runs glsl/gpu/sample_light_bvh.comp over 4096
 //! queries (point, normal or none, random number) in a scene of a few hundred emissive
 //! triangles and point and spot lights: the same found flag, the same light and its pmf within
-//! 1e-5 relative, and the GPU's re-walked pmf equal to its select pmf. The tolerance: the two
+//! 1e-5 relative, and the GPU's re-walked pmf equal to its select pmf (exact on lavapipe,
+//! where both sites compile alike). The tolerance: the two
 //! sides compute every importance with the same f32 operations, but LLVM on lavapipe may fuse
 //! some of them (FMA) where rustc does not, so an importance may differ in its last bits; a
 //! random number within 1e-5 (relative) of a child's boundary may then take the other child.
@@ -15,8 +16,11 @@
 //! hard-edged, over a diffuse floor with occluding boxes and a wall) with the reference
 //! choosing its lights by power and through the BVH, at depth 1 and at the default depth, over
 //! seeds: the image means agree within 4 combined standard errors (from the spread over
-//! seeds), and each standard error is below 1% of the mean, so a light the BVH cannot choose
-//! (a bias of a few percent) fails.
+//! seeds), and each standard error is below 1% of the mean, so a delta light the BVH cannot
+//! choose (a bias of a few percent: the hard-edged spot did before its fix) or a pmf at a BSDF
+//! hit that is not the one the light was sampled with fails. (An emissive triangle the BVH
+//! cannot choose would not show here: its BSDF hits take MIS weight 1. The CPU tests in
+//! src/sampling/light_bvh.rs check that every light that reaches a point has pmf > 0.)
 
 mod common;
 
@@ -232,11 +236,16 @@ fn gpu_picks_and_pmfs_match_the_cpu_mirror() {
             near_boundary += near as u32;
             let gpu_found = g[3] == 1;
             let (gpu_pmf, gpu_rewalked) = (f32::from_bits(g[1]), f32::from_bits(g[2]));
-            assert_eq!(
-                gpu_found,
-                cpu.is_some(),
-                "query {i} ({p}, n {n}, u {u}): found on the GPU {gpu_found}, on the CPU {cpu:?}"
-            );
+            // Near a child's boundary the other child may lead into a dead end on one side only.
+            if gpu_found != cpu.is_some() {
+                assert!(
+                    near,
+                    "query {i} ({p}, n {n}, u {u}): found on the GPU {gpu_found}, on the CPU \
+                     {cpu:?}, u not near a boundary"
+                );
+                differ_near += 1;
+                continue;
+            }
             let Some((entry, pmf)) = cpu else { continue };
             found += 1;
             assert_eq!(

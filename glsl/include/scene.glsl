@@ -9,7 +9,8 @@ struct ShadingTriangle {
     vec4 n0;               // shading normal at corner 0; w: material index (uint bits)
     vec4 n1;               // corner 1; w: probability that light selection picks this triangle
     vec4 n2;               // corner 2; w: area
-    vec4 geometric_normal; // unit, counter-clockwise side; w: unused
+    vec4 geometric_normal; // unit, counter-clockwise side; w bits: an emissive triangle's
+                           // entry in LightEntries (0xffffffff for every other triangle)
 };
 
 struct Material {

@@ -9,10 +9,13 @@
 // (visibility reuse; restir.glsl's invariant).
 //
 // Loop budget (docs/DESIGN.md "The loop budget"): at most 512 light candidates (the setting's
-// range), each a descent of at most 64 levels, and at most 16 BSDF candidates, each one
-// traversal, plus one shadow ray.
+// range), each a descent of at most 64 levels (tens on real scenes: 14 levels for 4288
+// lights) plus the environment texel's binary search (log2 of the map's texels) or the power
+// table's (log2 of the lights), so at most about 512 x (1 + 64 + 24) = 45000 iterations before
+// the rays, and at most 16 BSDF candidates, each one traversal, plus one shadow ray.
+// tests/setting_maxima.rs runs 512 candidates on many-lights-sky.
 //
-// Random numbers per (seed, pixel, frame): light candidate j hashes dimension 16 + j once and
+// Random numbers per (pass seed, pixel, frame): light candidate j hashes dimension 16 + j once and
 // draws its selection, texel, position (2) and resampling numbers from that hash, PCG-hashed
 // with 0..4 (one hash4 a candidate instead of five); BSDF candidate j uses dimensions
 // 16 + 4096 + 8 j .. +3 (direction 3, resampling).
@@ -37,7 +40,7 @@ layout(push_constant) uniform CandidateParams {
     uint bsdf_candidates;
 } params;
 
-// How light candidates are drawn (src/methods/restir/candidates.rs specializes it): through
+// How light candidates are drawn (src/methods/restir/kernels.rs specializes it): through
 // the light BVH (true) or by power (false).
 layout(constant_id = 3) const bool LIGHT_BVH = true;
 

@@ -10,7 +10,8 @@
 // tested in both (restir.glsl's invariant), and the result is the frame's final reservoir,
 // stored with this frame's surface for the next frame's temporal pass.
 //
-// Loop budget: at most 16 neighbours (the setting's range), a shadow ray each.
+// Loop budget: at most 16 neighbours (the setting's range): in the unbiased mode a shadow ray
+// each and one for the pixel (k + 1 rays), in the biased mode one for the pixel.
 
 #extension GL_GOOGLE_include_directive : require
 
@@ -36,7 +37,8 @@ layout(push_constant) uniform SpatialParams {
 } params;
 
 const uint MAX_NEIGHBOURS = 16u;
-// Random dimensions: 2 + 3 j .. 4 + 3 j for neighbour j (position, selection).
+// Random dimensions: 2 + 3 j .. 4 + 3 j for neighbour j (position, selection); the pass has
+// its own seed (kernels.rs).
 const uint SPATIAL_DIMENSION = 2u;
 
 float camera_distance(vec3 p) {

@@ -27,7 +27,7 @@ layout(push_constant) uniform TemporalParams {
     uint unbiased;   // 1: 1 / Z with visibility; 0: 1 / (sum of M)
 } params;
 
-// Dimension of the selection's random number (apart from the candidates' 16..).
+// Dimension of the selection's random number (the pass has its own seed: kernels.rs).
 const uint TEMPORAL_DIMENSION = 1u;
 
 void main() {

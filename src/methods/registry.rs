@@ -315,7 +315,8 @@ mod tests {
         };
         assert_eq!(
             e.to_string(),
-            "unknown method `nothing` (methods: reference, ir, bir, bundles, env, lightfield)"
+            "unknown method `nothing` (methods: reference, ir, bir, bundles, env, lightfield, \
+             restir)"
         );
     }
 

@@ -9,7 +9,14 @@ use crate::gpu::{bind, Binding, Buffer, Commands, Context, GpuResult};
 use crate::methods::accumulation::Accumulation;
 use crate::methods::gbuffer::GBuffer;
 use crate::methods::scene_kernel::SceneKernel;
+use crate::sampling::pcg;
 use crate::scene::gpu::GpuScene;
+
+/// Each pass's seed is the render's hashed with its own tag ("cand", "temp", "spat"), so their
+/// random streams are apart whatever dimensions they use (docs/DESIGN.md "Determinism").
+fn pass_seed(seed: u32, tag: u32) -> u32 {
+    pcg::hash(&[seed, tag])
+}
 
 /// One reservoir (glsl/include/restir.glsl `Reservoir`).
 #[repr(C)]
@@ -170,7 +177,7 @@ impl GenerateCandidates {
         bindings.extend(inputs.scene.light_bvh_bindings());
         let params = CandidateParams {
             frame: inputs.frame,
-            seed: inputs.seed,
+            seed: pass_seed(inputs.seed, 0x63616e64),
             light_candidates,
             bsdf_candidates,
         };
@@ -199,7 +206,7 @@ impl ReuseTemporal {
         let kernel = self.0.get(inputs.scene.features)?;
         let params = TemporalParams {
             frame: inputs.frame,
-            seed: inputs.seed,
+            seed: pass_seed(inputs.seed, 0x74656d70),
             cap: cap as f32,
             unbiased: unbiased.into(),
         };
@@ -227,7 +234,7 @@ impl ReuseSpatial {
         let kernel = self.0.get(inputs.scene.features)?;
         let params = SpatialParams {
             frame: inputs.frame,
-            seed: inputs.seed,
+            seed: pass_seed(inputs.seed, 0x73706174),
             neighbours,
             radius: radius as f32,
             unbiased: unbiased.into(),

@@ -84,7 +84,8 @@ impl Default for RestirSettings {
 
 /// Most light candidates: each is a light-BVH descent of at most 64 levels in one invocation,
 /// and lavapipe stops an invocation's loops after 65535 iterations in all (docs/DESIGN.md "The
-/// loop budget"): 512 x 64 leaves half of it to the rays.
+/// loop budget"): 512 x (64 + a texel or table search of up to 24) leaves about 20000
+/// iterations to the rays.
 pub const MAX_CANDIDATES: u32 = 512;
 
 pub const SETTINGS: &[Setting<RestirSettings>] = &[
@@ -159,12 +160,18 @@ pub const SETTINGS: &[Setting<RestirSettings>] = &[
         Kind::Choice(Combination::NAMES),
         "unbiased: 1 / Z over the reservoirs whose surface could have produced the sample, \
          visibility included (a shadow ray per reservoir reused); biased: 1 / (sum of M), \
-         darker where neighbours see other lights (README \"restir\" gives its bias).",
+         darker where the pixel receives light its neighbours cannot (beside shadow edges, \
+         across normal changes; README \"restir and the light BVH\" gives its bias).",
         |s| Some(Value::Name(s.combination.name())),
         |s, v| {
             s.combination = Combination::from_name(v.name()).expect("a checked name");
         },
-    ),
+    )
+    // It combines reservoirs in reuse only.
+    .needs(&[Need::Any(&[
+        Need::OneOf("temporal", &["true"]),
+        Need::Not("neighbours", "0"),
+    ])]),
     common_settings!(pixel_centres),
 ];
 
