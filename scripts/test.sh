@@ -42,6 +42,8 @@ SECOND_PASS_SKIPS=(
   strategies_at_equal_error
   # reference.rs: alpha's direct light (max_depth 1, alpha_frames).
   alpha_direct_light_is_unbiased_and_lowers_the_variance
+  # light_bvh.rs: the path tracer by power and by the light BVH (the mirror test stays).
+  path_tracer_is_unbiased_with_either_sampler
   # bundles.rs: strategies vpl, bundle, mis, two-bounce; environment and uniform directions;
   # glossy suppression none, roughness, clamp.
   every_strategy_matches_the_path_length_limited_reference_mean
@@ -60,6 +62,6 @@ if [ "$#" -eq 0 ]; then
   IRAD_FORCE_STAGING=1 LP_NATIVE_VECTOR_WIDTH=128 cargo test --locked \
     --test prefix_sum --test bvh --test buffers --test reference --test ir --test bir \
     --test bundles --test env --test lightfield --test tables --test pixel_hashes \
-    --test custom_method \
+    --test custom_method --test light_bvh \
     -- --exact "${skips[@]}"
 fi

@@ -459,9 +459,9 @@ fn polygon_irradiance(x: DVec3, n: DVec3, vertices: &[DVec3]) -> f64 {
 /// exact direct radiance is Kd / pi (sum of I cos / d^2 + Le times the triangle's Lambert
 /// irradiance). Pure RIS (no reuse), full reuse (the defaults) with either light sampler, and
 /// full reuse biased (which equals unbiased here: every neighbour sees every light): the image
-/// mean over 16 seeds of 8 frames within 1% of the exact one, its standard error under 0.3%
-/// (measured: pure RIS 0.99958 ± 0.00018, defaults 1.00310 ± 0.00204, power 1.00112 ±
-/// 0.00268).
+/// mean over 32 seeds of 8 frames within 1% of the exact one, its standard error under 0.3%
+/// (measured over 16 seeds: pure RIS 0.99958 ± 0.00018, defaults 1.00310 ± 0.00204, power
+/// 1.00112 ± 0.00268).
 #[test]
 fn two_point_lights_and_a_triangle_over_a_plane_match_the_exact_direct_light() {
     with_gpu(|ctx| {
@@ -549,7 +549,10 @@ fn two_point_lights_and_a_triangle_over_a_plane_match_the_exact_direct_light() {
             ),
         ];
         for (name, s) in cases {
-            let images = restir_images(ctx, &restir, &scene, &gpu, &s, 300..316);
+            // Reuse correlates pixels and frames, so the image mean moves more from seed to
+            // seed than under RIS alone: 32 seeds keep its standard error under 0.3% (16 gave
+            // 0.0020 with one set of seeds and 0.0031 with another).
+            let images = restir_images(ctx, &restir, &scene, &gpu, &s, 300..332);
             let ratios: Vec<f64> = images
                 .iter()
                 .map(|im| im.pixels.iter().map(|p| p[0] as f64).sum::<f64>() / total)
@@ -563,7 +566,7 @@ fn two_point_lights_and_a_triangle_over_a_plane_match_the_exact_direct_light() {
                 worst = worst.max((v / e - 1.0).abs());
             }
             eprintln!(
-                "plane, {name}: mean / exact {ratio:.5} ± {stderr:.5}, worst pixel of 16 seeds' average {worst:.4}"
+                "plane, {name}: mean / exact {ratio:.5} ± {stderr:.5}, worst pixel of 32 seeds' average {worst:.4}"
             );
             assert!(
                 stderr < 0.003,

@@ -67,7 +67,10 @@ pub const SETTINGS: &[Setting<ReferenceSettings>] = &[
         // A path's bounces run in one kernel invocation, whose loops lavapipe stops silently
         // after 65535 iterations in all (docs/DESIGN.md "The loop budget"): two traversals a
         // bounce, so 1024 bounces (the default) is as far as a path in a closed, white scene
-        // may go.
+        // may go. With light_sampler bvh a bounce adds a descent and, at an emissive hit, a pmf
+        // walk (tens of levels each on real scenes); the budget spent there cuts the path's
+        // next traversal, which LoopCuts reports (the render is refused), unless nothing of
+        // the path is left to trace.
         Kind::Count { min: 1, max: 1024 },
         Count,
         "Most scattering events per path (a safety cap: Russian roulette ends paths first).",

@@ -205,6 +205,14 @@ impl LightNode {
         }
     }
 
+    /// What the GPU reads where the tree is empty (a scene whose only light is the environment,
+    /// or none): a leaf of no power, which no descent chooses.
+    pub const EMPTY: LightNode = LightNode {
+        bounds_min: Vec4::ZERO,
+        bounds_max: Vec4::new(0.0, 0.0, 0.0, f32::from_bits(LEAF)),
+        axis: Vec4::ZERO,
+    };
+
     pub fn is_leaf(&self) -> bool {
         self.bounds_max.w.to_bits() & LEAF != 0
     }
@@ -313,6 +321,9 @@ impl LightBvh {
         depth: usize,
     ) -> LightBounds {
         self.depth = self.depth.max(depth);
+        // Below MEDIAN_SPLIT_DEPTH the splits halve, so a leaf is deeper than MAX_DEPTH only
+        // with more than 2^24 lights, which no device's buffers hold (maxStorageBufferRange).
+        assert!(depth < MAX_DEPTH, "light BVH deeper than {MAX_DEPTH} levels");
         if end - start == 1 {
             let (entry, bounds) = lights[start];
             self.nodes.push(LightNode::new(&bounds, entry | LEAF));

@@ -610,7 +610,7 @@ impl GpuScene {
             light_nodes: Buffer::from_slice(
                 ctx,
                 "LightBvhNodes",
-                &or_placeholder(light_bvh.nodes.clone(), LightNode::zeroed()),
+                &or_placeholder(light_bvh.nodes.clone(), LightNode::EMPTY),
             )?,
             light_trails: Buffer::from_slice(ctx, "LightTrails", &or_placeholder(trails, [0; 2]))?,
             light_bvh,
