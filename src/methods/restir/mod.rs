@@ -159,7 +159,10 @@ pub const SETTINGS: &[Setting<RestirSettings>] = &[
         "combination",
         Kind::Choice(Combination::NAMES),
         "unbiased: 1 / Z over the reservoirs whose surface could have produced the sample, \
-         visibility included (a shadow ray per reservoir reused); biased: 1 / (sum of M), \
+         visibility included (a shadow ray per reservoir reused); its weights ignore how the \
+         target differs between surfaces, so on glossy lobes and grazing emitters reuse brings \
+         spikes that an image averaged over frames keeps (README \"restir and the light \
+         BVH\": on glossy-env RIS alone is far better); biased: 1 / (sum of M), \
          darker where the pixel receives light its neighbours cannot (beside shadow edges, \
          across normal changes; README \"restir and the light BVH\" gives its bias).",
         |s| Some(Value::Name(s.combination.name())),
