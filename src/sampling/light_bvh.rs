@@ -323,7 +323,10 @@ impl LightBvh {
         self.depth = self.depth.max(depth);
         // Below MEDIAN_SPLIT_DEPTH the splits halve, so a leaf is deeper than MAX_DEPTH only
         // with more than 2^24 lights, which no device's buffers hold (maxStorageBufferRange).
-        assert!(depth < MAX_DEPTH, "light BVH deeper than {MAX_DEPTH} levels");
+        assert!(
+            depth < MAX_DEPTH,
+            "light BVH deeper than {MAX_DEPTH} levels"
+        );
         if end - start == 1 {
             let (entry, bounds) = lights[start];
             self.nodes.push(LightNode::new(&bounds, entry | LEAF));
