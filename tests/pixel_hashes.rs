@@ -42,6 +42,11 @@ const CASES: &[(&str, &str, &str)] = &[
     ("restir", "glossy-env", "frames = 2\nseed = 3"),
     (
         "restir",
+        "cornell-box",
+        "frames = 2\ncombination = \"one-over-z\"\nseed = 3",
+    ),
+    (
+        "restir",
         "spot-light",
         "frames = 2\ncombination = \"biased\"\nlight_sampler = \"power\"\nseed = 3",
     ),

@@ -145,7 +145,25 @@ bool restir_visible(RestirPoint s, uint entry, vec3 y) {
     vec3 to_light = distant ? y : y - origin;
     return !trace_any(origin, to_light, distant ? infinity() : 0.9999);
 }
+
+// p^ V of (entry, y) at s: the target times the sample's visibility from s, a shadow ray only
+// where p^ > 0. What the MIS weights of reuse see as the density of a reservoir's samples
+// (restir.glsl's invariant: a stored reservoir's samples are visible from its surface).
+float restir_visible_target(RestirPoint s, uint entry, vec3 y) {
+    float target = restir_target(s, entry, y);
+    return target > 0.0 && restir_visible(s, entry, y) ? target : 0.0;
+}
 #endif
+
+// How reuse combines reservoirs (the push constants' `combination`; RestirSettings).
+const uint COMBINATION_BIASED = 0u;     // 1 / (sum of M) (Alg. 4-5)
+const uint COMBINATION_ONE_OVER_Z = 1u; // 1 / Z with visibility (Alg. 6)
+const uint COMBINATION_MIS = 2u;        // the balance heuristic over p^ V (pairwise in space)
+
+// The balance heuristic's share of a among a and b: a / (a + b), 0 where a is 0.
+float balance_share(float a, float b) {
+    return a > 0.0 ? a / (a + b) : 0.0;
+}
 
 // Streaming weighted selection (Bitterli et al. Alg. 2 without the M bookkeeping): candidate
 // with weight w replaces the current choice with probability w / (sum so far).

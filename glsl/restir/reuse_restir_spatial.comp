@@ -1,17 +1,27 @@
 #version 450
 // ReSTIR DI's spatial reuse (Bitterli et al. 2020, Section 4, Alg. 4 and 6): each pixel's
-// reservoir combined with those of k random neighbours within R pixels (uniform over the
-// disk), a neighbour rejected where its surface differs (normals more than about 25 degrees
-// apart, camera distances more than 10% apart: the paper's heuristics) or the camera missed.
-// Weights p^(y) W M with p^ at this pixel's surface. Unbiased (the default): 1 / Z, Z the M of
-// the reservoirs (this pixel's and the neighbours' taken) whose surface could have produced y,
-// p^ > 0 there and y visible from it (a shadow ray from each but the one that produced y).
-// Biased: Z = the sum of every M taken. The chosen sample's visibility from this pixel is
-// tested in both (restir.glsl's invariant), and the result is the frame's final reservoir,
-// stored with this frame's surface for the next frame's temporal pass.
+// reservoir (the canonical one, c) combined with those of k random neighbours within R pixels
+// (uniform over the disk), a neighbour rejected where its surface differs (normals more than
+// about 25 degrees apart, camera distances more than 10% apart: the paper's heuristics) or the
+// camera missed. The result is the frame's final reservoir, stored with this frame's surface
+// for the next frame's temporal pass; it keeps restir.glsl's invariant. Combinations:
+// - mis (the default): pairwise MIS with confidence weights (Bitterli's thesis, 2022, Section
+//   9.1; GRIS, Lin et al. 2022; RTXDI's pairwise mode), p^ V standing for each domain's
+//   density. With n neighbours taken, M_sum the sum of every M, and pair i between neighbour i
+//   and c (c holding M_c / n in each pair):
+//     m_i(y) = (M_i + M_c / n) / M_sum * M_i p_i(y) / (M_i p_i(y) + M_c / n p_c(y)),
+//     m_c(y) = sum_i (M_i + M_c / n) / M_sum * (M_c / n) p_c(y) / (M_i p_i(y) + M_c / n p_c(y)),
+//   p_j = p^_j V_j. They sum to 1 wherever p_c > 0, which is where the pixel's integrand is,
+//   so the estimate is unbiased; a weight is bounded by the targets' ratio. Reservoir j enters
+//   with m_j(y_j) p_c(y_j) W_j, and W = (sum of weights) / p^_c(y). 2n shadow rays: each
+//   neighbour's sample from c, c's sample from each neighbour.
+// - one-over-z: weights p^_c(y_j) W_j M_j; 1 / Z, Z the M of the reservoirs whose surface could
+//   have produced y (p^ > 0 there and y visible from it: a shadow ray from each but the one
+//   that produced y, and one for y from c).
+// - biased: as one-over-z with Z = the sum of every M taken.
 //
-// Loop budget: at most 16 neighbours (the setting's range): in the unbiased mode a shadow ray
-// each and one for the pixel (k + 1 rays), in the biased mode one for the pixel.
+// Loop budget: at most 16 neighbours (the setting's range): 2k shadow rays in mis, k + 1 in
+// one-over-z, one in biased.
 
 #extension GL_GOOGLE_include_directive : require
 
@@ -30,15 +40,16 @@ layout(push_constant) uniform SpatialParams {
     uint seed;
     uint neighbours;  // k, at most MAX_NEIGHBOURS
     float radius;     // R, pixels
-    uint unbiased;    // 1: 1 / Z with visibility; 0: 1 / (sum of M)
+    uint combination; // COMBINATION_* (restir.glsl)
     float normal_cos; // a neighbour's normal at least this close (cosine) ...
     float depth_tolerance;  // ... and its camera distance within this fraction
     uint _pad;
 } params;
 
 const uint MAX_NEIGHBOURS = 16u;
-// Random dimensions: 2 + 3 j .. 4 + 3 j for neighbour j (position, selection); the pass has
-// its own seed (kernels.rs).
+// Random dimensions: 1 for the canonical reservoir's selection under mis, 2 + 3 j .. 4 + 3 j
+// for neighbour j (position, selection); the pass has its own seed (kernels.rs).
+const uint CANONICAL_DIMENSION = 1u;
 const uint SPATIAL_DIMENSION = 2u;
 
 float camera_distance(vec3 p) {
@@ -58,18 +69,13 @@ void main() {
     }
     float depth = camera_distance(s.p);
 
-    // The reservoirs taken: index 0 this pixel's, then the neighbours'.
+    // The reservoirs taken: index 0 this pixel's, then the neighbours' (and their selection's
+    // random dimension).
     uint taken[MAX_NEIGHBOURS + 1u];
+    uint taken_dimension[MAX_NEIGHBOURS + 1u];
     taken[0] = index;
     uint count = 1u;
-    float weight_sum = 0.0;
-    uint chosen = 0u;
-    uint entry = floatBitsToUint(own.sample_point.w);
-    vec3 y = own.sample_point.xyz;
-    float target = own.weights.z;
     float m_sum = own.weights.y;
-    reservoir_take(weight_sum, own.weights.z * own.weights.x * own.weights.y, 0.0);
-
     for (uint j = 0u; j < params.neighbours; ++j) {
         uint dim = SPATIAL_DIMENSION + 3u * j;
         float r = params.radius * sqrt(random(params.seed, index, params.frame, dim));
@@ -81,27 +87,82 @@ void main() {
         RestirPoint n = restir_point_from_gbuffer(qi);
         if (!n.valid || dot(n.n, s.n) < params.normal_cos
             || abs(camera_distance(n.p) - depth) > params.depth_tolerance * depth) continue;
-        Reservoir other = reservoirs[qi];
+        taken[count] = qi;
+        taken_dimension[count] = dim + 2u;
+        m_sum += reservoirs[qi].weights.y;
+        ++count;
+    }
+
+    uint entry = floatBitsToUint(own.sample_point.w);
+    vec3 y = own.sample_point.xyz;
+    float weight_sum = 0.0;
+    Reservoir result = empty_reservoir(m_sum);
+
+    if (params.combination == COMBINATION_MIS) {
+        float m_own = own.weights.y;
+        float pair_own = m_own / float(max(count - 1u, 1u));  // c's confidence in each pair
+        // p^ V of c's sample at c: its stored target where W > 0 (the invariant).
+        float own_at_own = own.weights.x > 0.0 ? own.weights.z : 0.0;
+        float own_mis = count == 1u ? 1.0 : 0.0;
+        float target = own_at_own;
+        for (uint i = 1u; i < count; ++i) {
+            Reservoir other = reservoirs[taken[i]];
+            RestirPoint n = restir_point_from_gbuffer(taken[i]);
+            uint other_entry = floatBitsToUint(other.sample_point.w);
+            float m_other = other.weights.y;
+            float pair = (m_other + pair_own) / m_sum;
+            float other_at_other = other.weights.x > 0.0 ? other.weights.z : 0.0;
+            float other_at_own = other_at_other > 0.0
+                ? restir_visible_target(s, other_entry, other.sample_point.xyz) : 0.0;
+            float own_at_other = own_at_own > 0.0 ? restir_visible_target(n, entry, y) : 0.0;
+            own_mis += pair * balance_share(pair_own * own_at_own, m_other * own_at_other);
+            float w = pair * balance_share(m_other * other_at_other, pair_own * other_at_own)
+                * other_at_own * other.weights.x;
+            if (reservoir_take(weight_sum, w,
+                               random(params.seed, index, params.frame, taken_dimension[i]))) {
+                result.sample_point = other.sample_point;
+                target = other_at_own;
+            }
+        }
+        bool from_own = reservoir_take(weight_sum, own_mis * own_at_own * own.weights.x,
+                                       random(params.seed, index, params.frame,
+                                              CANONICAL_DIMENSION));
+        if (from_own) {
+            result.sample_point = own.sample_point;
+            target = own_at_own;
+        }
+        if (weight_sum > 0.0 && !isinf(weight_sum) && target > 0.0) {
+            result.weights.z = target;
+            result.weights.x = weight_sum / target;
+        } else {
+            result = empty_reservoir(m_sum);
+        }
+        final_reservoirs[index] = result;
+        return;
+    }
+
+    uint chosen = 0u;
+    float target = own.weights.z;
+    reservoir_take(weight_sum, own.weights.z * own.weights.x * own.weights.y, 0.0);
+    for (uint i = 1u; i < count; ++i) {
+        Reservoir other = reservoirs[taken[i]];
         uint other_entry = floatBitsToUint(other.sample_point.w);
         float other_target = other.weights.x > 0.0
             ? restir_target(s, other_entry, other.sample_point.xyz) : 0.0;
         float w = other_target * other.weights.x * other.weights.y;
-        taken[count] = qi;
-        m_sum += other.weights.y;
-        if (reservoir_take(weight_sum, w, random(params.seed, index, params.frame, dim + 2u))) {
-            chosen = count;
+        if (reservoir_take(weight_sum, w,
+                           random(params.seed, index, params.frame, taken_dimension[i]))) {
+            chosen = i;
             entry = other_entry;
             y = other.sample_point.xyz;
             target = other_target;
         }
-        ++count;
     }
 
-    Reservoir result = empty_reservoir(m_sum);
     if (weight_sum > 0.0 && !isinf(weight_sum)) {
         bool visible = chosen == 0u ? true : restir_visible(s, entry, y);
         float z = m_sum;
-        if (params.unbiased != 0u) {
+        if (params.combination == COMBINATION_ONE_OVER_Z) {
             z = visible ? own.weights.y : 0.0;
             for (uint i = 1u; i < count; ++i) {
                 Reservoir other = reservoirs[taken[i]];

@@ -1,12 +1,18 @@
 #version 450
 // ReSTIR DI's temporal reuse (Bitterli et al. 2020, Section 4 and Alg. 5): this frame's
-// candidate reservoir combined with the same pixel's final reservoir of the previous frame
-// (the view is static; the G-buffer is re-jittered, so the previous frame's surface is kept
-// in PreviousSurfaces), its M capped at `cap` times this frame's. Each reservoir enters with
-// weight p^(y) W M, p^ at this frame's surface. Unbiased (the default): W = (sum of weights) /
-// (Z p^(y)), Z the M of the reservoirs whose surface could have produced y (p^ > 0 there and y
-// visible from it: Alg. 6's 1 / Z with visibility), one shadow ray for the one not known.
-// Biased: Z is the sum of both M (Alg. 5). The result keeps restir.glsl's invariant.
+// candidate reservoir (c, at this frame's surface s) combined with the same pixel's final
+// reservoir of the previous frame (p, at its surface q: the G-buffer is re-jittered every
+// frame, so q is kept in PreviousSurfaces; the view is static), p's M capped at `cap` times c's.
+// The result keeps restir.glsl's invariant. Combinations:
+// - mis (the default): the balance heuristic over the two domains, p^ V standing for each one's
+//   density (GRIS, Lin et al. 2022, with confidence weights M): reservoir i's sample y_i enters
+//   with weight m_i(y_i) p^_s(y_i) V_s(y_i) W_i, m_i(y) = M_i p^_i V_i(y) / sum_j M_j p^_j V_j(y),
+//   and W = (sum of weights) / p^_s(y). Two shadow rays: c's sample from q, p's from s. The
+//   weights are bounded by the targets' ratio, where 1 / Z's are not.
+// - one-over-z: weights p^_s(y_i) W_i M_i, W = (sum of weights) / (Z p^_s(y)), Z the M of the
+//   reservoirs whose surface could have produced y (p^ > 0 there and y visible from it: Alg. 6's
+//   1 / Z with visibility), one shadow ray for the one not known and one for y from s.
+// - biased: as one-over-z with Z the sum of both M (Alg. 5).
 
 #extension GL_GOOGLE_include_directive : require
 
@@ -23,8 +29,8 @@ layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 layout(push_constant) uniform TemporalParams {
     uint frame;
     uint seed;
-    float cap;       // the previous reservoir's M at most cap times this one's
-    uint unbiased;   // 1: 1 / Z with visibility; 0: 1 / (sum of M)
+    float cap;        // the previous reservoir's M at most cap times this one's
+    uint combination; // COMBINATION_* (restir.glsl)
 } params;
 
 // Dimension of the selection's random number (the pass has its own seed: kernels.rs).
@@ -46,6 +52,38 @@ void main() {
     uint e_previous = floatBitsToUint(previous.sample_point.w);
     vec3 y_current = current.sample_point.xyz;
     vec3 y_previous = previous.sample_point.xyz;
+    float u = random(params.seed, index, params.frame, TEMPORAL_DIMENSION);
+    Reservoir r = empty_reservoir(m_current + m_previous);
+
+    if (params.combination == COMBINATION_MIS) {
+        // p^ V of each sample at its own surface: its stored target where W > 0 (the invariant).
+        float own_current = current.weights.x > 0.0 ? current.weights.z : 0.0;
+        float own_previous = m_previous > 0.0 && previous.weights.x > 0.0
+            ? previous.weights.z : 0.0;
+        // ... and at the other surface.
+        float current_at_q = own_current > 0.0 && m_previous > 0.0
+            ? restir_visible_target(q, e_current, y_current) : 0.0;
+        float previous_at_s = own_previous > 0.0
+            ? restir_visible_target(s, e_previous, y_previous) : 0.0;
+        float weight_sum = 0.0;
+        reservoir_take(weight_sum,
+                       balance_share(m_current * own_current, m_previous * current_at_q)
+                           * own_current * current.weights.x,
+                       0.0);
+        bool from_previous = reservoir_take(
+            weight_sum,
+            balance_share(m_previous * own_previous, m_current * previous_at_s) * previous_at_s
+                * previous.weights.x,
+            u);
+        float target = from_previous ? previous_at_s : own_current;
+        if (weight_sum > 0.0 && !isinf(weight_sum) && target > 0.0) {
+            r.sample_point = from_previous ? previous.sample_point : current.sample_point;
+            r.weights.z = target;
+            r.weights.x = weight_sum / target;
+        }
+        reservoirs[index] = r;
+        return;
+    }
 
     float weight_sum = 0.0;
     float w_current = current.weights.z * current.weights.x * m_current;
@@ -55,10 +93,8 @@ void main() {
         target_previous = restir_target(s, e_previous, y_previous);
     }
     float w_previous = target_previous * previous.weights.x * m_previous;
-    bool from_previous = reservoir_take(weight_sum, w_previous,
-                                        random(params.seed, index, params.frame, TEMPORAL_DIMENSION));
+    bool from_previous = reservoir_take(weight_sum, w_previous, u);
 
-    Reservoir r = empty_reservoir(m_current + m_previous);
     if (weight_sum > 0.0 && !isinf(weight_sum)) {
         uint entry = from_previous ? e_previous : e_current;
         vec3 y = from_previous ? y_previous : y_current;
@@ -66,7 +102,7 @@ void main() {
         // Visibility from this frame's surface: known for its own sample (W > 0).
         bool visible = from_previous ? restir_visible(s, entry, y) : true;
         float z = m_current + m_previous;
-        if (params.unbiased != 0u) {
+        if (params.combination == COMBINATION_ONE_OVER_Z) {
             // Could the previous surface have produced y? Known for its own sample.
             bool previous_covers = from_previous;
             if (!from_previous && m_previous > 0.0 && restir_target(q, entry, y) > 0.0) {

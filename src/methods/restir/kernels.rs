@@ -10,6 +10,8 @@ use crate::methods::accumulation::Accumulation;
 use crate::methods::gbuffer::GBuffer;
 use crate::methods::scene_kernel::SceneKernel;
 use crate::sampling::pcg;
+
+use super::Combination;
 use crate::scene::gpu::GpuScene;
 
 /// Each pass's seed is the render's hashed with its own tag ("cand", "temp", "spat"), so their
@@ -50,7 +52,7 @@ struct TemporalParams {
     frame: u32,
     seed: u32,
     cap: f32,
-    unbiased: u32,
+    combination: u32,
 }
 
 #[repr(C)]
@@ -60,7 +62,7 @@ struct SpatialParams {
     seed: u32,
     neighbours: u32,
     radius: f32,
-    unbiased: u32,
+    combination: u32,
     normal_cos: f32,
     depth_tolerance: f32,
     _pad: u32,
@@ -79,13 +81,13 @@ pub(crate) const GPU_LAYOUTS: &[crate::gpu::contracts::GpuLayout] = {
             light_candidates,
             bsdf_candidates,
         }),
-        gpu_layout!(TemporalParams in ["reuse_restir_temporal"] { frame, seed, cap, unbiased }),
+        gpu_layout!(TemporalParams in ["reuse_restir_temporal"] { frame, seed, cap, combination }),
         gpu_layout!(SpatialParams in ["reuse_restir_spatial"] {
             frame,
             seed,
             neighbours,
             radius,
-            unbiased,
+            combination,
             normal_cos,
             depth_tolerance,
             _pad,
@@ -201,14 +203,14 @@ impl ReuseTemporal {
         cmd: &mut Commands<'a>,
         inputs: &FrameInputs<'a>,
         cap: u32,
-        unbiased: bool,
+        combination: Combination,
     ) -> GpuResult<()> {
         let kernel = self.0.get(inputs.scene.features)?;
         let params = TemporalParams {
             frame: inputs.frame,
             seed: pass_seed(inputs.seed, 0x74656d70),
             cap: cap as f32,
-            unbiased: unbiased.into(),
+            combination: combination.gpu_code(),
         };
         let bindings = inputs.bindings(true);
         kernel.dispatch(cmd, &bindings, &params, inputs.scene.image_workgroups())
@@ -229,7 +231,7 @@ impl ReuseSpatial {
         inputs: &FrameInputs<'a>,
         neighbours: u32,
         radius: u32,
-        unbiased: bool,
+        combination: Combination,
     ) -> GpuResult<()> {
         let kernel = self.0.get(inputs.scene.features)?;
         let params = SpatialParams {
@@ -237,7 +239,7 @@ impl ReuseSpatial {
             seed: pass_seed(inputs.seed, 0x73706174),
             neighbours,
             radius: radius as f32,
-            unbiased: unbiased.into(),
+            combination: combination.gpu_code(),
             normal_cos: NORMAL_COS,
             depth_tolerance: DEPTH_TOLERANCE,
             _pad: 0,

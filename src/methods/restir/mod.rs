@@ -5,8 +5,9 @@
 //! resampling, the target being the unshadowed contribution; a shadow ray for the chosen sample
 //! (pass "restir candidates"); the previous frame's reservoir of the same pixel, its M capped
 //! (pass "restir temporal"); k neighbours within R pixels, rejected by normal and depth (pass
-//! "restir spatial"); the final sample shaded (pass "restir shade"). Unbiased combination (1 / Z
-//! with visibility, Alg. 6) by default, the biased 1 / sum M (Alg. 4-5) as a setting. The
+//! "restir spatial"); the final sample shaded (pass "restir shade"). Unbiased combination by MIS
+//! (the balance heuristic over p^ V, pairwise in space) by default; 1 / Z with visibility
+//! (Alg. 6) and the biased 1 / sum M (Alg. 4-5) as settings. The
 //! emission the camera sees is the driver's direct-light pass at depth 0. Direct light only: it
 //! is scored against the path tracer at `max_depth` 1.
 
@@ -31,17 +32,37 @@ use kernels::{
 /// How reservoirs are combined in reuse.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Combination {
+    /// The balance heuristic over the reservoirs' p^ V, pairwise in space (Bitterli's thesis
+    /// Section 9.1; Lin et al. 2022, GRIS), with confidence weights: unbiased, its weights
+    /// bounded by the targets' ratio.
+    Mis,
     /// 1 / Z, Z the confidence of the reservoirs whose surface could have produced the sample,
-    /// visibility included (Bitterli et al. Alg. 6): unbiased.
-    Unbiased,
+    /// visibility included (Bitterli et al. Alg. 6): unbiased, its weights unbounded.
+    OneOverZ,
     /// 1 / (sum of M) (Alg. 4-5): biased where neighbours' surfaces or visibility differ.
     Biased,
 }
 
 named_choices!(Combination {
-    Unbiased => "unbiased",
+    Mis => "mis",
+    OneOverZ => "one-over-z",
     Biased => "biased",
 });
+
+impl Combination {
+    /// The kernels' COMBINATION_* (glsl/include/restir.glsl).
+    pub(crate) fn gpu_code(self) -> u32 {
+        match self {
+            Combination::Biased => 0,
+            Combination::OneOverZ => 1,
+            Combination::Mis => 2,
+        }
+    }
+
+    pub fn is_unbiased(self) -> bool {
+        self != Combination::Biased
+    }
+}
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RestirSettings {
@@ -76,7 +97,7 @@ impl Default for RestirSettings {
             temporal_cap: 20,
             neighbours: 5,
             radius: 30,
-            combination: Combination::Unbiased,
+            combination: Combination::Mis,
             pixels: PixelSampling::Jittered,
         }
     }
@@ -158,13 +179,15 @@ pub const SETTINGS: &[Setting<RestirSettings>] = &[
     Setting::<RestirSettings>::new(
         "combination",
         Kind::Choice(Combination::NAMES),
-        "unbiased: 1 / Z over the reservoirs whose surface could have produced the sample, \
-         visibility included (a shadow ray per reservoir reused); its weights ignore how the \
-         target differs between surfaces, so on glossy lobes and grazing emitters reuse brings \
-         spikes that an image averaged over frames keeps (README \"restir and the light \
-         BVH\": on glossy-env RIS alone is far better); biased: 1 / (sum of M), \
+        "mis: the balance heuristic over each reservoir's target times visibility, pairwise \
+         in space (two shadow rays per neighbour); unbiased, its weights bounded by how the \
+         targets differ between surfaces. one-over-z: 1 / Z over the reservoirs whose surface \
+         could have produced the sample, visibility included (a shadow ray per reservoir \
+         reused); unbiased, but its weights ignore how the target differs between surfaces, \
+         so on glossy lobes and grazing emitters reuse brings spikes that an image averaged \
+         over frames keeps (README \"restir and the light BVH\"). biased: 1 / (sum of M), \
          darker where the pixel receives light its neighbours cannot (beside shadow edges, \
-         across normal changes; README \"restir and the light BVH\" gives its bias).",
+         across normal changes; the README gives its bias).",
         |s| Some(Value::Name(s.combination.name())),
         |s, v| {
             s.combination = Combination::from_name(v.name()).expect("a checked name");
@@ -260,7 +283,6 @@ impl MethodFrames for RestirFrames<'_> {
             frame,
             seed: s.seed,
         };
-        let unbiased = s.combination == Combination::Unbiased;
         cmd.pass("restir candidates", |cmd| {
             restir.candidates.record(
                 cmd,
@@ -274,14 +296,14 @@ impl MethodFrames for RestirFrames<'_> {
             cmd.pass("restir temporal", |cmd| {
                 restir
                     .temporal
-                    .record(cmd, &inputs, s.temporal_cap, unbiased)
+                    .record(cmd, &inputs, s.temporal_cap, s.combination)
             })?;
         }
         // With no neighbours it still stores the final reservoirs and surfaces.
         cmd.pass("restir spatial", |cmd| {
             restir
                 .spatial
-                .record(cmd, &inputs, s.neighbours, s.radius, unbiased)
+                .record(cmd, &inputs, s.neighbours, s.radius, s.combination)
         })?;
         cmd.pass("restir shade", |cmd| {
             restir.shade.record(cmd, &inputs, shared.accumulation)
