@@ -8,17 +8,17 @@
 // SampleDiscrete), so one number serves the whole descent. The pmf of a given light re-walks
 // its bit trail (LightTrails), as MIS needs when a BSDF-sampled ray hits an emitter.
 //
-// Nodes are 48 bytes, depth-first (child 0 right after its parent, child 1 at the index the
+// Nodes are 32 bytes (two loads), depth-first (child 0 right after its parent, child 1 at the index the
 // parent stores), so the descent needs no stack; it is at most 64 levels (the build's bound),
 // a loop of at most 64 iterations. Bindings 37 and 38. Needs scene.glsl and lights.glsl.
 #ifndef LIGHT_BVH_GLSL
 #define LIGHT_BVH_GLSL
 
 struct LightNode {
-    vec4 bounds_min;  // xyz; w: phi (the lights' power)
-    vec4 bounds_max;  // xyz; w bits: child 1's index, or the light's entry | 0x80000000 (leaf)
-    vec4 axis;        // xyz: the emission cone's axis; w bits: cos theta_o (low half) and
-                      // cos theta_e (high half), half floats rounded down
+    vec4 sphere;  // xyz: the centre of a sphere around the node's lights; w: its radius
+    vec4 packed;  // x: phi (the lights' power); bits of y: child 1's index, or the light's
+                  // entry | 0x80000000 (leaf); of z: the cone's axis (octahedral_decode); of w:
+                  // cos theta_o (low half) and cos theta_e (high half), half floats rounded down
 };
 
 layout(set = 0, binding = 37, std430) readonly buffer LightBvhNodes { LightNode light_nodes[]; };
@@ -42,24 +42,37 @@ float safe_sqrt(float x) {
     return sqrt(max(x, 0.0));
 }
 
+// The axis of an octahedral vector (two snorm16: x low, y high), as
+// src/sampling/light_bvh.rs `octahedral_decode` computes it (divisions and square roots, which
+// are exact, so the CPU mirror gets the same bits).
+vec3 octahedral_decode(uint bits) {
+    const float SCALE = 1.0 / 32767.0;
+    float x = max(float(int(bits << 16u) >> 16) * SCALE, -1.0);
+    float y = max(float(int(bits) >> 16) * SCALE, -1.0);
+    vec3 v = vec3(x, y, 1.0 - abs(x) - abs(y));
+    if (v.z < 0.0) {
+        v.x = (1.0 - abs(y)) * (x >= 0.0 ? 1.0 : -1.0);
+        v.y = (1.0 - abs(x)) * (y >= 0.0 ? 1.0 : -1.0);
+    }
+    return v / sqrt(dot(v, v));
+}
+
 // pbrt's LightBounds::Importance of node `nd` at point p with normal n (zero: none).
 float light_importance(LightNode nd, vec3 p, vec3 n) {
-    vec3 bmin = nd.bounds_min.xyz;
-    vec3 bmax = nd.bounds_max.xyz;
-    float phi = nd.bounds_min.w;
-    vec3 pc = 0.5 * (bmin + bmax);
+    vec3 pc = nd.sphere.xyz;
+    float radius = nd.sphere.w;
+    float phi = nd.packed.x;
     vec3 to_p = p - pc;
     float dist2 = dot(to_p, to_p);
-    float half_diagonal = 0.5 * length(bmax - bmin);
-    // pbrt clamps d^2 below by half the diagonal's length (not its square).
-    float d2 = max(dist2, half_diagonal);
+    // pbrt clamps d^2 below by half the diagonal's length (not its square): here the radius.
+    float d2 = max(dist2, radius);
     vec3 wi = dist2 > 0.0 ? to_p / sqrt(dist2) : vec3(0.0, 0.0, 1.0);
-    float cos_theta_w = dot(nd.axis.xyz, wi);
+    float cos_theta_w = dot(octahedral_decode(floatBitsToUint(nd.packed.z)), wi);
     float sin_theta_w = safe_sqrt(1.0 - cos_theta_w * cos_theta_w);
-    float r2 = half_diagonal * half_diagonal;
+    float r2 = radius * radius;
     float cos_theta_b = dist2 < r2 ? -1.0 : safe_sqrt(1.0 - r2 / dist2);
     float sin_theta_b = safe_sqrt(1.0 - cos_theta_b * cos_theta_b);
-    vec2 cosines = unpackHalf2x16(floatBitsToUint(nd.axis.w));
+    vec2 cosines = unpackHalf2x16(floatBitsToUint(nd.packed.w));
     float cos_theta_o = cosines.x;
     float sin_theta_o = safe_sqrt(1.0 - cos_theta_o * cos_theta_o);
     float cos_theta_x = cos_sub_clamped(sin_theta_w, cos_theta_w, sin_theta_o, cos_theta_o);
@@ -83,7 +96,7 @@ bool light_bvh_select(vec3 p, vec3 n, float u, out uint entry, out float pmf) {
     entry = 0u;
     pmf = 0.0;
     LightNode nd = light_nodes[0];
-    uint link = floatBitsToUint(nd.bounds_max.w);
+    uint link = floatBitsToUint(nd.packed.y);
     if ((link & LIGHT_LEAF) != 0u) {
         entry = link & ~LIGHT_LEAF;
         pmf = 1.0;
@@ -105,7 +118,7 @@ bool light_bvh_select(vec3 p, vec3 n, float u, out uint entry, out float pmf) {
         product *= (first ? i0 : i1) / sum;
         u = min(first ? t / i0 : (t - i0) / i1, ONE_MINUS_EPSILON);
         node = first ? c0 : c1;
-        link = floatBitsToUint(first ? n0.bounds_max.w : n1.bounds_max.w);
+        link = floatBitsToUint(first ? n0.packed.y : n1.packed.y);
         if ((link & LIGHT_LEAF) != 0u) {
             entry = link & ~LIGHT_LEAF;
             pmf = product;
@@ -118,7 +131,7 @@ bool light_bvh_select(vec3 p, vec3 n, float u, out uint entry, out float pmf) {
 // The pmf with which light_bvh_select picks `entry` at (p, n): its bit trail re-walked.
 float light_bvh_pmf(vec3 p, vec3 n, uint entry) {
     LightNode nd = light_nodes[0];
-    uint link = floatBitsToUint(nd.bounds_max.w);
+    uint link = floatBitsToUint(nd.packed.y);
     if ((link & LIGHT_LEAF) != 0u) {
         return (link & ~LIGHT_LEAF) == entry && light_importance(nd, p, n) > 0.0 ? 1.0 : 0.0;
     }
@@ -137,7 +150,7 @@ float light_bvh_pmf(vec3 p, vec3 n, uint entry) {
         bool first = ((bits >> (level & 31u)) & 1u) == 0u;
         product *= (first ? i0 : i1) / (i0 + i1);
         node = first ? c0 : c1;
-        link = floatBitsToUint(first ? n0.bounds_max.w : n1.bounds_max.w);
+        link = floatBitsToUint(first ? n0.packed.y : n1.packed.y);
         if ((link & LIGHT_LEAF) != 0u) {
             return (link & ~LIGHT_LEAF) == entry ? product : 0.0;
         }
