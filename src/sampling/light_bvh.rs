@@ -502,7 +502,7 @@ impl LightBvh {
             }
             let sum = i0 + i1;
             let t = u * sum;
-            if t < i0 || !(i1 > 0.0) {
+            if t < i0 || i1.is_nan() || i1 <= 0.0 {
                 pmf *= i0 / sum;
                 u = (t / i0).min(ONE_MINUS_EPSILON);
                 node = c0;
