@@ -30,33 +30,12 @@ use irad::methods::paths::LightSampler;
 use irad::methods::reference::{Reference, ReferenceSettings};
 use irad::methods::Renderer;
 use irad::sampling::light_bvh::{importance, LightBvh, ONE_MINUS_EPSILON};
-use irad::sampling::pcg::{hash, unit_f32};
+use irad::sampling::pcg::{rand, rand3, sphere_direction as direction};
 use irad::scene::gpu::GpuScene;
 use irad::scene::{Light, Scene, Triangle};
 
 use common::shapes::*;
 use common::{luminance_mean, mean_and_stderr, with_gpu};
-
-fn rand(seed: u32, index: u32, dim: u32) -> f32 {
-    unit_f32(hash(&[seed, index, dim]))
-}
-
-fn rand3(seed: u32, index: u32, dim: u32) -> Vec3 {
-    Vec3::new(
-        rand(seed, index, dim),
-        rand(seed, index, dim + 1),
-        rand(seed, index, dim + 2),
-    )
-}
-
-/// A uniform direction on the sphere.
-fn direction(seed: u32, index: u32, dim: u32) -> Vec3 {
-    let (u, v) = (rand(seed, index, dim), rand(seed, index, dim + 1));
-    let z = 1.0 - 2.0 * u;
-    let r = (1.0 - z * z).max(0.0).sqrt();
-    let phi = 2.0 * std::f32::consts::PI * v;
-    Vec3::new(r * phi.cos(), r * phi.sin(), z)
-}
 
 /// Two triangles: the quad at `centre` spanned by `a` and `b` (half-extents), facing a x b.
 fn quad(centre: Vec3, a: Vec3, b: Vec3, material: u32) -> [Triangle; 2] {

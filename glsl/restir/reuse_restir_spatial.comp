@@ -104,7 +104,7 @@ void main() {
         // p^ V of c's sample at c: its stored target where W > 0 (the invariant).
         float own_at_own = own.weights.x > 0.0 ? own.weights.z : 0.0;
         float own_mis = count == 1u ? 1.0 : 0.0;
-        float target = own_at_own;
+        float target = 0.0;  // the chosen sample's p^ V at this pixel (none chosen yet)
         for (uint i = 1u; i < count; ++i) {
             Reservoir other = reservoirs[taken[i]];
             RestirPoint n = restir_point_from_gbuffer(taken[i]);

@@ -14,7 +14,7 @@ use super::envmap;
 use super::gbuffer::PixelSampling;
 use super::interface::{Lights, RenderMethod, SharedPasses, Support};
 use super::paths::{LightSampler, PathStarts};
-use super::settings::{common_settings, field_setting, Kind, Need, Setting, Value};
+use super::settings::{common_settings, field_setting, with_needs, Kind, Need, Setting, Value};
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ReferenceSettings {
@@ -101,19 +101,16 @@ pub const SETTINGS: &[Setting<ReferenceSettings>] = &[
     .unset("off (the power heuristic's one light and one BSDF sample)")
     // It splits the direct light only.
     .needs(&[Need::OneOf("max_depth", &["1"])]),
-    Setting::<ReferenceSettings>::new(
-        "light_sampler",
-        Kind::Choice(LightSampler::NAMES),
-        "How next-event estimation chooses its light: power (in proportion to each light's \
-         power, one table for every point) or bvh (pbrt-v4's light BVH: by each light's bound \
-         on what it sends to the shading point; the environment map keeps its power share).",
-        |s| Some(Value::Name(s.light_sampler.name())),
-        |s, v| {
-            s.light_sampler = LightSampler::from_name(v.name()).expect("a checked name");
-        },
-    )
     // alpha's direct light draws its own light samples by power.
-    .needs(&[Need::Unset("alpha_frames")]),
+    with_needs(
+        &[Need::Unset("alpha_frames")],
+        common_settings!(
+            light_sampler,
+            "How next-event estimation chooses its light: power (in proportion to each light's \
+             power, one table for every point) or bvh (pbrt-v4's light BVH: by each light's bound \
+             on what it sends to the shading point; the environment map keeps its power share)."
+        ),
+    ),
     common_settings!(pixel_centres),
 ];
 

@@ -567,7 +567,7 @@ macro_rules! field_setting {
 pub(crate) use field_setting;
 
 /// Settings several methods share, on fields of the same name (`pixel_centres`: `pixels`;
-/// `clamp` and `compensate`: `clamp`); `frames` takes the method's help;
+/// `clamp` and `compensate`: `clamp`); `frames` and `light_sampler` take the method's help;
 /// `common_settings!(name, needs: &[...])` applies only where the needs hold.
 macro_rules! common_settings {
     ($name:ident, needs: $needs:expr) => {
@@ -602,6 +602,18 @@ macro_rules! common_settings {
             Switch,
             "Shadow rays; false counts every sample as visible, as in the thesis's timings: for \
              timing comparisons only, the image is wrong wherever light is occluded.",
+        )
+    };
+    (light_sampler, $help:expr) => {
+        $crate::methods::settings::Setting::new(
+            "light_sampler",
+            $crate::methods::settings::Kind::Choice($crate::methods::paths::LightSampler::NAMES),
+            $help,
+            |s| Some($crate::methods::settings::Value::Name(s.light_sampler.name())),
+            |s, v| {
+                s.light_sampler = $crate::methods::paths::LightSampler::from_name(v.name())
+                    .expect("a checked name");
+            },
         )
     };
     (pixel_centres) => {

@@ -10,9 +10,9 @@ use crate::methods::accumulation::Accumulation;
 use crate::methods::gbuffer::GBuffer;
 use crate::methods::scene_kernel::SceneKernel;
 use crate::sampling::pcg;
+use crate::scene::gpu::GpuScene;
 
 use super::Combination;
-use crate::scene::gpu::GpuScene;
 
 /// Each pass's seed is the render's hashed with its own tag ("cand", "temp", "spat"), so their
 /// random streams are apart whatever dimensions they use (docs/DESIGN.md "Determinism").

@@ -135,15 +135,10 @@ pub const SETTINGS: &[Setting<RestirSettings>] = &[
         "B: BSDF-sampled candidates per pixel and frame (an emissive hit or the environment), \
          combined with the light candidates by the balance heuristic.",
     ),
-    Setting::<RestirSettings>::new(
-        "light_sampler",
-        Kind::Choice(LightSampler::NAMES),
+    common_settings!(
+        light_sampler,
         "How light candidates are drawn: bvh (the light BVH, by each light's bound on what it \
-         sends to the point) or power (the light table).",
-        |s| Some(Value::Name(s.light_sampler.name())),
-        |s, v| {
-            s.light_sampler = LightSampler::from_name(v.name()).expect("a checked name");
-        },
+         sends to the point) or power (the light table)."
     ),
     field_setting!(
         "temporal",
