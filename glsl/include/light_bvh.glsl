@@ -8,9 +8,9 @@
 // SampleDiscrete), so one number serves the whole descent. The pmf of a given light re-walks
 // its bit trail (LightTrails), as MIS needs when a BSDF-sampled ray hits an emitter.
 //
-// Nodes are 32 bytes (two loads), depth-first (child 0 right after its parent, child 1 at the index the
-// parent stores), so the descent needs no stack; it is at most 64 levels (the build's bound),
-// a loop of at most 64 iterations. Bindings 37 and 38. Needs scene.glsl and lights.glsl.
+// Nodes are 32 bytes (two loads), depth-first (child 0 right after its parent, child 1 at the
+// index the parent stores), so the descent needs no stack; it is at most 64 levels (the
+// build's bound), a loop of at most 64 iterations. Bindings 37 and 38. Needs scene.glsl and lights.glsl.
 #ifndef LIGHT_BVH_GLSL
 #define LIGHT_BVH_GLSL
 

@@ -84,9 +84,13 @@ void main() {
         if (q.x < 0 || q.y < 0 || q.x >= int(scene.size.x) || q.y >= int(scene.size.y)) continue;
         uint qi = uint(q.y) * scene.size.x + uint(q.x);
         if (qi == index) continue;
-        RestirPoint n = restir_point_from_gbuffer(qi);
-        if (!n.valid || dot(n.n, s.n) < params.normal_cos
-            || abs(camera_distance(n.p) - depth) > params.depth_tolerance * depth) continue;
+        // The test reads the G-buffer alone (a RestirPoint would load the material too).
+        GBufferTexel g = gbuffer[qi];
+        vec3 g_wo, g_side, g_n;
+        if (!gbuffer_surface(g, g_wo, g_side, g_n) || dot(g_n, s.n) < params.normal_cos
+            || abs(camera_distance(g.position.xyz) - depth) > params.depth_tolerance * depth) {
+            continue;
+        }
         taken[count] = qi;
         taken_dimension[count] = dim + 2u;
         m_sum += reservoirs[qi].weights.y;

@@ -7,9 +7,9 @@
 //! (pass "restir temporal"); k neighbours within R pixels, rejected by normal and depth (pass
 //! "restir spatial"); the final sample shaded (pass "restir shade"). Unbiased combination by MIS
 //! (the balance heuristic over p^ V, pairwise in space) by default; 1 / Z with visibility
-//! (Alg. 6) and the biased 1 / sum M (Alg. 4-5) as settings. The
-//! emission the camera sees is the driver's direct-light pass at depth 0. Direct light only: it
-//! is scored against the path tracer at `max_depth` 1.
+//! (Alg. 6) and the biased 1 / sum M (Alg. 4-5) as settings. The emission the camera sees is
+//! the driver's direct-light pass at depth 0. Direct light only: it is scored against the path
+//! tracer at `max_depth` 1.
 
 pub mod kernels;
 
