@@ -198,6 +198,8 @@ const CASES: &[(&str, &str, &str)] = &[
         "frames = 2\nspp = 8\nshared_samples = true\nseed = 3",
     ),
     ("env", "moving-sun", "frames = 2\nspp = 8\nseed = 3"),
+    // tests/state_across_frames.rs: temporal reuse across a change of map.
+    ("restir", "moving-sun", "frames = 3\nseed = 3"),
     // lightfield: every_lightfield_strategy_matches_the_brute_force, strategies_at_equal_error.
     (
         "lightfield",

@@ -13,8 +13,19 @@
 // of different pixels combine. Candidate weights are ratios of densities at one point, the same
 // in either measure; W is in y's measure.
 //
-// Bindings 13-15. Needs scene.glsl, sampling.glsl, bsdf.glsl, lights.glsl, gbuffer.glsl, and
-// bvh.glsl unless RESTIR_NO_TRACE is defined (restir_visible left out).
+// Frames. Reuse in time evaluates the previous frame's reservoirs at the previous frame's
+// surfaces (RestirPoint.previous): their target there is the one they were resampled for, so it
+// takes the light as it was then. The lights and the light table stay put within a render; the
+// environment map does not (a sequence or the procedural sky shows map f mod n at frame f), so a
+// previous-frame point reads the previous frame's map (PreviousEnvTexels, defined by
+// RESTIR_PREVIOUS_FRAME: the temporal pass). With this frame's map there instead, the balance
+// heuristic's weights of the two domains no longer sum to one where the map changed: a sun that
+// moved into a direction got the previous domain's share there, which cannot produce it, and
+// 40% of moving-sun's light was lost (docs/DESIGN.md "State across frames").
+//
+// Bindings 13-15 (16 with RESTIR_PREVIOUS_FRAME). Needs scene.glsl, sampling.glsl, bsdf.glsl,
+// lights.glsl, gbuffer.glsl, and bvh.glsl unless RESTIR_NO_TRACE is defined (restir_visible
+// left out).
 #ifndef RESTIR_GLSL
 #define RESTIR_GLSL
 
@@ -37,6 +48,17 @@ layout(set = 0, binding = 13, std430) buffer Reservoirs { Reservoir reservoirs[]
 layout(set = 0, binding = 14, std430) buffer FinalReservoirs { Reservoir final_reservoirs[]; };
 layout(set = 0, binding = 15, std430) buffer PreviousSurfaces { RestirSurface previous_surfaces[]; };
 
+#ifdef RESTIR_PREVIOUS_FRAME
+// The environment's texels as the previous frame saw them: a sequence's frames, one after
+// another (GpuScene::previous_environment), or the live map when it is still.
+layout(set = 0, binding = 16, std430) readonly buffer PreviousEnvTexels {
+    vec4 previous_env_texels[];
+};
+// Where the previous frame's map starts in PreviousEnvTexels, set by the kernel from its push
+// constants before any reuse.
+uint restir_previous_env_base = 0u;
+#endif
+
 const uint NO_LIGHT = 0xffffffffu;
 
 // A shading point as reuse sees it.
@@ -48,6 +70,7 @@ struct RestirPoint {
     uint material;
     Material m; // loaded once (gallivm runs a storage-buffer load as a loop over the lanes)
     bool valid;
+    bool previous; // a surface of the previous frame, lit as the previous frame was
 };
 
 RestirPoint restir_point_from_gbuffer(uint pixel) {
@@ -57,9 +80,11 @@ RestirPoint restir_point_from_gbuffer(uint pixel) {
     s.p = g.position.xyz;
     s.material = floatBitsToUint(g.shading_normal.w);
     s.m = materials[s.valid ? s.material : 0u];
+    s.previous = false;
     return s;
 }
 
+// A surface stored by the previous frame's spatial pass (only the temporal pass reads them).
 RestirPoint restir_point_from_surface(RestirSurface r) {
     RestirPoint s;
     s.p = r.position.xyz;
@@ -67,6 +92,7 @@ RestirPoint restir_point_from_surface(RestirSurface r) {
     s.side = r.side.xyz;
     s.material = floatBitsToUint(r.position.w);
     s.valid = s.material != NO_LIGHT;
+    s.previous = true;
     s.m = materials[s.valid ? s.material : 0u];
     // Camera rays start at the camera's position (camera.glsl).
     vec3 to_camera = scene.camera_position.xyz - s.p;
@@ -81,6 +107,17 @@ RestirSurface restir_surface(RestirPoint s) {
     r.normal = vec4(s.n, 0.0);
     r.side = vec4(s.side, 0.0);
     return r;
+}
+
+// The environment's radiance toward y as s's frame saw it.
+vec3 restir_env_radiance(RestirPoint s, vec3 y) {
+#ifdef RESTIR_PREVIOUS_FRAME
+    if (s.previous) {
+        return scene.env_size.z == 0u
+            ? vec3(0.0) : previous_env_texels[restir_previous_env_base + env_texel_index(y)].rgb;
+    }
+#endif
+    return env_radiance(y);
 }
 
 Reservoir empty_reservoir(float m) {
@@ -105,7 +142,7 @@ vec3 restir_contribution(RestirPoint s, uint entry, vec3 y, out vec3 wi, out flo
     if (SCENE_HAS_ENVIRONMENT && e.kind == 3u) {
         wi = y;
         dist = infinity();
-        le_g = env_radiance(y);
+        le_g = restir_env_radiance(s, y);
     } else {
         vec3 d = y - s.p;
         float dist2 = dot(d, d);

@@ -13,6 +13,8 @@
 //   reservoirs whose surface could have produced y (p^ > 0 there and y visible from it: Alg. 6's
 //   1 / Z with visibility), one shadow ray for the one not known and one for y from s.
 // - biased: as one-over-z with Z the sum of both M (Alg. 5).
+// q is lit as the previous frame was (restir.glsl's "Frames"): p's stored target and c's target
+// at q take the previous frame's environment map, s's this frame's.
 
 #extension GL_GOOGLE_include_directive : require
 
@@ -24,6 +26,7 @@ layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 #include "bsdf.glsl"
 #include "lights.glsl"
 #include "gbuffer.glsl"
+#define RESTIR_PREVIOUS_FRAME
 #include "restir.glsl"
 
 layout(push_constant) uniform TemporalParams {
@@ -31,6 +34,7 @@ layout(push_constant) uniform TemporalParams {
     uint seed;
     float cap;        // the previous reservoir's M at most cap times this one's
     uint combination; // COMBINATION_* (restir.glsl)
+    uint previous_env_base; // the previous frame's map in PreviousEnvTexels, in texels
 } params;
 
 // Dimension of the selection's random number (the pass has its own seed: kernels.rs).
@@ -40,6 +44,7 @@ void main() {
     uvec2 pixel = gl_GlobalInvocationID.xy;
     if (pixel.x >= scene.size.x || pixel.y >= scene.size.y) return;
     uint index = pixel.y * scene.size.x + pixel.x;
+    restir_previous_env_base = params.previous_env_base;
     RestirPoint s = restir_point_from_gbuffer(index);
     Reservoir current = reservoirs[index];
     Reservoir previous = final_reservoirs[index];

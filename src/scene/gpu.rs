@@ -656,6 +656,20 @@ impl GpuScene {
         })
     }
 
+    /// The environment texels frame `frame` shows, as a buffer and the index of its first texel
+    /// there: a sequence's frame `frame` mod its length among all its frames, a still map's
+    /// (or the placeholder's) live texels at 0. For a kernel that needs another frame's map
+    /// beside the live one (restir's temporal reuse reads the previous frame's).
+    pub fn environment_texels_of(&self, frame: u32) -> (&Buffer<Vec4>, u32) {
+        match &self.env_frames {
+            Some(frames) => {
+                let texels = self.env_texels.len() as u32;
+                (&frames.texels, (frame % frames.count) * texels)
+            }
+            None => (&self.env_texels, 0),
+        }
+    }
+
     /// Every scene binding (bvh.glsl and scene.glsl), by block name.
     pub fn bindings(&self) -> Vec<Binding<'_>> {
         let mut b: Vec<Binding<'_>> = self.bvh.bindings().into_iter().collect();

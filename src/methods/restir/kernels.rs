@@ -53,6 +53,7 @@ struct TemporalParams {
     seed: u32,
     cap: f32,
     combination: u32,
+    previous_env_base: u32,
 }
 
 #[repr(C)]
@@ -81,7 +82,13 @@ pub(crate) const GPU_LAYOUTS: &[crate::gpu::contracts::GpuLayout] = {
             light_candidates,
             bsdf_candidates,
         }),
-        gpu_layout!(TemporalParams in ["reuse_restir_temporal"] { frame, seed, cap, combination }),
+        gpu_layout!(TemporalParams in ["reuse_restir_temporal"] {
+            frame,
+            seed,
+            cap,
+            combination,
+            previous_env_base,
+        }),
         gpu_layout!(SpatialParams in ["reuse_restir_spatial"] {
             frame,
             seed,
@@ -206,13 +213,19 @@ impl ReuseTemporal {
         combination: Combination,
     ) -> GpuResult<()> {
         let kernel = self.0.get(inputs.scene.features)?;
+        // The previous frame's reservoirs were resampled under its map (restir.glsl "Frames").
+        let (previous_env, previous_env_base) = inputs
+            .scene
+            .environment_texels_of(inputs.frame.wrapping_sub(1));
         let params = TemporalParams {
             frame: inputs.frame,
             seed: pass_seed(inputs.seed, 0x74656d70),
             cap: cap as f32,
             combination: combination.gpu_code(),
+            previous_env_base,
         };
-        let bindings = inputs.bindings(true);
+        let mut bindings = inputs.bindings(true);
+        bindings.push(bind("PreviousEnvTexels", previous_env));
         kernel.dispatch(cmd, &bindings, &params, inputs.scene.image_workgroups())
     }
 }
