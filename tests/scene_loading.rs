@@ -251,6 +251,41 @@ fn degenerate_triangles_are_dropped_with_a_warning() {
     assert!(w.contains("m.obj: dropped 2 degenerate triangles"), "{w}");
 }
 
+/// A two-sided light written as two faces with the same corners: the loader warns, naming the
+/// OBJ and the count of emissive triangles (src/scene/coincident.rs says why); 1 mm apart, back
+/// to back, it does not.
+#[test]
+fn emitters_coinciding_with_another_face_are_warned_of() {
+    let light = "newmtl light\nKd 0 0 0\nKe 5 5 5\n";
+    let quad =
+        |y: &str| format!("v -0.5 {y} -0.5\nv 0.5 {y} -0.5\nv 0.5 {y} 0.5\nv -0.5 {y} 0.5\n");
+    let two_sided = format!("{OBJ}{}usemtl light\nf 5 6 7 8\nf 5 8 7 6\n", quad("1"));
+    let s = scratch(
+        "two-sided",
+        &good_toml(),
+        &two_sided,
+        &format!("{MTL}{light}"),
+    );
+    let w = s.load().unwrap().warnings.join("\n");
+    assert!(
+        w.contains("m.obj: 4 emissive triangle(s) have the same corners as another triangle"),
+        "{w}"
+    );
+    let apart = format!(
+        "{OBJ}{}{}usemtl light\nf 5 6 7 8\nf 9 12 11 10\n",
+        quad("1"),
+        quad("1.001")
+    );
+    let s = scratch(
+        "two-sided-apart",
+        &good_toml(),
+        &apart,
+        &format!("{MTL}{light}"),
+    );
+    let scene = s.load().unwrap();
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+}
+
 #[test]
 fn nan_vertex() {
     let obj = OBJ.replace("v 1 0 1", "v 1 nan 1");

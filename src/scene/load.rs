@@ -8,7 +8,7 @@ use glam::Vec3;
 
 use super::hash::Fnv1a64;
 use super::sky::MovingSun;
-use super::{camera, environment, failure, file, lights, luminaire, obj};
+use super::{camera, coincident, environment, failure, file, lights, luminaire, obj};
 use super::{Environment, Material, Scene, SceneError, Triangle};
 
 /// A triangle whose area is at most this times the square of its own longest edge is
@@ -246,6 +246,7 @@ fn build(file: &str, toml_text: &str, files: &Files) -> Result<Scene, SceneError
         environment_sequence.clear();
     }
 
+    coincident::warn_coincident_emitters(&meshes, &materials, &mut warnings);
     let triangles = drop_degenerate(meshes, &mut warnings);
     if triangles.is_empty() {
         let detail = if f.mesh.is_empty() {

@@ -127,6 +127,7 @@ pub struct Scene {
 }
 
 mod camera;
+mod coincident;
 mod environment;
 mod error;
 mod failure;
