@@ -213,10 +213,11 @@ impl ReuseTemporal {
         combination: Combination,
     ) -> GpuResult<()> {
         let kernel = self.0.get(inputs.scene.features)?;
-        // The previous frame's reservoirs were resampled under its map (restir.glsl "Frames").
+        // The previous frame's reservoirs were resampled under its map (restir.glsl "Frames");
+        // frame 0 has none (M = 0), so which map it binds does not matter.
         let (previous_env, previous_env_base) = inputs
             .scene
-            .environment_texels_of(inputs.frame.wrapping_sub(1));
+            .environment_texels_of(inputs.frame.saturating_sub(1));
         let params = TemporalParams {
             frame: inputs.frame,
             seed: pass_seed(inputs.seed, 0x74656d70),
