@@ -50,7 +50,7 @@ layout(set = 0, binding = 15, std430) buffer PreviousSurfaces { RestirSurface pr
 
 #ifdef RESTIR_PREVIOUS_FRAME
 // The environment's texels as the previous frame saw them: a sequence's frames, one after
-// another (GpuScene::previous_environment), or the live map when it is still.
+// another (GpuScene::environment_texels_of), or the live map when it is still.
 layout(set = 0, binding = 16, std430) readonly buffer PreviousEnvTexels {
     vec4 previous_env_texels[];
 };

@@ -1,5 +1,6 @@
-//! Emissive triangles with the same corners as another triangle: a two-sided emitter written
-//! as two faces, a light quad laid on a wall, a duplicated face. irad's emitters are one-sided
+//! Emissive triangles with exactly the corners of another triangle: a two-sided emitter written
+//! as two faces, a wall face under a light with the same corners, a duplicated face (a light
+//! quad lying inside a larger wall triangle is not detected). irad's emitters are one-sided
 //! (docs/DESIGN.md "Conventions") and every light table counts each emissive triangle, while a
 //! ray meets only one face of such a pair, whichever the BVH visits first: the light comes out
 //! neither one-sided nor two-sided and depends on the sampler. Measured on a 1 m square
@@ -10,11 +11,15 @@
 
 use std::collections::HashMap;
 
+use super::load::is_degenerate;
 use super::{Material, Triangle};
 
-/// A triangle's corners as bits in sorted order: the same for either winding and any rotation.
+/// A triangle's corners as bits in sorted order: the same for either winding and any rotation
+/// (-0 read as 0, so "-0" in one face and "0" in the other still match).
 fn corner_set(t: &Triangle) -> [[u32; 3]; 3] {
-    let mut p = t.positions.map(|v| v.to_array().map(f32::to_bits));
+    let mut p = t
+        .positions
+        .map(|v| v.to_array().map(|x| (x + 0.0).to_bits()));
     p.sort_unstable();
     p
 }
@@ -26,13 +31,23 @@ pub fn warn_coincident_emitters(
     materials: &[Material],
     warnings: &mut Vec<String>,
 ) {
-    let emits = |t: &Triangle| materials[t.material as usize].is_emissive();
-    if !meshes.iter().flat_map(|(_, ts)| ts).any(emits) {
+    let emits =
+        |t: &Triangle| materials[t.material as usize].is_emissive() && !is_degenerate(t.positions);
+    // Keyed by the emitters alone (a scene's emitters are usually a small part of it), then
+    // every triangle counted against them.
+    let mut faces: HashMap<[[u32; 3]; 3], u32> = meshes
+        .iter()
+        .flat_map(|(_, ts)| ts)
+        .filter(|t| emits(t))
+        .map(|t| (corner_set(t), 0))
+        .collect();
+    if faces.is_empty() {
         return;
     }
-    let mut faces: HashMap<[[u32; 3]; 3], u32> = HashMap::new();
     for t in meshes.iter().flat_map(|(_, ts)| ts) {
-        *faces.entry(corner_set(t)).or_default() += 1;
+        if let Some(n) = faces.get_mut(&corner_set(t)) {
+            *n += 1;
+        }
     }
     for (file, triangles) in meshes {
         let count = triangles
@@ -42,7 +57,8 @@ pub fn warn_coincident_emitters(
         if count > 0 {
             warnings.push(format!(
                 "{file}: {count} emissive triangle(s) have the same corners as another triangle \
-                 (a two-sided emitter written as two faces, a light on a wall, a duplicate): \
+                 (a two-sided emitter written as two faces, a wall face with the same corners, \
+                 a duplicate): \
                  emitters are one-sided and a ray meets only one face of such a pair, so their \
                  light comes out wrong (a quarter of a two-sided light's in a test) and differs \
                  between samplers; move the faces apart along their normal (1 mm at 1 m was \
