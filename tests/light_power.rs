@@ -2,12 +2,14 @@
 //! (point, spot, emissive triangle, environment map), a scene at the largest value the loader's
 //! message names renders a finite image with no non-finite estimate through each sampler (the
 //! path tracer by the power table and by the light BVH, and restir), and a value just above it
-//! is refused naming the file, the field and that largest value.
+//! is refused naming the file, the field and that largest value. And restir reports the
+//! reservoirs it drops when their weights overflow (a scene built in code, past the loader).
 
 mod common;
 
 use std::path::PathBuf;
 
+use glam::Vec3;
 use irad::gpu::Context;
 use irad::image::{exr, Image};
 use irad::methods::paths::LightSampler;
@@ -15,8 +17,9 @@ use irad::methods::reference::{Reference, ReferenceSettings};
 use irad::methods::restir::{Restir, RestirSettings};
 use irad::methods::{RenderOutput, Renderer};
 use irad::scene::gpu::GpuScene;
-use irad::scene::{self, Scene};
+use irad::scene::{self, Light, Scene};
 
+use common::shapes::{camera, material, plane_y, scene as scene_of};
 use common::with_gpu;
 
 /// A scratch folder under the system temp dir, removed when dropped.
@@ -222,4 +225,67 @@ fn an_emissive_triangle_at_the_power_bound_renders_and_above_it_is_refused() {
 #[test]
 fn an_environment_map_at_the_power_bound_renders_and_above_it_is_refused() {
     boundary(&CASES[3]);
+}
+/// The plane under a point light (and the weak one) at `height` above its centre, built in
+/// code past the loader's check.
+fn overflowing(height: f32, intensity: f32) -> Scene {
+    let mut scene = scene_of(
+        "overflow",
+        camera(Vec3::new(0.0, 2.0, 3.0), Vec3::ZERO, Vec3::Y, 45.0, 16),
+        plane_y(2.0, 0.0, 0),
+        vec![material("grey", 0.5, 0.0, 0.0, 0.0)],
+    );
+    scene.lights = vec![
+        Light::Point {
+            position: Vec3::new(1.5, 1.0, 1.5),
+            intensity: Vec3::ONE,
+        },
+        Light::Point {
+            position: Vec3::new(0.0, height, 0.0),
+            intensity: Vec3::splat(intensity),
+        },
+    ];
+    scene
+}
+
+/// Restir's reservoirs whose weights leave f32's range are dropped and counted: in the
+/// candidates' pass (a light of 1e38 at 0.1 above the plane: targets f I cos / d^2 past
+/// f32::MAX; through the light BVH its power 4 pi I is infinite, its pmf NaN) and in spatial
+/// reuse (3e38 at 1 above, no temporal pass: finite targets, but confidence M times a target
+/// overflows in the MIS weights).
+#[test]
+fn restir_counts_the_reservoirs_it_drops_when_their_weights_overflow() {
+    let cases = [
+        ("candidates, by power", 0.1, 1e38, LightSampler::Power, true),
+        ("candidates, light BVH", 0.1, 1e38, LightSampler::Bvh, true),
+        ("spatial reuse", 1.0, 3e38, LightSampler::Power, false),
+    ];
+    let mut unreported = Vec::new();
+    with_gpu(|ctx| {
+        let restir = Renderer::<Restir>::new(ctx).unwrap();
+        for (name, height, intensity, light_sampler, temporal) in cases {
+            let scene = overflowing(height, intensity);
+            let gpu = GpuScene::upload(ctx, &scene).unwrap();
+            let settings = RestirSettings {
+                frames: 2,
+                seed: 1,
+                light_sampler,
+                temporal,
+                ..Default::default()
+            };
+            let out = restir
+                .render(ctx, &scene, &gpu, &settings, |_, _| {})
+                .unwrap();
+            println!("{name}: {} dropped", out.nonfinite_estimates);
+            if out.nonfinite_estimates == 0 {
+                unreported.push(name);
+            }
+            let pixels = out.image.pixels.iter().flatten();
+            assert!(pixels.clone().all(|v| v.is_finite()), "{name}");
+        }
+    });
+    assert!(
+        unreported.is_empty(),
+        "no dropped estimate reported: {unreported:?}"
+    );
 }
