@@ -6,20 +6,21 @@
 //! phi cos / d^2 (src/sampling/light_bvh.rs), summed over two children; a light-table sample's
 //! estimate is Le G f / p with p the light's share of the total power, so it is the total
 //! power times f cos / (4 pi d^2) (times up to 14, the largest channel over the luminance the
-//! table weighs by); restir sums such weights over its candidates and reservoirs (at most 528
-//! candidates, weighted to an average); VPLs carry I / p, again the total power. Emitted
+//! table weighs by); restir sums such weights over its candidates and reservoirs and, in its
+//! MIS weights, multiplies targets by confidences M (hundreds); VPLs carry I / p, again the
+//! total power. Emitted
 //! radiance seen directly (a camera ray or a BSDF sample hitting an emitter or escaping to the
 //! environment) is summed over a submission's frames in f32.
 //!
 //! So the scene's total power P, each light counted by its largest channel (never below the
 //! luminance power the tables and the BVH hold), must leave room below f32::MAX (about 2^128)
 //! for those factors: P <= 2^64 W leaves 2^64 for the 1/d^2, BSDF, channel and sum factors,
-//! e.g. 2^10 for sums, 2^4 for a channel, 2^50 for f cos / d^2: a diffuse surface down to
-//! 2^-25 (3e-8) units from a light at the bound. Every emitter's radiance (MTL Ke, an
+//! e.g. 2^10 for sums and confidences, 2^4 for a channel, 2^50 for f cos / d^2: a diffuse
+//! surface down to 2^-25 (3e-8) units from a light at the bound. Every emitter's radiance (MTL Ke, an
 //! environment texel) is held to 2^64 W/(sr m^2) for the same reason. Measured on a plane under
 //! a point light 1 unit above (16x16, lavapipe): the light BVH broke where 4 pi I left f32's
 //! range (I = 3e37: phi infinite, every estimate NaN) and restir's reservoirs overflowed and
-//! were dropped from I = 2e37, about 2^63 above the bound's largest intensity (1.47e18).
+//! were dropped from I = 2e37, about 2^63 above the bound's largest intensity (1.46e18).
 //!
 //! A scene past the bound is refused naming the file and field at fault and the largest
 //! value that would pass with the rest of the scene unchanged.
