@@ -149,7 +149,7 @@ fn terms(scene: &Scene, sources: &PowerSources) -> Vec<Term> {
 /// `x` rounded down to three significant digits, as a message shows the largest value that
 /// works (rounding up could show one that does not).
 fn round_down(x: f64) -> f64 {
-    if !(x > 0.0) || !x.is_finite() {
+    if x.is_nan() || x <= 0.0 || x.is_infinite() {
         return 0.0;
     }
     let e = x.log10().floor();
