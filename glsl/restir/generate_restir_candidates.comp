@@ -32,6 +32,7 @@ layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 #include "light_bvh.glsl"
 #include "gbuffer.glsl"
 #include "restir.glsl"
+#include "radiance.glsl"
 
 layout(push_constant) uniform CandidateParams {
     uint frame;
@@ -139,7 +140,11 @@ void main() {
     }
 
     Reservoir r = empty_reservoir(m_light + m_bsdf);
-    if (chosen_entry != NO_LIGHT && weight_sum > 0.0 && !isinf(weight_sum)) {
+    // Weights past f32's range (a light too bright for its distance) drop the reservoir; it is
+    // counted as a non-finite estimate so that the render's record warns.
+    bool finite = !(isnan(weight_sum) || isinf(weight_sum));
+    if (!finite) count_nonfinite_estimate();
+    if (chosen_entry != NO_LIGHT && weight_sum > 0.0 && finite) {
         r.sample_point = vec4(chosen_y, uintBitsToFloat(chosen_entry));
         r.weights.z = chosen_target;
         r.weights.x = restir_visible(s, chosen_entry, chosen_y) ? weight_sum / chosen_target : 0.0;

@@ -34,6 +34,7 @@ layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 #include "lights.glsl"
 #include "gbuffer.glsl"
 #include "restir.glsl"
+#include "radiance.glsl"
 
 layout(push_constant) uniform SpatialParams {
     uint frame;
@@ -135,7 +136,10 @@ void main() {
             result.sample_point = own.sample_point;
             target = own_at_own;
         }
-        if (weight_sum > 0.0 && !isinf(weight_sum) && target > 0.0) {
+        // Weights past f32's range drop the reservoir, counted (as the candidates' pass does).
+        bool finite = !(isnan(weight_sum) || isinf(weight_sum));
+        if (!finite) count_nonfinite_estimate();
+        if (weight_sum > 0.0 && finite && target > 0.0) {
             result.weights.z = target;
             result.weights.x = weight_sum / target;
         } else {
@@ -163,7 +167,9 @@ void main() {
         }
     }
 
-    if (weight_sum > 0.0 && !isinf(weight_sum)) {
+    bool finite = !(isnan(weight_sum) || isinf(weight_sum));
+    if (!finite) count_nonfinite_estimate();
+    if (weight_sum > 0.0 && finite) {
         bool visible = chosen == 0u ? true : restir_visible(s, entry, y);
         float z = m_sum;
         if (params.combination == COMBINATION_ONE_OVER_Z) {

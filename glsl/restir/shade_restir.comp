@@ -26,7 +26,13 @@ void main() {
     uint index = pixel.y * scene.size.x + pixel.x;
     RestirPoint s = restir_point_from_gbuffer(index);
     Reservoir r = final_reservoirs[index];
-    if (!s.valid || !(r.weights.x > 0.0)) return;
+    if (!s.valid) return;
+    // A NaN W (reuse's weights out of f32's range) is dropped and counted; Inf is counted below.
+    if (isnan(r.weights.x)) {
+        count_nonfinite_estimate();
+        return;
+    }
+    if (!(r.weights.x > 0.0)) return;
     vec3 wi;
     float dist, to_area;
     vec3 c = restir_contribution(s, floatBitsToUint(r.sample_point.w), r.sample_point.xyz, wi,

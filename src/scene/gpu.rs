@@ -215,7 +215,7 @@ fn environment_tables(env: &Environment) -> (Vec<Vec4>, Vec<u32>, f64) {
 }
 
 /// Centre and radius of a sphere around the triangles and point lights.
-fn bounds(scene: &Scene) -> (Vec3, f32) {
+pub(crate) fn bounds(scene: &Scene) -> (Vec3, f32) {
     let mut lo = Vec3::splat(f32::MAX);
     let mut hi = Vec3::splat(f32::MIN);
     let points = scene

@@ -8,7 +8,7 @@ use glam::Vec3;
 
 use super::hash::Fnv1a64;
 use super::sky::MovingSun;
-use super::{camera, coincident, environment, failure, file, lights, luminaire, obj};
+use super::{camera, coincident, environment, failure, file, lights, luminaire, obj, power};
 use super::{Environment, Material, Scene, SceneError, Triangle};
 
 /// A triangle whose area is at most this times the square of its own longest edge is
@@ -194,6 +194,8 @@ fn build(file: &str, toml_text: &str, files: &Files) -> Result<Scene, SceneError
 
     let mut warnings = Vec::new();
     let mut materials: Vec<Material> = Vec::new();
+    // Each material's MTL file, for messages (None: the default material).
+    let mut material_files: Vec<Option<String>> = Vec::new();
     let mut default_material = None;
     // Per mesh: (OBJ name for messages, its triangles).
     let mut meshes: Vec<(String, Vec<Triangle>)> = Vec::new();
@@ -213,6 +215,7 @@ fn build(file: &str, toml_text: &str, files: &Files) -> Result<Scene, SceneError
         warnings.extend(mesh.warnings);
         let offset = materials.len() as u32;
         materials.extend(mesh.materials);
+        material_files.extend(mesh.material_files.into_iter().map(Some));
         let mut triangles = Vec::with_capacity(mesh.triangles.len());
         for t in mesh.triangles {
             let material = match t.material {
@@ -225,6 +228,7 @@ fn build(file: &str, toml_text: &str, files: &Files) -> Result<Scene, SceneError
                         ns: 0.0,
                         ke: Vec3::ZERO,
                     });
+                    material_files.push(None);
                     materials.len() as u32 - 1
                 }),
             };
@@ -285,7 +289,7 @@ fn build(file: &str, toml_text: &str, files: &Files) -> Result<Scene, SceneError
         });
     }
 
-    Ok(Scene {
+    let scene = Scene {
         source: None,
         name: String::new(),
         content_hash: hash.finish(),
@@ -298,7 +302,21 @@ fn build(file: &str, toml_text: &str, files: &Files) -> Result<Scene, SceneError
         luminaires,
         failure,
         warnings,
-    })
+    };
+    let sources = power::PowerSources {
+        file,
+        material_files: &material_files,
+        environment: f.environment.as_ref().map(|e| {
+            let map = match (&e.exr, &e.sky) {
+                (Some(exr), _) => format!("environment.exr = {exr:?}"),
+                (None, Some(sky)) => format!("the sky {sky:?}"),
+                (None, None) => "the environment".to_string(),
+            };
+            (e.scale, map)
+        }),
+    };
+    power::check(&scene, &sources)?;
+    Ok(scene)
 }
 
 /// The maps of `[environment]`, one per frame (one for a still map).

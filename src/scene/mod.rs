@@ -139,9 +139,11 @@ mod load;
 pub mod luminaire;
 mod mtl;
 mod obj;
+mod power;
 pub mod sky;
 pub(crate) mod toml_arrays;
 
 pub use camera::MAX_RESOLUTION;
 pub use error::SceneError;
 pub use load::{default_scene, load, load_str, DEGENERATE_AREA};
+pub use power::{MAX_POWER, MAX_RADIANCE};

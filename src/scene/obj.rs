@@ -28,6 +28,8 @@ pub struct ObjMesh {
     pub triangles: Vec<ObjTriangle>,
     /// Materials of every `mtllib`, in file order.
     pub materials: Vec<Material>,
+    /// The MTL file (as messages name it) of each material.
+    pub material_files: Vec<String>,
     /// Bytes of each MTL file in `mtllib` order (for the content hash).
     pub mtl_bytes: Vec<Vec<u8>>,
     pub warnings: Vec<String>,
@@ -43,6 +45,7 @@ pub fn load(file: &str, text: &str, read_mtl: &mut MtlReader) -> Result<ObjMesh,
     let mut warnings = checked.warnings;
 
     let mut materials = Vec::new();
+    let mut material_files = Vec::new();
     let mut mtl_bytes = Vec::new();
     let mut tobj_libraries = Vec::new();
     for (line, name) in &checked.mtllibs {
@@ -61,6 +64,7 @@ pub fn load(file: &str, text: &str, read_mtl: &mut MtlReader) -> Result<ObjMesh,
             });
         }
         tobj_libraries.push((library, names));
+        material_files.extend(parsed.iter().map(|_| mtl_file.clone()));
         materials.extend(parsed);
         mtl_bytes.push(bytes);
     }
@@ -161,6 +165,7 @@ pub fn load(file: &str, text: &str, read_mtl: &mut MtlReader) -> Result<ObjMesh,
     Ok(ObjMesh {
         triangles,
         materials,
+        material_files,
         mtl_bytes,
         warnings,
     })

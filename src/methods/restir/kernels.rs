@@ -180,10 +180,13 @@ impl GenerateCandidates {
         light_candidates: u32,
         bsdf_candidates: u32,
         light_bvh: bool,
+        accumulation: &'a Accumulation,
     ) -> GpuResult<()> {
         let kernel = self.0.get_with(inputs.scene.features, light_bvh)?;
         let mut bindings = inputs.bindings(true);
         bindings.extend(inputs.scene.light_bvh_bindings());
+        // For the count of reservoirs dropped with non-finite weights.
+        bindings.extend(accumulation.bindings());
         let params = CandidateParams {
             frame: inputs.frame,
             seed: pass_seed(inputs.seed, 0x63616e64),
@@ -246,6 +249,7 @@ impl ReuseSpatial {
         neighbours: u32,
         radius: u32,
         combination: Combination,
+        accumulation: &'a Accumulation,
     ) -> GpuResult<()> {
         let kernel = self.0.get(inputs.scene.features)?;
         let params = SpatialParams {
@@ -258,7 +262,9 @@ impl ReuseSpatial {
             depth_tolerance: DEPTH_TOLERANCE,
             _pad: 0,
         };
-        let bindings = inputs.bindings(true);
+        let mut bindings = inputs.bindings(true);
+        // For the count of reservoirs dropped with non-finite weights.
+        bindings.extend(accumulation.bindings());
         kernel.dispatch(cmd, &bindings, &params, inputs.scene.image_workgroups())
     }
 }

@@ -285,6 +285,7 @@ impl MethodFrames for RestirFrames<'_> {
                 s.candidates,
                 s.bsdf_candidates,
                 s.light_sampler == LightSampler::Bvh,
+                shared.accumulation,
             )
         })?;
         if s.temporal {
@@ -296,9 +297,14 @@ impl MethodFrames for RestirFrames<'_> {
         }
         // With no neighbours it still stores the final reservoirs and surfaces.
         cmd.pass("restir spatial", |cmd| {
-            restir
-                .spatial
-                .record(cmd, &inputs, s.neighbours, s.radius, s.combination)
+            restir.spatial.record(
+                cmd,
+                &inputs,
+                s.neighbours,
+                s.radius,
+                s.combination,
+                shared.accumulation,
+            )
         })?;
         cmd.pass("restir shade", |cmd| {
             restir.shade.record(cmd, &inputs, shared.accumulation)
