@@ -251,19 +251,35 @@ fn overflowing(height: f32, intensity: f32) -> Scene {
 /// Restir's reservoirs whose weights leave f32's range are dropped and counted: in the
 /// candidates' pass (a light of 1e38 at 0.1 above the plane: targets f I cos / d^2 past
 /// f32::MAX; through the light BVH its power 4 pi I is infinite, its pmf NaN) and in spatial
-/// reuse (3e38 at 1 above, no temporal pass: finite targets, but confidence M times a target
-/// overflows in the MIS weights).
+/// reuse and temporal reuse, each alone (3e38 and 1e38 at 1 above: finite targets, but
+/// confidence M times a target overflows in the MIS weights).
 #[test]
 fn restir_counts_the_reservoirs_it_drops_when_their_weights_overflow() {
+    // (name, height, intensity, sampler, temporal, neighbours)
     let cases = [
-        ("candidates, by power", 0.1, 1e38, LightSampler::Power, true),
-        ("candidates, light BVH", 0.1, 1e38, LightSampler::Bvh, true),
-        ("spatial reuse", 1.0, 3e38, LightSampler::Power, false),
+        (
+            "candidates, by power",
+            0.1,
+            1e38,
+            LightSampler::Power,
+            true,
+            5,
+        ),
+        (
+            "candidates, light BVH",
+            0.1,
+            1e38,
+            LightSampler::Bvh,
+            true,
+            5,
+        ),
+        ("spatial reuse", 1.0, 3e38, LightSampler::Power, false, 5),
+        ("temporal reuse", 1.0, 1e38, LightSampler::Power, true, 0),
     ];
     let mut unreported = Vec::new();
     with_gpu(|ctx| {
         let restir = Renderer::<Restir>::new(ctx).unwrap();
-        for (name, height, intensity, light_sampler, temporal) in cases {
+        for (name, height, intensity, light_sampler, temporal, neighbours) in cases {
             let scene = overflowing(height, intensity);
             let gpu = GpuScene::upload(ctx, &scene).unwrap();
             let settings = RestirSettings {
@@ -271,6 +287,7 @@ fn restir_counts_the_reservoirs_it_drops_when_their_weights_overflow() {
                 seed: 1,
                 light_sampler,
                 temporal,
+                neighbours,
                 ..Default::default()
             };
             let out = restir

@@ -28,6 +28,7 @@ layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 #include "gbuffer.glsl"
 #define RESTIR_PREVIOUS_FRAME
 #include "restir.glsl"
+#include "radiance.glsl"
 
 layout(push_constant) uniform TemporalParams {
     uint frame;
@@ -81,7 +82,10 @@ void main() {
                 * previous.weights.x,
             u);
         float target = from_previous ? previous_at_s : own_current;
-        if (weight_sum > 0.0 && !isinf(weight_sum) && target > 0.0) {
+        // Weights past f32's range drop the reservoir, counted (as the other passes do).
+        bool finite = !(isnan(weight_sum) || isinf(weight_sum));
+        if (!finite) count_nonfinite_estimate();
+        if (weight_sum > 0.0 && finite && target > 0.0) {
             r.sample_point = from_previous ? previous.sample_point : current.sample_point;
             r.weights.z = target;
             r.weights.x = weight_sum / target;
@@ -100,7 +104,9 @@ void main() {
     float w_previous = target_previous * previous.weights.x * m_previous;
     bool from_previous = reservoir_take(weight_sum, w_previous, u);
 
-    if (weight_sum > 0.0 && !isinf(weight_sum)) {
+    bool finite = !(isnan(weight_sum) || isinf(weight_sum));
+    if (!finite) count_nonfinite_estimate();
+    if (weight_sum > 0.0 && finite) {
         uint entry = from_previous ? e_previous : e_current;
         vec3 y = from_previous ? y_previous : y_current;
         float target = from_previous ? target_previous : current.weights.z;

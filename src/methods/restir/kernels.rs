@@ -214,6 +214,7 @@ impl ReuseTemporal {
         inputs: &FrameInputs<'a>,
         cap: u32,
         combination: Combination,
+        accumulation: &'a Accumulation,
     ) -> GpuResult<()> {
         let kernel = self.0.get(inputs.scene.features)?;
         // The previous frame's reservoirs were resampled under its map (restir.glsl "Frames");
@@ -230,6 +231,7 @@ impl ReuseTemporal {
         };
         let mut bindings = inputs.bindings(true);
         bindings.push(bind("PreviousEnvTexels", previous_env));
+        bindings.extend(accumulation.bindings());
         kernel.dispatch(cmd, &bindings, &params, inputs.scene.image_workgroups())
     }
 }

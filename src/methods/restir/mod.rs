@@ -290,9 +290,13 @@ impl MethodFrames for RestirFrames<'_> {
         })?;
         if s.temporal {
             cmd.pass("restir temporal", |cmd| {
-                restir
-                    .temporal
-                    .record(cmd, &inputs, s.temporal_cap, s.combination)
+                restir.temporal.record(
+                    cmd,
+                    &inputs,
+                    s.temporal_cap,
+                    s.combination,
+                    shared.accumulation,
+                )
             })?;
         }
         // With no neighbours it still stores the final reservoirs and surfaces.
