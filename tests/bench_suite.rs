@@ -1085,3 +1085,113 @@ fn converged_references_resume_bit_exactly_and_the_suite_uses_them() {
     });
     let _ = fs::remove_dir_all(&dir);
 }
+
+/// `irad bench references` holds the converged reference's folder while it writes: a second
+/// writer is refused with the folder and the holder named, and a lock left by a process that
+/// is gone is taken over with a note. A record whose samples per half disagree with its chunks
+/// (a hand edit) is refused, naming the file and both values, when extending it and when a
+/// suite would use it.
+#[test]
+fn converged_references_are_locked_and_their_records_checked() {
+    use irad::bench::suite::converged::{self, ConvergedKey, ExtendOptions, Progress};
+    use irad::methods::Renderers;
+    use irad::scene::gpu::GpuScene;
+    use std::sync::atomic::{AtomicBool, Ordering};
+
+    let dir = temp_dir("converged-lock");
+    copy_plane_scene(&dir.join("plane"));
+    let text = &PLANE_SUITE.replace("NAME", "converged-lock");
+    let suite = Suite::parse("converged-lock.toml", text, &dir).unwrap();
+    let s = &suite.scenes[0];
+    let key_dir = ConvergedKey::new(&s.scene, &s.reference).dir(&dir.join("plane"));
+    fs::create_dir_all(&key_dir).unwrap();
+    let held = irad::lock::HolderLock::acquire(&key_dir).unwrap().lock;
+    let pid = format!("pid {}", std::process::id());
+    // The shipped converged references (sessions of different chunk sizes among them) agree
+    // with their chunks.
+    let mut shipped = 0;
+    for scene in fs::read_dir(scenes_dir().join("failure")).unwrap() {
+        let Ok(entries) = fs::read_dir(scene.unwrap().path().join(converged::FOLDER)) else {
+            continue;
+        };
+        for entry in entries {
+            let path = entry.unwrap().path();
+            converged::load(&path)
+                .unwrap_or_else(|e| panic!("{e:#}"))
+                .unwrap_or_else(|| panic!("{}: no record", path.display()));
+            shipped += 1;
+        }
+    }
+    assert!(shipped >= 3, "{shipped} shipped converged references");
+    common::with_gpu(|ctx| {
+        let renderers = Renderers::default();
+        let gpu = GpuScene::upload(ctx, &s.scene).unwrap();
+        let extend = |chunks: u32, notes: &mut Vec<String>| {
+            let stop = AtomicBool::new(false);
+            let options = ExtendOptions {
+                target_rel_mse: 1e-12,
+                deadline: None,
+                chunk_spp: 3,
+                stop: Some(&stop),
+            };
+            converged::extend(
+                ctx,
+                &renderers,
+                &s.scene,
+                &gpu,
+                &s.reference,
+                &options,
+                |e| match e {
+                    Progress::Saved { record, .. } if record.chunks >= chunks => {
+                        stop.store(true, Ordering::SeqCst)
+                    }
+                    Progress::StaleLock { holder, .. } => notes.push(format!("stale {holder}")),
+                    _ => {}
+                },
+            )
+        };
+        let mut notes = Vec::new();
+        let e = format!("{:#}", extend(3, &mut notes).unwrap_err());
+        assert!(
+            e.contains(key_dir.to_str().unwrap()) && e.contains(&pid),
+            "{e}"
+        );
+        assert!(!key_dir.join("reference.json").exists());
+        drop(held);
+        // A lock file whose process is gone (no flock held on it).
+        fs::write(key_dir.join(irad::lock::LOCK_FILE), "pid 4000000 on gone\n").unwrap();
+        let done = extend(3, &mut notes).unwrap();
+        assert_eq!(notes, ["stale irad (pid 4000000 on gone)"]);
+        assert!(!key_dir.join(irad::lock::LOCK_FILE).exists());
+        assert_eq!(done.record.spp, [6, 3]);
+        // The record edited by hand: its samples no longer those of its 3 chunks of 3.
+        let record = key_dir.join("reference.json");
+        let mut json: serde_json::Value =
+            serde_json::from_str(&fs::read_to_string(&record).unwrap()).unwrap();
+        json["spp"] = serde_json::json!([100000, 100000]);
+        fs::write(&record, serde_json::to_string_pretty(&json).unwrap()).unwrap();
+        let e = format!("{:#}", extend(4, &mut notes).unwrap_err());
+        let named = |e: &str| {
+            e.contains(record.to_str().unwrap())
+                && e.contains("[100000, 100000]")
+                && e.contains("[6, 3]")
+        };
+        assert!(named(&e), "{e}");
+        let results = run_suite(
+            ctx,
+            &suite,
+            &dir.join("out"),
+            &dir.join("cache"),
+            Shard::WHOLE,
+        );
+        assert!(
+            !dir.join("cache").exists(),
+            "the suite fell back to the cache"
+        );
+        for r in &results.runs {
+            assert_eq!(r.status, Status::Error);
+            assert!(named(&r.note), "{}", r.note);
+        }
+    });
+    let _ = fs::remove_dir_all(&dir);
+}

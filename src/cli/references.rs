@@ -1,7 +1,7 @@
 //! `irad bench references`: renders or extends the converged references of a suite's scenes
 //! (irad::bench::suite::converged), with a progress bar per scene and Ctrl-C handling.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
@@ -52,6 +52,14 @@ fn parse_minutes(s: &str) -> Result<f64, String> {
             "{s}: minutes are a number above 0 and at most a week (10080)"
         )),
     }
+}
+
+/// The note for a lock whose holder is gone.
+fn took_over(dir: &Path, holder: &str) -> String {
+    format!(
+        "note: {} was locked by {holder}, which is no longer running (interrupted?): taking it over",
+        dir.display()
+    )
 }
 
 pub fn run(options: &ContextOptions, args: ReferencesArgs) -> Result<()> {
@@ -129,6 +137,9 @@ pub fn run(options: &ContextOptions, args: ReferencesArgs) -> Result<()> {
                         record.rel_mse.map_or("-".into(), |e| format!("{e:.4}")),
                         ms_per_spp
                     ));
+                }
+                Progress::StaleLock { dir, holder } => {
+                    bar.suspend(|| eprintln!("{}", took_over(dir, &holder)))
                 }
             },
         );
