@@ -1195,3 +1195,89 @@ fn converged_references_are_locked_and_their_records_checked() {
     });
     let _ = fs::remove_dir_all(&dir);
 }
+
+/// `irad bench references` prints the net relMSE and the target to three significant digits
+/// however small they are (a target under 1e-4 is reached at figures that four decimals
+/// print as 0.0000).
+#[test]
+fn reference_progress_shows_small_rel_mse() {
+    use irad::bench::suite::converged::{self, ExtendOptions, Progress};
+    use irad::methods::Renderers;
+    use irad::scene::gpu::GpuScene;
+    use std::sync::atomic::{AtomicBool, Ordering};
+
+    let dir = temp_dir("converged-figures");
+    copy_plane_scene(&dir.join("plane"));
+    let text = PLANE_SUITE.replace("NAME", "converged-figures");
+    fs::write(dir.join("suite.toml"), &text).unwrap();
+    let suite = Suite::parse("suite.toml", &text, &dir).unwrap();
+    let s = &suite.scenes[0];
+    let done = std::cell::RefCell::new(None);
+    common::with_gpu(|ctx| {
+        let gpu = GpuScene::upload(ctx, &s.scene).unwrap();
+        let stop = AtomicBool::new(false);
+        let options = ExtendOptions {
+            target_rel_mse: 1e-12,
+            deadline: None,
+            chunk_spp: 2,
+            stop: Some(&stop),
+        };
+        let c = converged::extend(
+            ctx,
+            &Renderers::default(),
+            &s.scene,
+            &gpu,
+            &s.reference,
+            &options,
+            |e| {
+                if let Progress::Saved { record, .. } = e {
+                    stop.store(record.chunks >= 2, Ordering::SeqCst);
+                }
+            },
+        )
+        .unwrap();
+        *done.borrow_mut() = Some(c);
+    });
+    // Halves 0.3% apart, as after a long run: a net relMSE far under 1e-4.
+    let mut c = done.into_inner().unwrap();
+    c.halves[1].pixels = c.halves[0]
+        .pixels
+        .iter()
+        .map(|p| p.map(|v| v * 1.003))
+        .collect();
+    let mut stacked = irad::image::Image::new(8, 16);
+    stacked.pixels = c.halves.iter().flat_map(|h| h.pixels.clone()).collect();
+    irad::image::exr::write(&c.halves_path(), &stacked).unwrap();
+    let rel_mse = c.image().1;
+    assert!(rel_mse > 0.0 && rel_mse < 1e-5, "{rel_mse}");
+    c.record.rel_mse = Some(rel_mse);
+    fs::write(
+        c.dir.join("reference.json"),
+        serde_json::to_string_pretty(&c.record).unwrap(),
+    )
+    .unwrap();
+    // The target met already: nothing is rendered, and both figures are printed.
+    let target = 2.0 * rel_mse;
+    let o = irad(&[
+        "bench",
+        "references",
+        dir.join("suite.toml").to_str().unwrap(),
+        "--target",
+        &format!("{target:e}"),
+    ]);
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        o.status.success(),
+        "{out}{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    // The printed net relMSE and target, each within 0.5% of its value.
+    let figures: Vec<f64> = out
+        .split(|c: char| c.is_whitespace() || "(),;".contains(c))
+        .filter_map(|w| w.parse().ok())
+        .collect();
+    let near = |x: f64| figures.iter().any(|f| (f / x - 1.0).abs() < 5e-3);
+    assert!(near(rel_mse) && near(target), "{out}");
+    assert!(out.contains(" reached)"), "{out}");
+    let _ = fs::remove_dir_all(&dir);
+}

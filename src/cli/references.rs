@@ -45,6 +45,19 @@ fn parse_target(s: &str) -> Result<f64, String> {
     }
 }
 
+/// A relMSE to three significant digits, in scientific notation below 0.001: targets go far
+/// under the 1e-4 that four decimals can show.
+fn figure(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() {
+        format!("{v}")
+    } else if (1e-3..1e4).contains(&v.abs()) {
+        let decimals = (2 - v.abs().log10().floor() as i32).max(0) as usize;
+        format!("{v:.decimals$}")
+    } else {
+        format!("{v:.2e}")
+    }
+}
+
 fn parse_minutes(s: &str) -> Result<f64, String> {
     match s.parse::<f64>() {
         Ok(v) if v > 0.0 && v <= 7.0 * 24.0 * 60.0 => Ok(v),
@@ -82,7 +95,7 @@ pub fn run(options: &ContextOptions, args: ReferencesArgs) -> Result<()> {
         "converged references of {} scene(s) of {} to a net relMSE of {}, chunks of {} spp, on {}",
         chosen.len(),
         args.suite.display(),
-        args.target,
+        figure(args.target),
         args.chunk_spp,
         device_line(ctx.info())
     );
@@ -134,7 +147,7 @@ pub fn run(options: &ContextOptions, args: ReferencesArgs) -> Result<()> {
                     chunk_base = spp;
                     bar.set_message(format!(
                         "spp, relMSE {}, {:.1} ms GPU/spp",
-                        record.rel_mse.map_or("-".into(), |e| format!("{e:.4}")),
+                        record.rel_mse.map_or("-".into(), figure),
                         ms_per_spp
                     ));
                 }
@@ -149,14 +162,15 @@ pub fn run(options: &ContextOptions, args: ReferencesArgs) -> Result<()> {
         let r = &done.record;
         let reached = r.rel_mse.is_some_and(|e| e <= args.target);
         println!(
-            "{}: {} spp, net relMSE {} ({}), {:.0} s GPU in all; {}",
+            "{}: {} spp, net relMSE {} (target {} {}), {:.0} s GPU in all; {}",
             scene.name,
             r.total_spp(),
-            r.rel_mse.map_or("-".into(), |e| format!("{e:.4}")),
+            r.rel_mse.map_or("-".into(), figure),
+            figure(args.target),
             if reached {
-                "target reached"
+                "reached"
             } else {
-                "target not reached yet: the same command goes on"
+                "not reached yet: the same command goes on"
             },
             r.gpu_ms / 1000.0,
             done.dir.join("reference.json").display()
