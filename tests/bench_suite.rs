@@ -1281,3 +1281,54 @@ fn reference_progress_shows_small_rel_mse() {
     assert!(out.contains(" reached)"), "{out}");
     let _ = fs::remove_dir_all(&dir);
 }
+
+/// A suite refused its folder's results after an edit names the edit: the suite field with
+/// its old and new values, or the scene whose file (or a file it references) changed. Results
+/// written before irad recorded the suite's text still name the scene, and otherwise say the
+/// suite file changed.
+#[test]
+fn a_refused_resume_names_the_edit() {
+    let dir = temp_dir("resume-edit");
+    copy_plane_scene(&dir.join("plane"));
+    let text = PLANE_SUITE.replace("NAME", "edited");
+    let (out, cache) = (dir.join("out"), dir.join("cache"));
+    let parse = |text: &str| Suite::parse("edited.toml", text, &dir).unwrap();
+    common::with_gpu(|ctx| {
+        run_suite(ctx, &parse(&text), &out, &cache, Shard::WHOLE);
+        let refused = |text: &str| {
+            let suite = parse(text);
+            let r = run_suite_events(ctx, &suite, &out, &cache, Shard::WHOLE, &mut Vec::new());
+            format!("{:#}", r.unwrap_err())
+        };
+        let e = refused(&text.replace("repeats = 1", "repeats = 2"));
+        assert!(e.contains("`repeats` was 1, now 2"), "{e}");
+        let e = refused(&text.replace("spp = 8", "spp = 8\nmax_depth = 3"));
+        assert!(e.contains("`reference.max_depth` was absent, now 3"), "{e}");
+        let e = refused(&text.replace("budgets = [{ spp = 1 }]", "budgets = [{ spp = 2 }]"));
+        assert!(e.contains("`method[0].budgets[0].spp` was 1, now 2"), "{e}");
+        let e = refused(&text.replace("repeats = 1", "repeats = 1 # one"));
+        assert!(e.contains("comments or layout"), "{e}");
+        let scene = dir.join("plane").join("scene.toml");
+        let mut edited = fs::read_to_string(&scene).unwrap();
+        edited.push_str("\n# edited\n");
+        fs::write(&scene, edited).unwrap();
+        let e = refused(&text);
+        assert!(
+            e.contains("scene `plane` (plane/scene.toml)") && !e.contains("was"),
+            "{e}"
+        );
+        // Results from before the suite's text and scenes were recorded.
+        let path = out.join("results.json");
+        let mut json: serde_json::Value =
+            serde_json::from_str(&fs::read_to_string(&path).unwrap()).unwrap();
+        let fields = json.as_object_mut().unwrap();
+        fields.remove("suite_text");
+        fields.remove("scene_files");
+        fs::write(&path, serde_json::to_string_pretty(&json).unwrap()).unwrap();
+        let e = refused(&text);
+        assert!(e.contains("scene `plane` (plane/scene.toml)"), "{e}");
+        let e = refused(&text.replace("repeats = 1", "repeats = 2"));
+        assert!(e.contains("the suite file"), "{e}");
+    });
+    let _ = fs::remove_dir_all(&dir);
+}
