@@ -48,6 +48,14 @@ impl HolderLock {
     /// The lock file `LOCK_FILE` in `dir` (which must exist): held by this process, or an
     /// error naming `dir` and the live holder.
     pub fn acquire(dir: &Path) -> Result<Acquired> {
+        HolderLock::acquire_or(
+            dir,
+            "wait for it to finish, or choose another output folder",
+        )
+    }
+
+    /// As `acquire`, with `advice` ending the error when another process holds `dir`.
+    pub fn acquire_or(dir: &Path, advice: &str) -> Result<Acquired> {
         let path = dir.join(LOCK_FILE);
         // The file can be removed by its holder between our open and our lock (it removes it
         // when it is done): then we locked a file no one else will see, so open it again.
@@ -65,7 +73,7 @@ impl HolderLock {
                 Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => {
                     let _ = file.read_to_string(&mut text);
                     bail!(
-                        "{} is being written by {} (lock file {}): wait for it to finish, or choose another output folder",
+                        "{} is being written by {} (lock file {}): {advice}",
                         dir.display(),
                         holder_words(&text),
                         path.display()

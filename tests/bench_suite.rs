@@ -1085,3 +1085,250 @@ fn converged_references_resume_bit_exactly_and_the_suite_uses_them() {
     });
     let _ = fs::remove_dir_all(&dir);
 }
+
+/// `irad bench references` holds the converged reference's folder while it writes: a second
+/// writer is refused with the folder and the holder named, and a lock left by a process that
+/// is gone is taken over with a note. A record whose samples per half disagree with its chunks
+/// (a hand edit) is refused, naming the file and both values, when extending it and when a
+/// suite would use it.
+#[test]
+fn converged_references_are_locked_and_their_records_checked() {
+    use irad::bench::suite::converged::{self, ConvergedKey, ExtendOptions, Progress};
+    use irad::methods::Renderers;
+    use irad::scene::gpu::GpuScene;
+    use std::sync::atomic::{AtomicBool, Ordering};
+
+    let dir = temp_dir("converged-lock");
+    copy_plane_scene(&dir.join("plane"));
+    let text = &PLANE_SUITE.replace("NAME", "converged-lock");
+    let suite = Suite::parse("converged-lock.toml", text, &dir).unwrap();
+    let s = &suite.scenes[0];
+    let key_dir = ConvergedKey::new(&s.scene, &s.reference).dir(&dir.join("plane"));
+    fs::create_dir_all(&key_dir).unwrap();
+    let held = irad::lock::HolderLock::acquire(&key_dir).unwrap().lock;
+    let pid = format!("pid {}", std::process::id());
+    // The shipped converged references (sessions of different chunk sizes among them) agree
+    // with their chunks.
+    let mut shipped = 0;
+    for scene in fs::read_dir(scenes_dir().join("failure")).unwrap() {
+        let Ok(entries) = fs::read_dir(scene.unwrap().path().join(converged::FOLDER)) else {
+            continue;
+        };
+        for entry in entries {
+            let path = entry.unwrap().path();
+            converged::load(&path)
+                .unwrap_or_else(|e| panic!("{e:#}"))
+                .unwrap_or_else(|| panic!("{}: no record", path.display()));
+            shipped += 1;
+        }
+    }
+    assert!(shipped >= 3, "{shipped} shipped converged references");
+    common::with_gpu(|ctx| {
+        let renderers = Renderers::default();
+        let gpu = GpuScene::upload(ctx, &s.scene).unwrap();
+        let extend = |chunks: u32, notes: &mut Vec<String>| {
+            let stop = AtomicBool::new(false);
+            let options = ExtendOptions {
+                target_rel_mse: 1e-12,
+                deadline: None,
+                chunk_spp: 3,
+                stop: Some(&stop),
+            };
+            converged::extend(
+                ctx,
+                &renderers,
+                &s.scene,
+                &gpu,
+                &s.reference,
+                &options,
+                |e| match e {
+                    Progress::Saved { record, .. } if record.chunks >= chunks => {
+                        stop.store(true, Ordering::SeqCst)
+                    }
+                    Progress::StaleLock { holder, .. } => notes.push(format!("stale {holder}")),
+                    _ => {}
+                },
+            )
+        };
+        let mut notes = Vec::new();
+        let e = format!("{:#}", extend(3, &mut notes).unwrap_err());
+        assert!(
+            e.contains(key_dir.to_str().unwrap()) && e.contains(&pid),
+            "{e}"
+        );
+        assert!(!key_dir.join("reference.json").exists());
+        drop(held);
+        // A lock file whose process is gone (no flock held on it).
+        fs::write(key_dir.join(irad::lock::LOCK_FILE), "pid 4000000 on gone\n").unwrap();
+        let done = extend(3, &mut notes).unwrap();
+        assert_eq!(notes, ["stale irad (pid 4000000 on gone)"]);
+        assert!(!key_dir.join(irad::lock::LOCK_FILE).exists());
+        assert_eq!(done.record.spp, [6, 3]);
+        // The record edited by hand: its samples no longer those of its 3 chunks of 3.
+        let record = key_dir.join("reference.json");
+        let mut json: serde_json::Value =
+            serde_json::from_str(&fs::read_to_string(&record).unwrap()).unwrap();
+        json["spp"] = serde_json::json!([100000, 100000]);
+        fs::write(&record, serde_json::to_string_pretty(&json).unwrap()).unwrap();
+        let e = format!("{:#}", extend(4, &mut notes).unwrap_err());
+        let named = |e: &str| {
+            e.contains(record.to_str().unwrap())
+                && e.contains("[100000, 100000]")
+                && e.contains("[6, 3]")
+        };
+        assert!(named(&e), "{e}");
+        let results = run_suite(
+            ctx,
+            &suite,
+            &dir.join("out"),
+            &dir.join("cache"),
+            Shard::WHOLE,
+        );
+        assert!(
+            !dir.join("cache").exists(),
+            "the suite fell back to the cache"
+        );
+        for r in &results.runs {
+            assert_eq!(r.status, Status::Error);
+            assert!(named(&r.note), "{}", r.note);
+        }
+    });
+    let _ = fs::remove_dir_all(&dir);
+}
+
+/// `irad bench references` prints the net relMSE and the target to three significant digits
+/// however small they are (a target under 1e-4 is reached at figures that four decimals
+/// print as 0.0000).
+#[test]
+fn reference_progress_shows_small_rel_mse() {
+    use irad::bench::suite::converged::{self, ExtendOptions, Progress};
+    use irad::methods::Renderers;
+    use irad::scene::gpu::GpuScene;
+    use std::sync::atomic::{AtomicBool, Ordering};
+
+    let dir = temp_dir("converged-figures");
+    copy_plane_scene(&dir.join("plane"));
+    let text = PLANE_SUITE.replace("NAME", "converged-figures");
+    fs::write(dir.join("suite.toml"), &text).unwrap();
+    let suite = Suite::parse("suite.toml", &text, &dir).unwrap();
+    let s = &suite.scenes[0];
+    let done = std::cell::RefCell::new(None);
+    common::with_gpu(|ctx| {
+        let gpu = GpuScene::upload(ctx, &s.scene).unwrap();
+        let stop = AtomicBool::new(false);
+        let options = ExtendOptions {
+            target_rel_mse: 1e-12,
+            deadline: None,
+            chunk_spp: 2,
+            stop: Some(&stop),
+        };
+        let c = converged::extend(
+            ctx,
+            &Renderers::default(),
+            &s.scene,
+            &gpu,
+            &s.reference,
+            &options,
+            |e| {
+                if let Progress::Saved { record, .. } = e {
+                    stop.store(record.chunks >= 2, Ordering::SeqCst);
+                }
+            },
+        )
+        .unwrap();
+        *done.borrow_mut() = Some(c);
+    });
+    // Halves 0.3% apart, as after a long run: a net relMSE far under 1e-4.
+    let mut c = done.into_inner().unwrap();
+    c.halves[1].pixels = c.halves[0]
+        .pixels
+        .iter()
+        .map(|p| p.map(|v| v * 1.003))
+        .collect();
+    let mut stacked = irad::image::Image::new(8, 16);
+    stacked.pixels = c.halves.iter().flat_map(|h| h.pixels.clone()).collect();
+    irad::image::exr::write(&c.halves_path(), &stacked).unwrap();
+    let rel_mse = c.image().1;
+    assert!(rel_mse > 0.0 && rel_mse < 1e-5, "{rel_mse}");
+    c.record.rel_mse = Some(rel_mse);
+    fs::write(
+        c.dir.join("reference.json"),
+        serde_json::to_string_pretty(&c.record).unwrap(),
+    )
+    .unwrap();
+    // The target met already: nothing is rendered, and both figures are printed.
+    let target = 2.0 * rel_mse;
+    let o = irad(&[
+        "bench",
+        "references",
+        dir.join("suite.toml").to_str().unwrap(),
+        "--target",
+        &format!("{target:e}"),
+    ]);
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        o.status.success(),
+        "{out}{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    // The printed net relMSE and target, each within 0.5% of its value.
+    let figures: Vec<f64> = out
+        .split(|c: char| c.is_whitespace() || "(),;".contains(c))
+        .filter_map(|w| w.parse().ok())
+        .collect();
+    let near = |x: f64| figures.iter().any(|f| (f / x - 1.0).abs() < 5e-3);
+    assert!(near(rel_mse) && near(target), "{out}");
+    assert!(out.contains(" reached)"), "{out}");
+    let _ = fs::remove_dir_all(&dir);
+}
+
+/// A suite refused its folder's results after an edit names the edit: the suite field with
+/// its old and new values, or the scene whose file (or a file it references) changed. Results
+/// written before irad recorded the suite's text still name the scene, and otherwise say the
+/// suite file changed.
+#[test]
+fn a_refused_resume_names_the_edit() {
+    let dir = temp_dir("resume-edit");
+    copy_plane_scene(&dir.join("plane"));
+    let text = PLANE_SUITE.replace("NAME", "edited");
+    let (out, cache) = (dir.join("out"), dir.join("cache"));
+    let parse = |text: &str| Suite::parse("edited.toml", text, &dir).unwrap();
+    common::with_gpu(|ctx| {
+        run_suite(ctx, &parse(&text), &out, &cache, Shard::WHOLE);
+        let refused = |text: &str| {
+            let suite = parse(text);
+            let r = run_suite_events(ctx, &suite, &out, &cache, Shard::WHOLE, &mut Vec::new());
+            format!("{:#}", r.unwrap_err())
+        };
+        let e = refused(&text.replace("repeats = 1", "repeats = 2"));
+        assert!(e.contains("`repeats` was 1, now 2"), "{e}");
+        let e = refused(&text.replace("spp = 8", "spp = 8\nmax_depth = 3"));
+        assert!(e.contains("`reference.max_depth` was absent, now 3"), "{e}");
+        let e = refused(&text.replace("budgets = [{ spp = 1 }]", "budgets = [{ spp = 2 }]"));
+        assert!(e.contains("`method[0].budgets[0].spp` was 1, now 2"), "{e}");
+        let e = refused(&text.replace("repeats = 1", "repeats = 1 # one"));
+        assert!(e.contains("comments or layout"), "{e}");
+        let scene = dir.join("plane").join("scene.toml");
+        let mut edited = fs::read_to_string(&scene).unwrap();
+        edited.push_str("\n# edited\n");
+        fs::write(&scene, edited).unwrap();
+        let e = refused(&text);
+        assert!(
+            e.contains("scene `plane` (plane/scene.toml)") && !e.contains("was"),
+            "{e}"
+        );
+        // Results from before the suite's text and scenes were recorded.
+        let path = out.join("results.json");
+        let mut json: serde_json::Value =
+            serde_json::from_str(&fs::read_to_string(&path).unwrap()).unwrap();
+        let fields = json.as_object_mut().unwrap();
+        fields.remove("suite_text");
+        fields.remove("scene_files");
+        fs::write(&path, serde_json::to_string_pretty(&json).unwrap()).unwrap();
+        let e = refused(&text);
+        assert!(e.contains("scene `plane` (plane/scene.toml)"), "{e}");
+        let e = refused(&text.replace("repeats = 1", "repeats = 2"));
+        assert!(e.contains("the suite file"), "{e}");
+    });
+    let _ = fs::remove_dir_all(&dir);
+}

@@ -1043,3 +1043,125 @@ fn coordinates_beyond_the_limit_are_refused() {
         .load()
         .is_ok());
 }
+
+/// scripts/generate-many-lights.py: `--help` documents it; into a fresh folder it writes a
+/// hall of the lights asked for that irad loads (two emissive triangles a light), and with the
+/// defaults the shipped files byte for byte (but the sky scene's path to its map); without
+/// `--out`, or with `--out` at the shipped scenes but no `--overwrite-shipped`, it refuses and
+/// writes nothing. Skipped without python3 (outside CI).
+#[test]
+fn the_many_lights_generator_writes_halls_irad_loads() {
+    use std::process::{Command, Output};
+    let python = |args: &[&str]| -> Option<Output> {
+        Command::new("python3")
+            .arg(Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/generate-many-lights.py"))
+            .args(args)
+            .output()
+            .ok()
+    };
+    let Some(help) = python(&["--help"]) else {
+        let ci = std::env::var("CI").is_ok_and(|v| !v.is_empty() && v != "false" && v != "0");
+        assert!(!ci, "python3 is needed under CI");
+        eprintln!("note: no python3; skipping");
+        return;
+    };
+    let text = String::from_utf8_lossy(&help.stdout);
+    assert!(help.status.success(), "{text}");
+    for flag in ["--out", "--lights", "--seed", "--overwrite-shipped"] {
+        assert!(text.contains(flag), "{flag} not in\n{text}");
+    }
+    let files = [
+        "many-lights/scene.toml",
+        "many-lights/hall.obj",
+        "many-lights/ceiling.obj",
+        "many-lights/many-lights.mtl",
+        "many-lights-sky/scene.toml",
+    ];
+    let read_all = |dir: &Path| -> Vec<String> {
+        files
+            .iter()
+            .map(|f| std::fs::read_to_string(dir.join(f)).unwrap())
+            .collect()
+    };
+    let shipped = read_all(&scenes_dir());
+    let scratch = Scratch::new("many-lights-generator");
+    let dir = |name: &str| scratch.0.join(name).to_str().unwrap().to_string();
+    let shipped_dir = scenes_dir().to_str().unwrap().to_string();
+    for args in [
+        &[][..],
+        &["--lights", "1000"],
+        &["--out", &shipped_dir],
+        &["--out", &dir("bad"), "--lights", "0"],
+        &["--out", &dir("bad"), "--lights", "1048577"],
+    ] {
+        let o = python(args).unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            !o.status.success() && err.contains("error: "),
+            "{args:?}: {err}"
+        );
+    }
+    assert_eq!(
+        read_all(&scenes_dir()),
+        shipped,
+        "a refused run wrote the shipped scenes"
+    );
+    assert!(!scratch.0.join("bad").exists());
+    let emissive = |scene: &Scene| {
+        scene
+            .triangles
+            .iter()
+            .filter(|t| scene.materials[t.material as usize].is_emissive())
+            .count()
+    };
+    // A hall of 1000 lights: grown or shrunk to hold them, some slots left empty.
+    let o = python(&["--out", &dir("k"), "--lights", "1000", "--seed", "2"]).unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let hall = scene::load(&scratch.0.join("k/many-lights/scene.toml")).unwrap();
+    assert_eq!(emissive(&hall), 2000);
+    let sky = scene::load(&scratch.0.join("k/many-lights-sky/scene.toml")).unwrap();
+    assert!(sky.environment.is_some() && emissive(&sky) < 2000 && emissive(&sky) > 1000);
+    // The defaults: the shipped hall.
+    let o = python(&["--out", &dir("d")]).unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let fresh = read_all(&scratch.0.join("d"));
+    assert_eq!(fresh[..4], shipped[..4]);
+    let no_map = |t: &str| -> Vec<String> {
+        t.lines()
+            .filter(|l| !l.contains("sky.exr"))
+            .map(String::from)
+            .collect()
+    };
+    assert_eq!(no_map(&fresh[4]), no_map(&shipped[4]));
+    assert!(scene::load(&scratch.0.join("d/many-lights-sky/scene.toml")).is_ok());
+}
+
+/// The generator's largest hall, 2^20 lights (about a minute of python and 140 MB of OBJ), loads
+/// with its 2^21 emissive triangles. Too slow for CI: `cargo test --test scene_loading --
+/// --ignored many_lights`.
+#[test]
+#[ignore]
+fn the_many_lights_generator_writes_a_hall_of_2_20_lights() {
+    let scratch = Scratch::new("many-lights-2-20");
+    let started = std::time::Instant::now();
+    let o = std::process::Command::new("python3")
+        .arg(Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/generate-many-lights.py"))
+        .args(["--lights", "1048576", "--out"])
+        .arg(&scratch.0)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let generated = started.elapsed();
+    let hall = scene::load(&scratch.0.join("many-lights/scene.toml")).unwrap();
+    let emissive = hall
+        .triangles
+        .iter()
+        .filter(|t| hall.materials[t.material as usize].is_emissive())
+        .count();
+    assert_eq!(emissive, 1 << 21);
+    eprintln!(
+        "2^20 lights: generated in {:.0} s, loaded in {:.0} s",
+        generated.as_secs_f64(),
+        (started.elapsed() - generated).as_secs_f64()
+    );
+}

@@ -1,7 +1,7 @@
 //! `irad bench references`: renders or extends the converged references of a suite's scenes
 //! (irad::bench::suite::converged), with a progress bar per scene and Ctrl-C handling.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
@@ -45,6 +45,19 @@ fn parse_target(s: &str) -> Result<f64, String> {
     }
 }
 
+/// A relMSE to three significant digits, in scientific notation below 0.001: targets go far
+/// under the 1e-4 that four decimals can show.
+fn figure(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() {
+        format!("{v}")
+    } else if (1e-3..1e4).contains(&v.abs()) {
+        let decimals = (2 - v.abs().log10().floor() as i32).max(0) as usize;
+        format!("{v:.decimals$}")
+    } else {
+        format!("{v:.2e}")
+    }
+}
+
 fn parse_minutes(s: &str) -> Result<f64, String> {
     match s.parse::<f64>() {
         Ok(v) if v > 0.0 && v <= 7.0 * 24.0 * 60.0 => Ok(v),
@@ -52,6 +65,14 @@ fn parse_minutes(s: &str) -> Result<f64, String> {
             "{s}: minutes are a number above 0 and at most a week (10080)"
         )),
     }
+}
+
+/// The note for a lock whose holder is gone.
+fn took_over(dir: &Path, holder: &str) -> String {
+    format!(
+        "note: {} was locked by {holder}, which is no longer running (interrupted?): taking it over",
+        dir.display()
+    )
 }
 
 pub fn run(options: &ContextOptions, args: ReferencesArgs) -> Result<()> {
@@ -74,7 +95,7 @@ pub fn run(options: &ContextOptions, args: ReferencesArgs) -> Result<()> {
         "converged references of {} scene(s) of {} to a net relMSE of {}, chunks of {} spp, on {}",
         chosen.len(),
         args.suite.display(),
-        args.target,
+        figure(args.target),
         args.chunk_spp,
         device_line(ctx.info())
     );
@@ -126,9 +147,12 @@ pub fn run(options: &ContextOptions, args: ReferencesArgs) -> Result<()> {
                     chunk_base = spp;
                     bar.set_message(format!(
                         "spp, relMSE {}, {:.1} ms GPU/spp",
-                        record.rel_mse.map_or("-".into(), |e| format!("{e:.4}")),
+                        record.rel_mse.map_or("-".into(), figure),
                         ms_per_spp
                     ));
+                }
+                Progress::StaleLock { dir, holder } => {
+                    bar.suspend(|| eprintln!("{}", took_over(dir, &holder)))
                 }
             },
         );
@@ -138,14 +162,15 @@ pub fn run(options: &ContextOptions, args: ReferencesArgs) -> Result<()> {
         let r = &done.record;
         let reached = r.rel_mse.is_some_and(|e| e <= args.target);
         println!(
-            "{}: {} spp, net relMSE {} ({}), {:.0} s GPU in all; {}",
+            "{}: {} spp, net relMSE {} (target {} {}), {:.0} s GPU in all; {}",
             scene.name,
             r.total_spp(),
-            r.rel_mse.map_or("-".into(), |e| format!("{e:.4}")),
+            r.rel_mse.map_or("-".into(), figure),
+            figure(args.target),
             if reached {
-                "target reached"
+                "reached"
             } else {
-                "target not reached yet: the same command goes on"
+                "not reached yet: the same command goes on"
             },
             r.gpu_ms / 1000.0,
             done.dir.join("reference.json").display()

@@ -12,7 +12,8 @@
 //! estimated from their difference (`references::combine`). Every chunk is saved at once: the
 //! new halves under a new name, then the record that names them (write, then rename), then
 //! the old halves are removed, so an interrupted run never leaves a record that names
-//! anything but complete halves, and at most one chunk is lost.
+//! anything but complete halves, and at most one chunk is lost. One process extends a
+//! reference at a time: the folder is locked (`crate::lock::HolderLock`) while it does.
 //!
 //! The key is what changes the expected image: the scene (its content hash), the resolution
 //! and every reference parameter but the sample count, the seed and the light sampler. Unlike the cache's key, it
@@ -33,6 +34,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::gpu::Context;
 use crate::image::{exr, Image};
+use crate::lock::HolderLock;
 use crate::methods::reference::Reference;
 use crate::methods::{Method, Renderers};
 use crate::scene::gpu::GpuScene;
@@ -166,6 +168,7 @@ pub fn load(dir: &Path) -> Result<Option<Converged>> {
         .with_context(|| format!("reading {}", record_path.display()))?;
     let record: ConvergedRecord = serde_json::from_str(&text)
         .with_context(|| format!("parsing {} as a converged reference", record_path.display()))?;
+    check_samples(&record, &record_path)?;
     let path = dir.join(&record.halves);
     let stacked = exr::read(&path)?;
     let [w, h] = record.key.resolution;
@@ -202,6 +205,76 @@ pub fn load(dir: &Path) -> Result<Option<Converged>> {
         halves: [half(0), half(1)],
         record,
     }))
+}
+
+/// Refuses a record whose samples per half are not those its chunks put there: the halves'
+/// weights in the reference and its relMSE come from `spp`, so a wrong count (a hand edit)
+/// would skew both without a sign. `extend` sends chunk i to the half with fewer samples
+/// (A on a tie), and every chunk of a session has the session's samples, so replaying the
+/// sessions gives the counts.
+fn check_samples(record: &ConvergedRecord, path: &Path) -> Result<()> {
+    let chunks: u64 = record.sessions.iter().map(|s| u64::from(s.chunks)).sum();
+    if chunks != u64::from(record.chunks) {
+        bail!(
+            "{}: `chunks` = {}, but its sessions add up to {chunks} chunks: the record is damaged or was edited; move its folder away to start again",
+            path.display(),
+            record.chunks
+        );
+    }
+    let mut spp = [0u128; 2];
+    let mut sizes = Vec::new();
+    for (i, s) in record.sessions.iter().enumerate() {
+        let per_chunk = match u64::from(s.chunks) {
+            0 => 0,
+            n => s.spp / n,
+        };
+        if s.chunks == 0 || per_chunk == 0 || per_chunk * u64::from(s.chunks) != s.spp {
+            bail!(
+                "{}: sessions[{i}] has `spp` = {} over `chunks` = {}, not a whole number of samples per chunk: the record is damaged or was edited; move its folder away to start again",
+                path.display(),
+                s.spp,
+                s.chunks
+            );
+        }
+        replay(&mut spp, u128::from(per_chunk), u64::from(s.chunks));
+        sizes.push(format!("{} of {per_chunk}", s.chunks));
+    }
+    if spp != record.spp.map(u128::from) {
+        bail!(
+            "{}: `spp` = [{}, {}], but its {} chunks ({} spp) put [{}, {}] in its halves: the record is damaged or was edited, and its halves would be weighted wrongly; move its folder away to start again",
+            path.display(),
+            record.spp[0],
+            record.spp[1],
+            record.chunks,
+            sizes.join(", then "),
+            spp[0],
+            spp[1]
+        );
+    }
+    Ok(())
+}
+
+/// Adds `chunks` chunks of `per_chunk` samples to the halves `spp` as `extend` does.
+fn replay(spp: &mut [u128; 2], per_chunk: u128, mut chunks: u64) {
+    let step = |spp: &mut [u128; 2]| spp[usize::from(spp[1] < spp[0])] += per_chunk;
+    while chunks > 0 {
+        let before = *spp;
+        step(spp);
+        chunks -= 1;
+        if chunks == 0 {
+            break;
+        }
+        step(spp);
+        chunks -= 1;
+        // Which half a chunk goes to depends only on the halves' difference; once a pair of
+        // chunks brings it back, every later pair does the same, so they are added at once.
+        if spp[0] - before[0] == per_chunk && spp[1] - before[1] == per_chunk {
+            let pairs = chunks / 2;
+            spp[0] += u128::from(pairs) * per_chunk;
+            spp[1] += u128::from(pairs) * per_chunk;
+            chunks -= 2 * pairs;
+        }
+    }
 }
 
 /// The converged reference for `scene` and `reference` (a reference method) when one is stored
@@ -241,6 +314,9 @@ pub enum Progress<'a> {
         record: &'a ConvergedRecord,
         ms_per_spp: f64,
     },
+    /// The reference's folder `dir` was locked by a process that is gone (`holder`); it was
+    /// taken over.
+    StaleLock { dir: &'a Path, holder: String },
 }
 
 /// Extends (or starts) the converged reference of `scene` with `reference`'s settings, chunk
@@ -268,6 +344,17 @@ pub fn extend(
     };
     let key = ConvergedKey::new(scene, reference);
     let dir = key.dir(folder);
+    // One writer at a time: two writers would render the same chunks, and the last record
+    // written would drop the other's session and leave its halves behind.
+    fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
+    let acquired = HolderLock::acquire_or(
+        &dir,
+        "wait for it to finish (or stop it); it extends the same converged reference",
+    )?;
+    let _lock = acquired.lock;
+    if let Some(holder) = acquired.stale {
+        on(Progress::StaleLock { dir: &dir, holder });
+    }
     let mut current = match load(&dir)? {
         Some(found) if found.record.key == key => found,
         Some(found) => bail!(

@@ -116,6 +116,8 @@ pub struct Suite {
     pub file: String,
     /// FNV-1a 64 of the suite text and every scene's content hash: parts of one suite merge.
     pub hash: u64,
+    /// The suite file's text (results record it, so a later run can name an edit).
+    pub text: String,
     pub seed: u32,
     pub warmup: u32,
     pub repeats: u32,
@@ -249,6 +251,7 @@ impl Suite {
             description: f.description,
             file: file.into(),
             hash: suite_hash(text, &scenes),
+            text: text.into(),
             seed: counts.seed,
             warmup: counts.warmup,
             repeats: counts.repeats,
@@ -521,10 +524,15 @@ fn scene_reference(
 
 /// FNV-1a 64 of the suite text, then of every scene's content hash in suite order.
 fn suite_hash(text: &str, scenes: &[SuiteScene]) -> u64 {
+    suite_hash_of(text, scenes.iter().map(|s| s.scene.content_hash))
+}
+
+/// `Suite::hash` of a suite text and its scenes' content hashes, in suite order.
+pub fn suite_hash_of(text: &str, scene_hashes: impl IntoIterator<Item = u64>) -> u64 {
     let mut hash = Fnv1a64::default();
     hash.write(text.as_bytes());
-    for s in scenes {
-        hash.write(&s.scene.content_hash.to_le_bytes());
+    for h in scene_hashes {
+        hash.write(&h.to_le_bytes());
     }
     hash.finish()
 }

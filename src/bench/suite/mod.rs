@@ -33,7 +33,7 @@ use crate::scene::gpu::GpuScene;
 
 pub use file::{Shard, Suite};
 use measure::{measure, MeasureError};
-pub use results::{ReferenceSummary, RunRecord, Status, SuiteResults};
+pub use results::{ReferenceSummary, RunRecord, SceneFile, Status, SuiteResults};
 
 /// Thumbnails in the report are at most this wide (block averages of the render).
 pub const THUMBNAIL_WIDTH: u32 = 256;
@@ -116,6 +116,16 @@ pub fn run(
         irad_version: IRAD_VERSION.into(),
         references: BTreeMap::new(),
         runs: Vec::new(),
+        suite_text: suite.text.clone(),
+        scene_files: suite
+            .scenes
+            .iter()
+            .map(|s| SceneFile {
+                name: s.scene.name.clone(),
+                path: s.path.clone(),
+                content_hash: format!("{:016x}", s.scene.content_hash),
+            })
+            .collect(),
     };
     match &previous {
         resume::Previous::Resume(_) if options.references_only => anyhow::bail!(

@@ -148,6 +148,24 @@ pub struct SuiteResults {
     /// Per scene: its reference image (relative path), spp and where it is cached.
     pub references: BTreeMap<String, ReferenceSummary>,
     pub runs: Vec<RunRecord>,
+    /// The suite file's text, so that a run refused after an edit can name the field that
+    /// changed; empty in results written before it was recorded.
+    #[serde(default)]
+    pub suite_text: String,
+    /// Every scene of the suite in suite order, so that a run refused after an edit can name
+    /// the scene whose contents changed; empty in results written before it was recorded.
+    #[serde(default)]
+    pub scene_files: Vec<SceneFile>,
+}
+
+/// A scene of a suite as it was run.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SceneFile {
+    pub name: String,
+    /// As the suite file writes it.
+    pub path: String,
+    /// `Scene::content_hash`, 16 hex digits.
+    pub content_hash: String,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -504,6 +522,8 @@ mod tests {
             irad_version: String::new(),
             references: BTreeMap::new(),
             runs,
+            suite_text: String::new(),
+            scene_files: Vec::new(),
         };
         results.mark_pareto();
         let marks: Vec<bool> = results.runs.iter().map(|r| r.pareto).collect();
@@ -569,6 +589,8 @@ mod tests {
             irad_version: String::new(),
             references: BTreeMap::new(),
             runs: vec![a, b],
+            suite_text: String::new(),
+            scene_files: Vec::new(),
         };
         results.runs[1].index = 4;
         results
