@@ -48,6 +48,7 @@ pub mod methods;
 pub mod render;
 pub mod sampling;
 pub mod scene;
+pub mod sequence;
 pub mod trace;
 
 pub use gpu::{Context, ContextOptions, DeviceSelector, GpuError, Validation};

@@ -23,6 +23,8 @@ pub struct RenderJob<'a> {
     pub exposure: f32,
     /// A reference EXR to score against.
     pub reference: Option<PathBuf>,
+    /// The animation frame `scene` shows (`Scene::at_frame`), for the record.
+    pub frame: Option<u32>,
 }
 
 impl RenderJob<'_> {
@@ -117,6 +119,17 @@ pub fn render_checked(
     checked: Checked,
     progress: impl FnMut(u32, u32),
 ) -> Result<RenderReport> {
+    render_checked_with(ctx, &Renderers::default(), job, checked, progress)
+}
+
+/// `render_checked` with kernels built once for many renders (a sequence's frames).
+pub fn render_checked_with(
+    ctx: &Context,
+    renderers: &Renderers,
+    job: &RenderJob,
+    checked: Checked,
+    progress: impl FnMut(u32, u32),
+) -> Result<RenderReport> {
     let cam = &job.scene.camera;
     let reference = checked.reference;
     let gpu_scene = GpuScene::upload(ctx, job.scene).context("uploading the scene")?;
@@ -137,7 +150,7 @@ pub fn render_checked(
             ));
         }
     }
-    let output = Renderers::default().run(ctx, &job.method, job.scene, &gpu_scene, progress)?;
+    let output = renderers.run(ctx, &job.method, job.scene, &gpu_scene, progress)?;
     if output.nonfinite_estimates > 0 {
         warnings.push(format!(
             "{} per-pixel estimates were NaN or Inf and were dropped (counted as black)",
@@ -161,6 +174,7 @@ pub fn render_checked(
         scene_hash: format!("{:016x}", job.scene.content_hash),
         resolution: [cam.width, cam.height],
         seed: job.method.seed() as u64,
+        frame: job.frame,
         samples: job.method.samples(),
         device: info.name.clone(),
         driver: info.driver.clone(),

@@ -511,6 +511,7 @@ fn record() -> RenderRecord {
         scene_hash: "0123456789abcdef".into(),
         resolution: [256, 192],
         seed: u64::MAX,
+        frame: None,
         samples: 1024,
         device: "llvmpipe (LLVM 19.1.7, 256 bits) \u{e9}".into(),
         driver: "Mesa 25.0.7".into(),

@@ -1165,3 +1165,129 @@ fn the_many_lights_generator_writes_a_hall_of_2_20_lights() {
         (started.elapsed() - generated).as_secs_f64()
     );
 }
+
+// ---- animation ----------------------------------------------------------------------------
+
+/// `good_toml()` with a point light's position moving over `[animation]`, the track's fields
+/// replaced by `track` when given.
+fn animated(track: &str, frames: &str) -> String {
+    format!("{CAMERA}{MESH}{POINT}[animation]\n{frames}\n[[animation.track]]\n{track}\n")
+}
+
+const MOVING: &str =
+    "target = \"light[0].position\"\ntimes = [0.0, 1.0]\nvalues = [[0, 1, 0], [1, 1, 0]]";
+
+#[test]
+fn an_animated_scene_shows_each_frame_as_a_still() {
+    let s = scratch(
+        "animated",
+        &animated(MOVING, "frames = 25\nfps = 24"),
+        OBJ,
+        MTL,
+    );
+    let scene = s.load().unwrap();
+    let animation = scene.animation.as_ref().unwrap();
+    assert_eq!((animation.frames, animation.fps), (25, 24.0));
+    // Frame 12 at 0.5 s: halfway.
+    let still = scene.at_frame(12).unwrap();
+    assert!(still.animation.is_none());
+    match &still.lights[0] {
+        scene::Light::Point { position, .. } => {
+            assert!(
+                (*position - Vec3::new(0.5, 1.0, 0.0)).length() < 1e-6,
+                "{position}"
+            )
+        }
+        other => panic!("{other:?}"),
+    }
+    assert_eq!(still.triangles, scene.triangles);
+}
+
+#[test]
+fn bad_tracks_are_refused_naming_the_field_and_value() {
+    let cases: &[(&str, &str, &[&str])] = &[
+        (
+            "target = \"light[3].position\"\ntimes = [0.0]\nvalues = [[0, 1, 0]]",
+            "frames = 4",
+            &[
+                "animation.track[0].target",
+                "\"light[3].position\"",
+                "1 [[light]] entry",
+            ],
+        ),
+        (
+            "target = \"camera.zoom\"\ntimes = [0.0]\nvalues = [1.0]",
+            "frames = 4",
+            &["animation.track[0].target", "camera.zoom", "camera.fov_y"],
+        ),
+        (
+            "target = \"light[0].direction\"\ntimes = [0.0]\nvalues = [[0, -1, 0]]",
+            "frames = 4",
+            &["animation.track[0].target", "only spot lights"],
+        ),
+        (
+            "target = \"light[0].position\"\ntimes = [1.0, 0.5]\nvalues = [[0, 1, 0], [1, 1, 0]]",
+            "frames = 48",
+            &["animation.track[0].times[1] = 0.5", "in order of time"],
+        ),
+        (
+            "target = \"light[0].position\"\ntimes = [0.0, 3.0]\nvalues = [[0, 1, 0], [1, 1, 0]]",
+            "frames = 24\nfps = 24",
+            &[
+                "animation.track[0].times[1] = 3",
+                "past the animation's end",
+                "0.9583",
+            ],
+        ),
+        (
+            "target = \"light[0].position\"\ntimes = [0.0]\nvalues = [[0, 1]]",
+            "frames = 4",
+            &["animation.track[0].values[0] = [0.0, 1.0]", "[x, y, z]"],
+        ),
+        (
+            "target = \"camera.fov_y\"\ntimes = [0.0]\nvalues = [[40, 40, 40]]",
+            "frames = 4",
+            &["animation.track[0].values[0]", "must be a number"],
+        ),
+        (
+            "target = \"light[0].position\"\ntimes = [0.0, 0.1]\nvalues = [[0, 1, 0]]",
+            "frames = 4",
+            &["animation.track[0].values", "one value per time"],
+        ),
+        (
+            "target = \"material.grey.emission\"\ntimes = [0.0]\nvalues = [1.0]",
+            "frames = 4",
+            &["material.grey.emission", "emits nothing"],
+        ),
+        (
+            "target = \"camera.fov_y\"\ntimes = [0.0, 0.5]\nvalues = [40.0, 200.0]",
+            "frames = 24",
+            &["camera.fov_y at animation frame", "(0, 180)"],
+        ),
+        (MOVING, "frames = 0", &["animation.frames = 0", "1..="]),
+        (MOVING, "frames = 4\nfps = -1", &["animation.fps = -1"]),
+        (
+            "target = \"light[0].intensity\"\ntimes = [0.0, 0.5]\nvalues = [[1, 1, 1], [-1, 1, 1]]",
+            "frames = 24",
+            &["light[0].intensity at animation frame", ">= 0"],
+        ),
+    ];
+    for (k, (track, frames, parts)) in cases.iter().enumerate() {
+        let s = scratch(
+            &format!("bad-track-{k}"),
+            &animated(track, frames),
+            OBJ,
+            MTL,
+        );
+        s.error(parts);
+    }
+    // Two tracks on one target, and an unknown key in a track.
+    let twice = format!(
+        "{}[[animation.track]]\n{MOVING}\n",
+        animated(MOVING, "frames = 30")
+    );
+    scratch("track-twice", &twice, OBJ, MTL)
+        .error(&["animation.track[1].target", "moves it already"]);
+    let unknown = animated(&format!("{MOVING}\nease = 2"), "frames = 30");
+    scratch("track-key", &unknown, OBJ, MTL).error(&["ease"]);
+}

@@ -10,6 +10,7 @@ mod methods;
 mod references;
 mod render;
 mod selfcheck;
+mod sequence;
 mod shader_tree;
 mod shaders;
 mod suite;

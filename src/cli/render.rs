@@ -32,6 +32,24 @@ pub struct RenderArgs {
     /// outliers against it to the JSON and the summary.
     #[arg(long, value_name = "EXR")]
     reference: Option<PathBuf>,
+    /// The frame of an animated scene ([animation] in its file) to render as a still [default:
+    /// 0]. It renders with seed SEED + N, as frame N of `--sequence` does, so the two agree bit
+    /// for bit.
+    #[arg(long, value_name = "N")]
+    frame: Option<u32>,
+    /// Render an animated scene frame by frame, each frame its own image from the method's
+    /// count (`--samples-per-frame`), into the folder OUT: frame_NNNN.exr, .png and .json,
+    /// sequence.json (each frame's GPU time per pass, seed and files; device and settings once)
+    /// and preview.png (an animated PNG; preview.mp4 too where ffmpeg is installed). All frames,
+    /// or `--sequence=A..B` for frames A to B-1. An interrupted sequence resumes from the
+    /// frames it completed. (`--frames` is the methods' own count of samples, so the range is
+    /// the value of --sequence.)
+    #[arg(long, value_name = "A..B", num_args = 0..=1, require_equals = true, default_missing_value = "")]
+    sequence: Option<String>,
+    /// With --sequence: the method's count per frame (samples per pixel for the path tracer,
+    /// frames for the others) [default: the method's own count setting].
+    #[arg(long, value_name = "K", requires = "sequence")]
+    samples_per_frame: Option<u32>,
     #[command(flatten)]
     settings: MethodFlags,
 }
@@ -71,6 +89,43 @@ pub fn run(options: &ContextOptions, args: RenderArgs) -> Result<()> {
         }
         None => scene::default_scene(),
     };
+    if let Some(range) = &args.sequence {
+        if args.frame.is_some() || args.reference.is_some() {
+            bail!("--sequence renders every frame: --frame and --reference are for one render");
+        }
+        let method = match args.samples_per_frame {
+            Some(k) => method.with_count(k),
+            None => method,
+        };
+        return super::sequence::run(options, &scene, method, range, args.out, args.exposure);
+    }
+    let (scene, frame) = match (&scene.animation, args.frame) {
+        (Some(animation), frame) => {
+            let f = frame.unwrap_or(0);
+            if f >= animation.frames {
+                bail!(
+                    "--frame {f}: the animation has frames 0..{} ({} frames)",
+                    animation.frames,
+                    animation.frames
+                );
+            }
+            println!(
+                "animation frame {f} of 0..{} as a still (--frame N picks another; --sequence \
+                 renders them all)",
+                animation.frames
+            );
+            (scene.at_frame(f)?, Some(f))
+        }
+        (None, Some(f)) => bail!(
+            "--frame {f}: {} is not animated (no [animation] in its file)",
+            render::scene_label(&scene)
+        ),
+        (None, None) => (scene, None),
+    };
+    let method = match frame {
+        Some(f) => irad::sequence::frame_method(&method, f),
+        None => method,
+    };
     let out = args
         .out
         .unwrap_or_else(|| PathBuf::from("out").join(&scene.name));
@@ -80,6 +135,7 @@ pub fn run(options: &ContextOptions, args: RenderArgs) -> Result<()> {
         out,
         exposure: args.exposure,
         reference: args.reference,
+        frame,
     };
     // Before the device opens: a bad exposure, folder or reference costs nothing.
     let checked = job.check()?;

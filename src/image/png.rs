@@ -63,3 +63,45 @@ pub fn write_rgb8(path: &Path, width: u32, height: u32, data: &[u8]) -> Result<(
         .finish()
         .with_context(|| format!("writing {}", path.display()))
 }
+
+/// Writes `frames` (one size) tone-mapped at `exposure` as an animated PNG (APNG) playing at
+/// `fps` frames per second in a loop: what `irad render --sequence` previews, viewable in any
+/// browser. Written under a temporary name and renamed.
+pub fn write_animated(path: &Path, frames: &[Image], fps: f32, exposure: f32) -> Result<()> {
+    let Some(first) = frames.first() else {
+        anyhow::bail!("writing {}: no frames", path.display());
+    };
+    let (width, height) = (first.width, first.height);
+    ensure!(
+        frames
+            .iter()
+            .all(|f| (f.width, f.height) == (width, height)),
+        "writing {}: the frames differ in size",
+        path.display()
+    );
+    ensure!(
+        fps.is_finite() && fps > 0.0,
+        "writing {}: {fps} frames per second",
+        path.display()
+    );
+    let tmp = path.with_extension("png.tmp");
+    let write = || -> Result<()> {
+        let file = File::create(&tmp)?;
+        let mut encoder = ::png::Encoder::new(BufWriter::new(file), width, height);
+        encoder.set_color(::png::ColorType::Rgb);
+        encoder.set_depth(::png::BitDepth::Eight);
+        encoder.set_source_srgb(::png::SrgbRenderingIntent::Perceptual);
+        encoder.set_animated(frames.len() as u32, 0)?;
+        // The delay as a fraction: 1000 / (1000 fps) seconds, to a millisecond's precision.
+        let denominator = (fps * 1000.0).round().clamp(1.0, u16::MAX as f32) as u16;
+        encoder.set_frame_delay(1000u16.min(denominator), denominator)?;
+        let mut writer = encoder.write_header()?;
+        for frame in frames {
+            writer.write_image_data(&tonemap::tonemap_rgb8(frame, exposure))?;
+        }
+        writer.finish()?;
+        Ok(())
+    };
+    write().with_context(|| format!("writing {}", tmp.display()))?;
+    std::fs::rename(&tmp, path).with_context(|| format!("writing {}", path.display()))
+}

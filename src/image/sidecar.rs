@@ -31,6 +31,9 @@ pub struct RenderRecord {
     /// [width, height] in pixels.
     pub resolution: [u32; 2],
     pub seed: u64,
+    /// The animation frame shown (an animated scene's; docs/DESIGN.md "Animation").
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub frame: Option<u32>,
     /// Samples as the method counts them: samples per pixel, VPLs, frames.
     pub samples: u64,
     /// Device name and driver as Vulkan reports them.

@@ -6,7 +6,7 @@ use serde::Deserialize;
 use super::toml_arrays::{exact, exact_opt};
 use super::SceneError;
 
-#[derive(Debug, Deserialize)]
+#[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SceneFile {
     pub camera: CameraFile,
@@ -19,9 +19,47 @@ pub struct SceneFile {
     #[serde(default)]
     pub luminaire: Vec<LuminairePlacementFile>,
     pub failure: Option<FailureFile>,
+    /// Keyframed tracks over animation frames (scene/animation.rs).
+    pub animation: Option<AnimationFile>,
 }
 
-#[derive(Debug, Deserialize)]
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AnimationFile {
+    /// Signed so that zero and negative counts get the loader's message, not serde's.
+    pub frames: i64,
+    /// Frames per second: key times are in seconds, frame f at f / fps.
+    #[serde(default = "default_fps")]
+    pub fps: f32,
+    #[serde(default)]
+    pub track: Vec<TrackFile>,
+}
+
+fn default_fps() -> f32 {
+    24.0
+}
+
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TrackFile {
+    /// What the track moves: `camera.position`, `light[0].intensity`, ...
+    pub target: String,
+    /// Key times in seconds, strictly increasing.
+    pub times: Vec<f32>,
+    /// One value a key: a number or an [x, y, z] array, as the target takes.
+    pub values: Vec<KeyValue>,
+    /// `linear` (the default) or `smooth` (a Catmull-Rom spline through the keys).
+    pub interpolation: Option<String>,
+}
+
+#[derive(Clone, Debug, Deserialize)]
+#[serde(untagged)]
+pub enum KeyValue {
+    Number(f32),
+    Array(Vec<f32>),
+}
+
+#[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct CameraFile {
     #[serde(deserialize_with = "exact")]
@@ -40,13 +78,13 @@ fn default_up() -> [f32; 3] {
     [0.0, 1.0, 0.0]
 }
 
-#[derive(Debug, Deserialize)]
+#[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MeshFile {
     pub obj: String,
 }
 
-#[derive(Debug, Deserialize)]
+#[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct LightFile {
     pub kind: String,
@@ -60,7 +98,7 @@ pub struct LightFile {
     pub falloff_angle: Option<f32>,
 }
 
-#[derive(Debug, Deserialize)]
+#[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct LuminairePlacementFile {
     /// The luminaire's TOML, relative to the scene file.
@@ -77,7 +115,7 @@ pub struct LuminairePlacementFile {
     pub up: Option<[f32; 3]>,
 }
 
-#[derive(Debug, Deserialize)]
+#[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct EnvironmentFile {
     /// An equirectangular EXR, or a glob (`*`, `?` in the file name) naming a sequence: one
@@ -106,7 +144,7 @@ fn default_scale() -> f32 {
 }
 
 /// `[failure]`: the methods a stability-suite scene is expected to defeat, and why.
-#[derive(Debug, Deserialize)]
+#[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct FailureFile {
     pub methods: Vec<String>,

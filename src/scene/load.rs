@@ -6,6 +6,7 @@ use std::path::{Path, PathBuf};
 
 use glam::Vec3;
 
+use super::animation::Animation;
 use super::hash::Fnv1a64;
 use super::sky::MovingSun;
 use super::{camera, coincident, environment, failure, file, lights, luminaire, obj, power};
@@ -302,6 +303,7 @@ fn build(file: &str, toml_text: &str, files: &Files) -> Result<Scene, SceneError
         luminaires,
         failure,
         warnings,
+        animation: None,
     };
     let sources = power::PowerSources {
         file,
@@ -316,7 +318,49 @@ fn build(file: &str, toml_text: &str, files: &Files) -> Result<Scene, SceneError
         }),
     };
     power::check(&scene, &sources)?;
-    Ok(scene)
+    let Some(a) = &f.animation else {
+        return Ok(scene);
+    };
+    let animation = Animation::build(
+        file,
+        a,
+        &f.camera,
+        &f.light,
+        &f.luminaire,
+        &scene.materials,
+        scene.environment.is_some(),
+    )?;
+    // The power bound at each light's and material's brightest over the frames.
+    let (emission, intensity) = animation.brightest(scene.materials.len());
+    let mut brightest = scene.clone();
+    for (m, s) in brightest.materials.iter_mut().zip(emission) {
+        m.ke *= s;
+    }
+    for (l, i) in brightest.lights.iter_mut().zip(intensity) {
+        match l {
+            super::Light::Point { intensity, .. } | super::Light::Spot { intensity, .. } => {
+                *intensity = i
+            }
+        }
+    }
+    power::check(&brightest, &sources).map_err(|e| match e {
+        SceneError::Invalid {
+            file,
+            field,
+            value,
+            problem,
+        } => SceneError::Invalid {
+            file,
+            field: format!("{field} (at its brightest over [animation])"),
+            value,
+            problem,
+        },
+        other => other,
+    })?;
+    Ok(Scene {
+        animation: Some(animation),
+        ..scene
+    })
 }
 
 /// The maps of `[environment]`, one per frame (one for a still map).

@@ -124,8 +124,12 @@ pub struct Scene {
     pub failure: Option<FailureNote>,
     /// Things the loader fixed and reports (for example "dropped 2 degenerate triangles").
     pub warnings: Vec<String>,
+    /// Keyframed tracks over animation frames (animation.rs): None for a still scene. A
+    /// render shows one frame of it (`Scene::at_frame`), a sequence render every frame.
+    pub animation: Option<animation::Animation>,
 }
 
+pub mod animation;
 mod camera;
 mod coincident;
 mod environment;

@@ -116,5 +116,6 @@ pub fn scene(
         luminaires: vec![],
         failure: None,
         warnings: Vec::new(),
+        animation: None,
     }
 }

@@ -456,6 +456,22 @@ impl PlacedLuminaire {
         luminaire: Luminaire,
         f: &super::file::LuminairePlacementFile,
     ) -> Result<PlacedLuminaire, SceneError> {
+        let [position, x, y, z] = Self::frame(file, k, f)?;
+        Ok(PlacedLuminaire {
+            luminaire,
+            position,
+            x,
+            y,
+            z,
+        })
+    }
+
+    /// The position and axes (x, y, z) `[[luminaire]]` entry k places a luminaire at.
+    pub fn frame(
+        file: &str,
+        k: usize,
+        f: &super::file::LuminairePlacementFile,
+    ) -> Result<[Vec3; 4], SceneError> {
         let invalid = |field: &str, value: String, problem: &str| SceneError::Invalid {
             file: file.to_string(),
             field: format!("luminaire[{k}].{field}"),
@@ -508,13 +524,7 @@ impl PlacedLuminaire {
                 "must be finite and not parallel to look_at - position",
             ));
         }
-        Ok(PlacedLuminaire {
-            luminaire,
-            position,
-            x: y.cross(z),
-            y,
-            z,
-        })
+        Ok([position, y.cross(z), y, z])
     }
 }
 

@@ -1,0 +1,367 @@
+//! Sequences (docs/DESIGN.md "Animation"): every frame of an animated scene rendered as its own
+//! image from the method's count of samples, each frame independent of the others (the
+//! baseline without reuse across frames). `render_frames` hands each frame's image to a
+//! callback; `render_sequence` writes `OUT/frame_NNNN.{exr,png,json}` per frame (one set, the
+//! JSON last, as `irad render` writes), `OUT/sequence.json` after every frame, and a preview,
+//! and resumes an interrupted sequence from the frames it finds complete.
+//!
+//! Frame f renders the still scene `Scene::at_frame(f)` with the method's seed plus f
+//! (`frame_seed`), so its noise differs from the next frame's, and `irad render --frame f` with
+//! the same seed gives the same bits.
+
+use std::collections::BTreeMap;
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+
+use anyhow::{bail, Context as _, Result};
+use serde::{Deserialize, Serialize};
+
+use crate::gpu::Context;
+use crate::image::{self, exr, RenderRecord};
+use crate::lock::HolderLock;
+use crate::methods::{Method, RenderOutput, Renderers};
+use crate::render::{self, RenderJob, RenderReport};
+use crate::scene::gpu::GpuScene;
+use crate::scene::Scene;
+
+/// The seed animation frame `frame` renders with.
+pub fn frame_seed(seed: u32, frame: u32) -> u32 {
+    seed.wrapping_add(frame)
+}
+
+/// `method` as animation frame `frame` runs it (its seed, `frame_seed`).
+pub fn frame_method(method: &Method, frame: u32) -> Method {
+    method.with_seed(frame_seed(method.seed(), frame))
+}
+
+/// Renders each frame of `frames` of `scene` with `method` (its count per frame), calling
+/// `on_frame(frame, the frame's scene, its output)` after each. Nothing is written.
+pub fn render_frames(
+    ctx: &Context,
+    scene: &Scene,
+    method: &Method,
+    frames: Range<u32>,
+    mut on_frame: impl FnMut(u32, &Scene, RenderOutput) -> Result<()>,
+) -> Result<()> {
+    let renderers = Renderers::default();
+    for f in frames {
+        let still = scene.at_frame(f)?;
+        // Geometry does not move, but the lights, emission and map that the upload's tables
+        // are built from do: the frame's scene is uploaded whole.
+        let gpu = GpuScene::upload(ctx, &still).context("uploading the scene")?;
+        let output = renderers.run(ctx, &frame_method(method, f), &still, &gpu, |_, _| {})?;
+        on_frame(f, &still, output)?;
+    }
+    Ok(())
+}
+
+/// A sequence to render into a folder.
+pub struct SequenceJob<'a> {
+    /// An animated scene.
+    pub scene: &'a Scene,
+    /// The method, its count the samples of each frame.
+    pub method: Method,
+    pub frames: Range<u32>,
+    pub out: PathBuf,
+    pub exposure: f32,
+}
+
+/// OUT/sequence.json: what was rendered, once, and each frame's record in brief.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SequenceRecord {
+    pub scene: String,
+    pub scene_hash: String,
+    pub method: String,
+    /// The method's settings but the seed (each frame's is `seed` + its frame).
+    pub parameters: BTreeMap<String, serde_json::Value>,
+    pub seed: u32,
+    /// The animation's frame count and rate; `frames` the range rendered.
+    pub animation_frames: u32,
+    pub fps: f32,
+    pub frames: [u32; 2],
+    pub device: String,
+    pub driver: String,
+    pub irad_version: String,
+    /// Each complete frame, in order.
+    pub rendered: Vec<FrameSummary>,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FrameSummary {
+    pub frame: u32,
+    pub seed: u32,
+    pub passes: Vec<image::PassRecord>,
+    pub gpu_ms_total: Option<f64>,
+    pub wall_ms: f64,
+    #[serde(default)]
+    pub warnings: Vec<String>,
+    pub files: Vec<String>,
+}
+
+impl FrameSummary {
+    fn of(record: &RenderRecord) -> FrameSummary {
+        FrameSummary {
+            frame: record.frame.unwrap_or(0),
+            seed: record.seed as u32,
+            passes: record.passes.clone(),
+            gpu_ms_total: record.gpu_ms_total,
+            wall_ms: record.wall_ms,
+            warnings: record.warnings.clone(),
+            files: record.files.clone(),
+        }
+    }
+}
+
+/// Frame `f`'s output stem in `out`.
+pub fn frame_stem(out: &Path, f: u32) -> PathBuf {
+    out.join(format!("frame_{f:04}"))
+}
+
+/// What `render_sequence` did.
+pub struct SequenceReport {
+    pub record: SequenceRecord,
+    /// Frames found complete from an earlier run and kept.
+    pub resumed: Vec<u32>,
+    /// The preview files written (an animated PNG, an MP4 where ffmpeg is installed).
+    pub previews: Vec<PathBuf>,
+    pub warnings: Vec<String>,
+}
+
+/// Renders `job` into its folder, resuming from the frames an earlier run of the same
+/// sequence completed; `progress(frames done, frames in all, frame)` before each frame and
+/// `on_frame` after it (the frame's report: image and record).
+pub fn render_sequence(
+    ctx: &Context,
+    job: &SequenceJob,
+    mut progress: impl FnMut(u32, u32, u32),
+    mut on_frame: impl FnMut(u32, &RenderReport),
+) -> Result<SequenceReport> {
+    let Some(animation) = &job.scene.animation else {
+        bail!(
+            "{} has no [animation]: a sequence renders an animated scene's frames",
+            render::scene_label(job.scene)
+        );
+    };
+    if job.frames.is_empty() || job.frames.end > animation.frames {
+        bail!(
+            "frames {}..{} are not within the animation's 0..{}",
+            job.frames.start,
+            job.frames.end,
+            animation.frames
+        );
+    }
+    std::fs::create_dir_all(&job.out)
+        .with_context(|| format!("creating the output folder {}", job.out.display()))?;
+    let acquired = HolderLock::acquire(&job.out)?;
+    let _lock = acquired.lock;
+    let mut warnings: Vec<String> = acquired
+        .stale
+        .into_iter()
+        .map(|holder| format!("took over {}'s lock of a sequence that stopped", holder))
+        .collect();
+    let info = ctx.info();
+    let mut record = SequenceRecord {
+        scene: render::scene_label(job.scene),
+        scene_hash: format!("{:016x}", job.scene.content_hash),
+        method: job.method.name().into(),
+        parameters: job.method.parameters(),
+        seed: job.method.seed(),
+        animation_frames: animation.frames,
+        fps: animation.fps,
+        frames: [job.frames.start, job.frames.end],
+        device: info.name.clone(),
+        driver: info.driver.clone(),
+        irad_version: image::sidecar::IRAD_VERSION.into(),
+        rendered: vec![],
+    };
+    let record_path = job.out.join("sequence.json");
+    if record_path.exists() {
+        let earlier: SequenceRecord = read_json(&record_path)?;
+        if let Some(what) = differs(&earlier, &record) {
+            bail!(
+                "{} holds frames of another sequence ({what}): choose another output folder, or \
+                 remove it to replace them",
+                job.out.display()
+            );
+        }
+    }
+    let renderers = Renderers::default();
+    let total = job.frames.len() as u32;
+    let mut resumed = vec![];
+    for (done, f) in job.frames.clone().enumerate() {
+        progress(done as u32, total, f);
+        let method = frame_method(&job.method, f);
+        let stem = frame_stem(&job.out, f);
+        if let Some(earlier) = complete_frame(&stem, job.scene, &method, f)? {
+            record.rendered.push(FrameSummary::of(&earlier));
+            resumed.push(f);
+            continue;
+        }
+        let still = job.scene.at_frame(f)?;
+        let frame_job = RenderJob {
+            scene: &still,
+            method,
+            out: stem,
+            exposure: job.exposure,
+            reference: None,
+            frame: Some(f),
+        };
+        let checked = frame_job.check()?;
+        let report = render::render_checked_with(ctx, &renderers, &frame_job, checked, |_, _| {})
+            .with_context(|| format!("rendering animation frame {f}"))?;
+        on_frame(f, &report);
+        record.rendered.push(FrameSummary::of(&report.record));
+        write_json(&record_path, &record)?;
+    }
+    progress(total, total, job.frames.end);
+    write_json(&record_path, &record)?;
+    let (previews, preview_warnings) =
+        previews(&job.out, job.frames.clone(), animation.fps, job.exposure)?;
+    warnings.extend(preview_warnings);
+    Ok(SequenceReport {
+        record,
+        resumed,
+        previews,
+        warnings,
+    })
+}
+
+/// What makes `earlier` another sequence than `now`, in words; None when it is the same one.
+fn differs(earlier: &SequenceRecord, now: &SequenceRecord) -> Option<String> {
+    if earlier.scene_hash != now.scene_hash {
+        return Some(format!(
+            "the scene {} has other contents (hash {}, now {})",
+            now.scene, earlier.scene_hash, now.scene_hash
+        ));
+    }
+    if earlier.method != now.method {
+        return Some(format!("method {}, now {}", earlier.method, now.method));
+    }
+    if earlier.seed != now.seed {
+        return Some(format!("seed {}, now {}", earlier.seed, now.seed));
+    }
+    if earlier.parameters != now.parameters {
+        let changed: Vec<String> = earlier
+            .parameters
+            .keys()
+            .chain(now.parameters.keys())
+            .filter(|k| earlier.parameters.get(*k) != now.parameters.get(*k))
+            .map(|k| {
+                let show = |v: Option<&serde_json::Value>| {
+                    v.map_or("unset".to_string(), |v| v.to_string())
+                };
+                format!(
+                    "{k} {}, now {}",
+                    show(earlier.parameters.get(k)),
+                    show(now.parameters.get(k))
+                )
+            })
+            .collect();
+        let mut changed = changed;
+        changed.dedup();
+        return Some(changed.join(", "));
+    }
+    None
+}
+
+/// Frame `f`'s record at `stem` when an earlier run completed it with this method, scene and
+/// seed (its JSON, written last, is there); None when the frame is still to render. A frame of
+/// another render is an error rather than overwritten.
+fn complete_frame(
+    stem: &Path,
+    scene: &Scene,
+    method: &Method,
+    f: u32,
+) -> Result<Option<RenderRecord>> {
+    let json = stem.with_extension("json");
+    if !json.exists() {
+        return Ok(None);
+    }
+    let record = RenderRecord::read(&json)?;
+    let same = record.method == method.name()
+        && record.parameters == method.parameters()
+        && record.seed == method.seed() as u64
+        && record.scene_hash == format!("{:016x}", scene.content_hash)
+        && record.frame == Some(f);
+    if !same {
+        bail!(
+            "{} is a render of another sequence (method {}, seed {}, frame {:?}): remove it or \
+             choose another output folder",
+            json.display(),
+            record.method,
+            record.seed,
+            record.frame
+        );
+    }
+    let missing = record
+        .files
+        .iter()
+        .map(|name| json.with_file_name(name))
+        .find(|p| !p.exists());
+    Ok(match missing {
+        // An image removed by hand: the frame is rendered again.
+        Some(_) => None,
+        None => Some(record),
+    })
+}
+
+/// An animated PNG of the frames' tone-mapped images at the animation's rate, and an MP4 where
+/// ffmpeg is installed (its failure only warns).
+fn previews(
+    out: &Path,
+    frames: Range<u32>,
+    fps: f32,
+    exposure: f32,
+) -> Result<(Vec<PathBuf>, Vec<String>)> {
+    let apng = out.join("preview.png");
+    let images: Vec<image::Image> = frames
+        .clone()
+        .map(|f| exr::read(&frame_stem(out, f).with_extension("exr")))
+        .collect::<Result<_>>()?;
+    image::png::write_animated(&apng, &images, fps, exposure)?;
+    let mut written = vec![apng];
+    let mut warnings = vec![];
+    let ffmpeg_found = std::env::var_os("PATH")
+        .is_some_and(|paths| std::env::split_paths(&paths).any(|p| p.join("ffmpeg").is_file()));
+    if ffmpeg_found {
+        let mp4 = out.join("preview.mp4");
+        let status = std::process::Command::new("ffmpeg")
+            .args(["-y", "-loglevel", "error", "-framerate"])
+            .arg(fps.to_string())
+            .arg("-start_number")
+            .arg(frames.start.to_string())
+            .arg("-i")
+            .arg(out.join("frame_%04d.png"))
+            .args([
+                "-frames:v",
+                &frames.len().to_string(),
+                "-vf",
+                "scale=trunc(iw/2)*2:trunc(ih/2)*2",
+                "-pix_fmt",
+                "yuv420p",
+            ])
+            .arg(&mp4)
+            .status();
+        match status {
+            Ok(s) if s.success() => written.push(mp4),
+            Ok(s) => warnings.push(format!("ffmpeg exited with {s}: no preview.mp4")),
+            Err(e) => warnings.push(format!("ffmpeg did not run ({e}): no preview.mp4")),
+        }
+    }
+    Ok((written, warnings))
+}
+
+fn read_json<T: for<'de> Deserialize<'de>>(path: &Path) -> Result<T> {
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    serde_json::from_str(&text)
+        .with_context(|| format!("{}: not a sequence record", path.display()))
+}
+
+/// Written under a temporary name and renamed, so a reader never sees half a record.
+fn write_json<T: Serialize>(path: &Path, value: &T) -> Result<()> {
+    let tmp = path.with_extension("json.tmp");
+    let text = serde_json::to_string_pretty(value)?;
+    std::fs::write(&tmp, text + "\n").with_context(|| format!("writing {}", tmp.display()))?;
+    std::fs::rename(&tmp, path).with_context(|| format!("writing {}", path.display()))
+}

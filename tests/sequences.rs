@@ -1,0 +1,198 @@
+//! Sequences of animated scenes (src/scene/animation.rs, src/sequence.rs; docs/DESIGN.md
+//! "Animation"): a point light moving over a diffuse plane matches its closed form in every
+//! frame; frame f of a sequence has the bits of a still render of frame f; an interrupted
+//! sequence resumes to the files of one run through, and a folder of another sequence is
+//! refused.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+
+use glam::Vec3;
+use irad::image::exr;
+use irad::methods::Method;
+use irad::render::{self, RenderJob};
+use irad::scene;
+use irad::sequence::{self, SequenceJob};
+
+use common::with_gpu;
+
+/// A scratch folder, removed when dropped.
+struct Scratch(PathBuf);
+
+impl Scratch {
+    fn new(name: &str) -> Scratch {
+        let dir = std::env::temp_dir().join(format!("irad-seq-{}-{name}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        Scratch(dir)
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+const ALBEDO: f32 = 0.5;
+const INTENSITY: f32 = 2.0;
+const HEIGHT: f32 = 0.5;
+const FRAMES: u32 = 5;
+
+/// A diffuse plane (y = 0, 4 x 4) seen from above, a point light 0.5 above it moving from
+/// x = -1 to x = 1 over 5 frames at 4 fps (linear: x = -1 + f / 2).
+fn moving_light(dir: &Path) -> scene::Scene {
+    std::fs::write(
+        dir.join("plane.obj"),
+        "mtllib plane.mtl\nv -2 0 -2\nv 2 0 -2\nv 2 0 2\nv -2 0 2\nusemtl floor\nf 1 4 3 2\n",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("plane.mtl"),
+        format!("newmtl floor\nKd {ALBEDO} {ALBEDO} {ALBEDO}\n"),
+    )
+    .unwrap();
+    let toml = format!(
+        "[camera]\nposition = [0, 4, 0.001]\nlook_at = [0, 0, 0]\nfov_y = 40\n\
+         resolution = [16, 16]\n[[mesh]]\nobj = \"plane.obj\"\n\
+         [[light]]\nkind = \"point\"\nposition = [-1, {HEIGHT}, 0]\n\
+         intensity = [{INTENSITY}, {INTENSITY}, {INTENSITY}]\n\
+         [animation]\nframes = {FRAMES}\nfps = 4\n[[animation.track]]\n\
+         target = \"light[0].position\"\ntimes = [0.0, 1.0]\n\
+         values = [[-1, {HEIGHT}, 0], [1, {HEIGHT}, 0]]\n"
+    );
+    std::fs::write(dir.join("scene.toml"), toml).unwrap();
+    scene::load(&dir.join("scene.toml")).unwrap()
+}
+
+fn path_tracer(spp: u32, seed: u32) -> Method {
+    let params: toml::Table = toml::from_str(&format!(
+        "spp = {spp}\nseed = {seed}\nmax_depth = 1\npixel_centres = true"
+    ))
+    .unwrap();
+    Method::from_params("reference", &params).unwrap()
+}
+
+/// Each pixel centre's radiance: (rho / pi) I cos / d^2 with cos = h / d, from the point its
+/// camera ray meets on the plane. With pixel centres and a point light, next-event estimation
+/// is exact and BSDF samples never meet the light, so the render has no noise.
+#[test]
+fn a_point_light_moving_over_a_plane_matches_its_closed_form_in_every_frame() {
+    let dir = Scratch::new("closed-form");
+    let scene = moving_light(&dir.0);
+    with_gpu(|ctx| {
+        let mut frames_seen = 0;
+        sequence::render_frames(
+            ctx,
+            &scene,
+            &path_tracer(2, 7),
+            0..FRAMES,
+            |f, still, out| {
+                let light = Vec3::new(-1.0 + f as f32 / 2.0, HEIGHT, 0.0);
+                let cam = &still.camera;
+                let mut worst = 0.0f64;
+                for j in 0..cam.height {
+                    for i in 0..cam.width {
+                        let d = cam.direction(i as f32 + 0.5, j as f32 + 0.5);
+                        let hit = cam.position + d * (-cam.position.y / d.y);
+                        let to_light = light - hit;
+                        let dist2 = to_light.length_squared() as f64;
+                        let cos = HEIGHT as f64 / dist2.sqrt();
+                        let expected =
+                            ALBEDO as f64 / std::f64::consts::PI * INTENSITY as f64 * cos / dist2;
+                        let got = out.image.pixels[(j * cam.width + i) as usize][1] as f64;
+                        worst = worst.max((got / expected - 1.0).abs());
+                    }
+                }
+                eprintln!(
+                    "frame {f}: light at x = {}, worst relative error {worst:.2e}",
+                    light.x
+                );
+                assert!(worst < 1e-3, "frame {f}: {worst}");
+                frames_seen += 1;
+                Ok(())
+            },
+        )
+        .unwrap();
+        assert_eq!(frames_seen, FRAMES);
+    });
+}
+
+/// Frame f of `render_sequence` against `irad render --frame f`'s path (the frame's still
+/// scene, the frame's seed), bit for bit; then a run cut after two frames and resumed leaves
+/// the same images and records as one run through, and another sequence's folder is refused.
+#[test]
+fn frames_are_stills_and_an_interrupted_sequence_resumes_to_the_same_files() {
+    let dir = Scratch::new("resume");
+    let scene = moving_light(&dir.0);
+    let method = path_tracer(2, 3).with_count(2);
+    let jittered: toml::Table = toml::from_str("spp = 2\nseed = 3").unwrap();
+    let jittered = Method::from_params("reference", &jittered).unwrap();
+    with_gpu(|ctx| {
+        let run = |out: &Path, frames: std::ops::Range<u32>, method: &Method| {
+            let job = SequenceJob {
+                scene: &scene,
+                method: method.clone(),
+                frames,
+                out: out.to_path_buf(),
+                exposure: 0.0,
+            };
+            sequence::render_sequence(ctx, &job, |_, _, _| {}, |_, _| {})
+        };
+        let whole = dir.0.join("whole");
+        let report = run(&whole, 0..FRAMES, &jittered).unwrap();
+        assert_eq!(report.record.rendered.len(), FRAMES as usize);
+        assert!(report.resumed.is_empty());
+        assert!(whole.join("preview.png").exists());
+
+        // Frame 3 as a still.
+        let still = scene.at_frame(3).unwrap();
+        let job = RenderJob {
+            scene: &still,
+            method: sequence::frame_method(&jittered, 3),
+            out: dir.0.join("still"),
+            exposure: 0.0,
+            reference: None,
+            frame: Some(3),
+        };
+        let alone = render::render(ctx, &job, |_, _| {}).unwrap();
+        let in_sequence =
+            exr::read(&sequence::frame_stem(&whole, 3).with_extension("exr")).unwrap();
+        assert_eq!(alone.image.pixels, in_sequence.pixels, "frame 3");
+        let frame2 = exr::read(&sequence::frame_stem(&whole, 2).with_extension("exr")).unwrap();
+        assert_ne!(
+            frame2.pixels, in_sequence.pixels,
+            "frames 2 and 3 are the same image"
+        );
+
+        // Cut after frames 0 and 1 (their files complete, the rest never written), resumed.
+        let cut = dir.0.join("cut");
+        run(&cut, 0..2, &jittered).unwrap();
+        std::fs::remove_file(cut.join("sequence.json")).unwrap();
+        let resumed = run(&cut, 0..FRAMES, &jittered).unwrap();
+        assert_eq!(resumed.resumed, vec![0, 1]);
+        for f in 0..FRAMES {
+            let stem = |d: &Path| sequence::frame_stem(d, f);
+            let a = exr::read(&stem(&whole).with_extension("exr")).unwrap();
+            let b = exr::read(&stem(&cut).with_extension("exr")).unwrap();
+            assert_eq!(a.pixels, b.pixels, "frame {f}");
+            let ra = irad::image::RenderRecord::read(&stem(&whole).with_extension("json")).unwrap();
+            let rb = irad::image::RenderRecord::read(&stem(&cut).with_extension("json")).unwrap();
+            assert_eq!(
+                (ra.seed, ra.frame, &ra.parameters),
+                (rb.seed, rb.frame, &rb.parameters)
+            );
+        }
+        let frames =
+            |r: &sequence::SequenceRecord| r.rendered.iter().map(|f| f.frame).collect::<Vec<_>>();
+        assert_eq!(frames(&resumed.record), frames(&report.record));
+
+        // Another sequence (other samples a frame) into the same folder: refused, files kept.
+        let e = run(&cut, 0..FRAMES, &method).err().unwrap().to_string();
+        assert!(
+            e.contains("holds frames of another sequence") && e.contains("pixel_centres"),
+            "{e}"
+        );
+    });
+}
