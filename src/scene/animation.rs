@@ -41,8 +41,8 @@ pub enum Target {
     LightPosition(usize),
     LightDirection(usize),
     LightIntensity(usize),
-    /// A material (by index) whose Ke is scaled.
-    Emission(usize),
+    /// The materials of one name (each mesh reads its own copy of an MTL) whose Ke is scaled.
+    Emission(Vec<usize>),
     /// Degrees about +Y, right-handed.
     EnvironmentRotation,
     LuminairePosition(usize),
@@ -304,7 +304,7 @@ impl Animation {
                 Target::LightPosition(i) => lights[i].position = v.to_array(),
                 Target::LightDirection(i) => lights[i].direction = Some(v.to_array()),
                 Target::LightIntensity(i) => lights[i].intensity = v.to_array(),
-                Target::Emission(m) => emission[m] = v.x,
+                Target::Emission(ref ms) => ms.iter().for_each(|&m| emission[m] = v.x),
                 Target::EnvironmentRotation => environment_rotation = v.x,
                 Target::LuminairePosition(i) => luminaires[i].position = v.to_array(),
                 Target::LuminaireLookAt(i) => luminaires[i].look_at = v.to_array(),
@@ -371,7 +371,7 @@ impl Animation {
                 .collect();
             for track in &self.tracks {
                 match track.target {
-                    Target::Emission(m) => e[m] = track.at(t).x,
+                    Target::Emission(ref ms) => ms.iter().for_each(|&m| e[m] = track.at(t).x),
                     Target::LightIntensity(i) => l[i] = track.at(t),
                     _ => {}
                 }
@@ -450,12 +450,17 @@ fn parse_target(
         .strip_prefix("material.")
         .and_then(|t| t.strip_suffix(".emission"))
     {
-        return match materials.iter().position(|m| m.name == name) {
-            Some(m) if materials[m].is_emissive() => Ok(Target::Emission(m)),
-            Some(_) => Err(format!(
+        let named: Vec<usize> = (0..materials.len())
+            .filter(|&m| materials[m].name == name)
+            .collect();
+        return if named.is_empty() {
+            Err(format!("no material is named `{name}`"))
+        } else if !named.iter().any(|&m| materials[m].is_emissive()) {
+            Err(format!(
                 "material `{name}` emits nothing (Ke = 0): its emission cannot be scaled"
-            )),
-            None => Err(format!("no material is named `{name}`")),
+            ))
+        } else {
+            Ok(Target::Emission(named))
         };
     }
     Err(unknown())
