@@ -17,7 +17,7 @@ use anyhow::{bail, Context as _, Result};
 use serde::{Deserialize, Serialize};
 
 use crate::gpu::Context;
-use crate::image::{self, exr, RenderRecord};
+use crate::image::{self, exr, Metrics, RenderRecord, SequenceMetrics};
 use crate::lock::HolderLock;
 use crate::methods::{Method, RenderOutput, Renderers};
 use crate::render::{self, RenderJob, RenderReport};
@@ -64,6 +64,9 @@ pub struct SequenceJob<'a> {
     pub frames: Range<u32>,
     pub out: PathBuf,
     pub exposure: f32,
+    /// A folder of the same animation's reference frames (an earlier sequence, its
+    /// frame_NNNN.exr): each frame is scored against its own, and the sequence as a whole.
+    pub reference: Option<PathBuf>,
 }
 
 /// OUT/sequence.json: what was rendered, once, and each frame's record in brief.
@@ -84,6 +87,12 @@ pub struct SequenceRecord {
     pub irad_version: String,
     /// Each complete frame, in order.
     pub rendered: Vec<FrameSummary>,
+    /// Against the reference frames, when given: the mean over frames, the worst frame and
+    /// the flicker (docs/DESIGN.md "Error metrics").
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reference: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub metrics: Option<SequenceMetrics>,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -93,6 +102,8 @@ pub struct FrameSummary {
     pub passes: Vec<image::PassRecord>,
     pub gpu_ms_total: Option<f64>,
     pub wall_ms: f64,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub metrics: Option<Metrics>,
     #[serde(default)]
     pub warnings: Vec<String>,
     pub files: Vec<String>,
@@ -106,6 +117,7 @@ impl FrameSummary {
             passes: record.passes.clone(),
             gpu_ms_total: record.gpu_ms_total,
             wall_ms: record.wall_ms,
+            metrics: record.metrics.clone(),
             warnings: record.warnings.clone(),
             files: record.files.clone(),
         }
@@ -173,7 +185,12 @@ pub fn render_sequence(
         driver: info.driver.clone(),
         irad_version: image::sidecar::IRAD_VERSION.into(),
         rendered: vec![],
+        reference: job.reference.as_ref().map(|r| r.display().to_string()),
+        metrics: None,
     };
+    if let Some(dir) = &job.reference {
+        check_reference_sequence(dir, &record, job.frames.clone())?;
+    }
     let record_path = job.out.join("sequence.json");
     if record_path.exists() {
         let earlier: SequenceRecord = read_json(&record_path)?;
@@ -192,6 +209,10 @@ pub fn render_sequence(
         progress(done as u32, total, f);
         let method = frame_method(&job.method, f);
         let stem = frame_stem(&job.out, f);
+        let reference = job
+            .reference
+            .as_ref()
+            .map(|dir| frame_stem(dir, f).with_extension("exr"));
         if let Some(earlier) = complete_frame(&stem, job.scene, &method, f)? {
             record.rendered.push(FrameSummary::of(&earlier));
             resumed.push(f);
@@ -203,7 +224,7 @@ pub fn render_sequence(
             method,
             out: stem,
             exposure: job.exposure,
-            reference: None,
+            reference,
             frame: Some(f),
         };
         let checked = frame_job.check()?;
@@ -214,6 +235,21 @@ pub fn render_sequence(
         write_json(&record_path, &record)?;
     }
     progress(total, total, job.frames.end);
+    if let Some(dir) = &job.reference {
+        let read = |d: &Path, f: u32| exr::read(&frame_stem(d, f).with_extension("exr"));
+        let frames: Vec<_> = job
+            .frames
+            .clone()
+            .map(|f| read(&job.out, f))
+            .collect::<Result<_>>()?;
+        let refs: Vec<_> = job
+            .frames
+            .clone()
+            .map(|f| read(dir, f))
+            .collect::<Result<_>>()?;
+        let (_, summary) = image::compare_sequence(&frames, &refs)?;
+        record.metrics = Some(summary);
+    }
     write_json(&record_path, &record)?;
     let (previews, preview_warnings) =
         previews(&job.out, job.frames.clone(), animation.fps, job.exposure)?;
@@ -224,6 +260,37 @@ pub fn render_sequence(
         previews,
         warnings,
     })
+}
+
+/// A reference folder's frames must exist for `frames`; where it has a sequence.json, it must
+/// be of the same scene and cover them.
+fn check_reference_sequence(dir: &Path, now: &SequenceRecord, frames: Range<u32>) -> Result<()> {
+    let record_path = dir.join("sequence.json");
+    if record_path.exists() {
+        let reference: SequenceRecord = read_json(&record_path)?;
+        if reference.scene_hash != now.scene_hash {
+            bail!(
+                "the reference sequence {} is of another scene or another version of it (hash {}, \
+                 this one {})",
+                dir.display(),
+                reference.scene_hash,
+                now.scene_hash
+            );
+        }
+    }
+    if let Some(f) = frames
+        .clone()
+        .find(|&f| !frame_stem(dir, f).with_extension("exr").exists())
+    {
+        bail!(
+            "the reference sequence {} has no frame {f} ({}): render frames {}..{} there first",
+            dir.display(),
+            frame_stem(dir, f).with_extension("exr").display(),
+            frames.start,
+            frames.end
+        );
+    }
+    Ok(())
 }
 
 /// What makes `earlier` another sequence than `now`, in words; None when it is the same one.

@@ -399,6 +399,83 @@ fn flicker_by_hand() {
     );
 }
 
+/// A sequence's flicker on cases known by hand: the error alternating in sign every frame
+/// (x_f = r (1 + a (-1)^f)) gives a r sqrt(2) / sqrt(r^2 + 0.01); a constant bias, the same
+/// error every frame, and a reference that itself brightens frame by frame, matched exactly,
+/// give 0; frames with independent noise give about the still flicker's relative deviation.
+#[test]
+fn sequence_flicker_by_hand() {
+    let (a, r) = (0.1f32, 0.5f32);
+    let refs: Vec<Image> = (0..6).map(|_| image(2, 1, &[gray(r); 2])).collect();
+    let alternating: Vec<Image> = (0..6)
+        .map(|f| {
+            image(
+                2,
+                1,
+                &[gray(r * (1.0 + a * if f % 2 == 0 { 1.0 } else { -1.0 })); 2],
+            )
+        })
+        .collect();
+    let expected = (a * r) as f64 * 2f64.sqrt() / ((r * r) as f64 + 0.01).sqrt();
+    let got = metrics::sequence_flicker(&alternating, &refs).unwrap();
+    assert!(
+        (got - expected).abs() < 1e-6 * expected,
+        "{got} against {expected}"
+    );
+
+    let biased: Vec<Image> = (0..6)
+        .map(|_| image(2, 1, &[gray(r * (1.0 + a)); 2]))
+        .collect();
+    assert_eq!(metrics::sequence_flicker(&biased, &refs).unwrap(), 0.0);
+    let brightening: Vec<Image> = (0..6)
+        .map(|f| image(2, 1, &[gray(0.25 * f as f32); 2]))
+        .collect();
+    assert_eq!(
+        metrics::sequence_flicker(&brightening, &brightening).unwrap(),
+        0.0
+    );
+
+    // Independent noise of relative standard deviation 0.2 about a reference of 1 (and
+    // r^2 + 0.01 = 1.01): flicker about 0.2 / sqrt(1.01), within sampling error.
+    let mut state = 12345u64;
+    let mut uniform = || {
+        state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((state >> 11) as f64 / (1u64 << 53) as f64) as f32
+    };
+    let n = 4096;
+    let ones: Vec<Image> = (0..8)
+        .map(|_| image(n, 1, &vec![gray(1.0); n as usize]))
+        .collect();
+    let noisy: Vec<Image> = (0..8)
+        .map(|_| {
+            // Uniform on [-0.2 sqrt(3), 0.2 sqrt(3)]: standard deviation 0.2.
+            let px: Vec<[f32; 3]> = (0..n)
+                .map(|_| gray(1.0 + 0.2 * 3f32.sqrt() * (2.0 * uniform() - 1.0)))
+                .collect();
+            image(n, 1, &px)
+        })
+        .collect();
+    let got = metrics::sequence_flicker(&noisy, &ones).unwrap();
+    let expected = 0.2 / 1.01f64.sqrt();
+    assert!(
+        (got / expected - 1.0).abs() < 0.03,
+        "{got} against {expected}"
+    );
+
+    // Per frame and over the sequence: the worst frame named, the mean over frames.
+    let (per_frame, summary) = metrics::compare_sequence(&alternating, &refs).unwrap();
+    assert_eq!(per_frame.len(), 6);
+    assert!((summary.flicker - expected_alternating(a, r)).abs() < 1e-6);
+    assert!((summary.mean.rel_mse - per_frame[0].rel_mse).abs() < 1e-12);
+    assert!(metrics::sequence_flicker(&alternating[..1], &refs[..1]).is_err());
+}
+
+fn expected_alternating(a: f32, r: f32) -> f64 {
+    (a * r) as f64 * 2f64.sqrt() / ((r * r) as f64 + 0.01).sqrt()
+}
+
 // --- files ------------------------------------------------------------------------------------
 
 #[test]

@@ -130,15 +130,22 @@ fn frames_are_stills_and_an_interrupted_sequence_resumes_to_the_same_files() {
     let jittered: toml::Table = toml::from_str("spp = 2\nseed = 3").unwrap();
     let jittered = Method::from_params("reference", &jittered).unwrap();
     with_gpu(|ctx| {
-        let run = |out: &Path, frames: std::ops::Range<u32>, method: &Method| {
+        let scored = |out: &Path,
+                      frames: std::ops::Range<u32>,
+                      method: &Method,
+                      reference: Option<PathBuf>| {
             let job = SequenceJob {
                 scene: &scene,
                 method: method.clone(),
                 frames,
                 out: out.to_path_buf(),
                 exposure: 0.0,
+                reference,
             };
             sequence::render_sequence(ctx, &job, |_, _, _| {}, |_, _| {})
+        };
+        let run = |out: &Path, frames: std::ops::Range<u32>, method: &Method| {
+            scored(out, frames, method, None)
         };
         let whole = dir.0.join("whole");
         let report = run(&whole, 0..FRAMES, &jittered).unwrap();
@@ -187,6 +194,32 @@ fn frames_are_stills_and_an_interrupted_sequence_resumes_to_the_same_files() {
         let frames =
             |r: &sequence::SequenceRecord| r.rendered.iter().map(|f| f.frame).collect::<Vec<_>>();
         assert_eq!(frames(&resumed.record), frames(&report.record));
+
+        // Scored against its own frames (the same bits): no error and no flicker; against the
+        // pixel-centred frames, an error in every frame and a flicker.
+        let same = scored(
+            &dir.0.join("same"),
+            0..FRAMES,
+            &jittered,
+            Some(whole.clone()),
+        )
+        .unwrap();
+        let m = same.record.metrics.unwrap();
+        assert_eq!(
+            (m.mean.rel_mse, m.worst_rel_mse, m.flicker),
+            (0.0, 0.0, 0.0)
+        );
+        assert!(same
+            .record
+            .rendered
+            .iter()
+            .all(|f| f.metrics.as_ref().unwrap().rel_mse == 0.0));
+        let centres = dir.0.join("centres");
+        run(&centres, 0..FRAMES, &method).unwrap();
+        let other = scored(&dir.0.join("other"), 0..FRAMES, &jittered, Some(centres)).unwrap();
+        let m = other.record.metrics.unwrap();
+        assert!(m.mean.rel_mse > 0.0 && m.flicker > 0.0, "{m:?}");
+        assert!(m.worst_rel_mse >= m.mean.rel_mse);
 
         // Another sequence (other samples a frame) into the same folder: refused, files kept.
         let e = run(&cut, 0..FRAMES, &method).err().unwrap().to_string();

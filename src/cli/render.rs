@@ -29,7 +29,9 @@ pub struct RenderArgs {
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
     exposure: f32,
     /// Reference EXR of the same scene and size: adds relMSE, RMSE, Lab error, bias and
-    /// outliers against it to the JSON and the summary.
+    /// outliers against it to the JSON and the summary. With --sequence, a folder of the same
+    /// animation's reference frames (an earlier --sequence): each frame is scored against its
+    /// own, and sequence.json gets the mean, the worst frame and the flicker.
     #[arg(long, value_name = "EXR")]
     reference: Option<PathBuf>,
     /// The frame of an animated scene ([animation] in its file) to render as a still [default:
@@ -90,14 +92,22 @@ pub fn run(options: &ContextOptions, args: RenderArgs) -> Result<()> {
         None => scene::default_scene(),
     };
     if let Some(range) = &args.sequence {
-        if args.frame.is_some() || args.reference.is_some() {
-            bail!("--sequence renders every frame: --frame and --reference are for one render");
+        if args.frame.is_some() {
+            bail!("--sequence renders every frame: --frame is for one render");
         }
         let method = match args.samples_per_frame {
             Some(k) => method.with_count(k),
             None => method,
         };
-        return super::sequence::run(options, &scene, method, range, args.out, args.exposure);
+        return super::sequence::run(
+            options,
+            &scene,
+            method,
+            range,
+            args.out,
+            args.exposure,
+            args.reference,
+        );
     }
     let (scene, frame) = match (&scene.animation, args.frame) {
         (Some(animation), frame) => {

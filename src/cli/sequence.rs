@@ -52,6 +52,7 @@ pub fn run(
     range: &str,
     out: Option<PathBuf>,
     exposure: f32,
+    reference: Option<PathBuf>,
 ) -> Result<()> {
     let Some(animation) = &scene.animation else {
         bail!(
@@ -87,6 +88,7 @@ pub fn run(
         frames,
         out,
         exposure,
+        reference,
     };
     let report = sequence::render_sequence(
         &ctx,
@@ -120,6 +122,17 @@ pub fn run(
         let mean = gpu.iter().sum::<f64>() / gpu.len() as f64;
         let worst = gpu.iter().cloned().fold(0.0, f64::max);
         println!("GPU time a frame: mean {mean:.1} ms, longest {worst:.1} ms");
+    }
+    if let Some(m) = &report.record.metrics {
+        println!(
+            "against the reference frames: relMSE mean {:.4e}, worst {:.4e} (frame {}), bias mean \
+             {:.3}%, flicker {:.4e}",
+            m.mean.rel_mse,
+            m.worst_rel_mse,
+            report.record.frames[0] as usize + m.worst_frame,
+            100.0 * m.mean.bias,
+            m.flicker
+        );
     }
     let previews: Vec<String> = report
         .previews

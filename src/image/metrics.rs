@@ -10,7 +10,8 @@
 //! - outliers = fraction of pixels with Y(x) > 10 Y(r) + 0.1, Y = 0.2126 R + 0.7152 G + 0.0722 B;
 //! - nan_inf = number of non-finite values (channels) in x;
 //! - flicker = temporal standard deviation across renders with successive seeds relative to
-//!   the reference, averaged (see `flicker`).
+//!   the reference, averaged (see `flicker`); a sequence's flicker the same of the error's
+//!   change from frame to frame (see `sequence_flicker`).
 //!
 //! Everything accumulates in f64. Non-finite values of x are counted in `nan_inf` and left
 //! out of every other figure (a pixel with any non-finite channel is left out of the per-pixel
@@ -279,6 +280,99 @@ pub fn flicker(frames: &[Image], reference: &Image) -> Result<f64, MetricsError>
         }
     }
     Ok((total / (3 * reference.pixels.len()) as f64).sqrt())
+}
+
+/// Flicker of a sequence: `frames[f]` an animation's frame f, `references[f]` that frame's
+/// reference. The error e = x - r changes from frame to frame by de = dx - dr, the image's
+/// change less the reference's own; per pixel and channel de^2 / (2 (m^2 + 0.01)), m the two
+/// references' mean, averaged over pixels, channels and frame pairs, then the square root. For
+/// frames with independent noise of relative variance v it is sqrt(v), the scale of `flicker`
+/// on a still view; an error that stays put (a bias, the same noise every frame) is 0, and so
+/// is the reference's own change. Non-finite values make it NaN.
+pub fn sequence_flicker(frames: &[Image], references: &[Image]) -> Result<f64, MetricsError> {
+    if frames.len() < 2 || references.len() != frames.len() {
+        return Err(MetricsError::TooFewImages {
+            count: frames.len().min(references.len()),
+        });
+    }
+    for (index, (x, r)) in frames.iter().zip(references).enumerate() {
+        check(x, "image")?;
+        check(r, "reference")?;
+        let first = (references[0].width, references[0].height);
+        for size in [(x.width, x.height), (r.width, r.height)] {
+            if size != first {
+                return Err(MetricsError::SeedSizeMismatch { index, size, first });
+            }
+        }
+    }
+    let mut total = 0.0f64;
+    for f in 1..frames.len() {
+        let (x0, x1, r0, r1) = (
+            &frames[f - 1],
+            &frames[f],
+            &references[f - 1],
+            &references[f],
+        );
+        for i in 0..r0.pixels.len() {
+            for c in 0..3 {
+                let (a, b) = (r0.pixels[i][c] as f64, r1.pixels[i][c] as f64);
+                let de = (x1.pixels[i][c] as f64 - b) - (x0.pixels[i][c] as f64 - a);
+                let m = 0.5 * (a + b);
+                total += de * de / (2.0 * (m * m + REL_MSE_EPSILON));
+            }
+        }
+    }
+    let count = (frames.len() - 1) * 3 * references[0].pixels.len();
+    Ok((total / count as f64).sqrt())
+}
+
+/// A sequence scored frame by frame against its frames' references: each frame's metrics,
+/// their mean, the worst frame's relMSE, and `sequence_flicker`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SequenceMetrics {
+    pub mean: Metrics,
+    #[serde(with = "nullable_f64")]
+    pub worst_rel_mse: f64,
+    pub worst_frame: usize,
+    #[serde(with = "nullable_f64")]
+    pub flicker: f64,
+}
+
+/// `frames` against `references`, frame by frame (`compare`), and the sequence's figures; the
+/// flicker is NaN for a single frame.
+pub fn compare_sequence(
+    frames: &[Image],
+    references: &[Image],
+) -> Result<(Vec<Metrics>, SequenceMetrics), MetricsError> {
+    let per_frame = frames
+        .iter()
+        .zip(references)
+        .map(|(x, r)| compare(x, r))
+        .collect::<Result<Vec<_>, _>>()?;
+    let (worst_frame, worst_rel_mse) =
+        per_frame
+            .iter()
+            .map(|m| m.rel_mse)
+            .enumerate()
+            .fold((0, f64::NAN), |(k, w), (i, v)| {
+                if w.is_nan() || v > w {
+                    (i, v)
+                } else {
+                    (k, w)
+                }
+            });
+    let flicker = if frames.len() > 1 {
+        sequence_flicker(frames, references)?
+    } else {
+        f64::NAN
+    };
+    let summary = SequenceMetrics {
+        mean: Metrics::mean(&per_frame),
+        worst_rel_mse,
+        worst_frame,
+        flicker,
+    };
+    Ok((per_frame, summary))
 }
 
 /// Y = 0.2126 R + 0.7152 G + 0.0722 B of linear RGB.
