@@ -117,7 +117,7 @@ impl FrameSummary {
             passes: record.passes.clone(),
             gpu_ms_total: record.gpu_ms_total,
             wall_ms: record.wall_ms,
-            metrics: record.metrics.clone(),
+            metrics: record.metrics,
             warnings: record.warnings.clone(),
             files: record.files.clone(),
         }
