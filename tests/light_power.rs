@@ -226,6 +226,42 @@ fn an_emissive_triangle_at_the_power_bound_renders_and_above_it_is_refused() {
 fn an_environment_map_at_the_power_bound_renders_and_above_it_is_refused() {
     boundary(&CASES[3]);
 }
+/// A light-field luminaire's atlas texel past the bound on emitted radiance is refused naming
+/// the atlas file, the texel and the largest value that works; that value loads.
+#[test]
+fn a_luminaire_atlas_texel_past_the_radiance_bound_is_refused() {
+    let dir = Scratch::new("luminaire");
+    dir.write(
+        "luminaire.toml",
+        "grid = [1, 1]\npitch = [0.01, 0.01]\nbasis = \"bilinear\"\ndelta = 0.05\n\
+         image_size = [0.2, 0.2]\natlas = \"images.exr\"\n",
+    );
+    let atlas = dir.0.join("images.exr");
+    let load = |texel: f32| {
+        let mut image = Image::new(2, 2);
+        image.pixels.fill([1.0; 3]);
+        image.pixels[3] = [1.0, texel, 1.0];
+        exr::write(&atlas, &image).unwrap();
+        irad::scene::luminaire::Luminaire::load(&dir.0.join("luminaire.toml"))
+    };
+    let refused = |texel: f32| {
+        let message = load(texel).map(|_| ()).unwrap_err().to_string();
+        assert!(
+            message.starts_with(&format!("{}: texel (x 1, y 1) = ", atlas.display())),
+            "{message}"
+        );
+        (largest_named(&message), message)
+    };
+    let (largest, message) = refused(3e37);
+    assert!(
+        largest as f64 <= 2f64.powi(64) && largest as f64 > 0.99 * 2f64.powi(64),
+        "{message}"
+    );
+    load(largest).unwrap_or_else(|e| panic!("the named largest texel {largest:e}: {e}"));
+    let (named, message) = refused(largest * 1.01);
+    assert_eq!(named, largest, "{message}");
+}
+
 /// The plane under a point light (and the weak one) at `height` above its centre, built in
 /// code past the loader's check.
 fn overflowing(height: f32, intensity: f32) -> Scene {

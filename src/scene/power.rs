@@ -104,6 +104,10 @@ fn terms(scene: &Scene, sources: &PowerSources) -> Vec<Term> {
             brightest: amount,
         });
     }
+    // Light-field luminaires ([[luminaire]]) are no term: they are sampled by the lightfield
+    // method alone, never through the light table or the light BVH whose f32 sums this total
+    // bounds. Their atlas texels are held to MAX_RADIANCE where they are read
+    // (src/scene/luminaire/mod.rs), as the lightfield method's f32 tables sum them.
     if let (Some(env), Some((scale, map))) = (&scene.environment, &sources.environment) {
         let (_, radius) = super::gpu::bounds(scene);
         let r2 = (radius as f64).powi(2);
@@ -177,7 +181,8 @@ fn fmt3(v: glam::Vec3) -> String {
     format!("[{}, {}, {}]", fmt1(v.x), fmt1(v.y), fmt1(v.z))
 }
 
-fn shown(x: f64) -> String {
+/// `x` as a message shows the largest value that works: three digits, rounded down.
+pub(super) fn shown(x: f64) -> String {
     fmt1(round_down(x) as f32)
 }
 
