@@ -226,6 +226,58 @@ fn an_emissive_triangle_at_the_power_bound_renders_and_above_it_is_refused() {
 fn an_environment_map_at_the_power_bound_renders_and_above_it_is_refused() {
     boundary(&CASES[3]);
 }
+/// One emissive material in an MTL that two OBJs load (each [[mesh]] parses its own copy) is
+/// one field: the largest `Ke` a refusal names counts both OBJs' triangles, so it loads, and
+/// one just above it is refused with the same largest value.
+#[test]
+fn a_material_two_objs_share_is_bounded_once_and_its_named_largest_ke_loads() {
+    let dir = Scratch::new("shared-mtl");
+    let load = |ke: f32| {
+        dir.write(
+            "plane.obj",
+            "mtllib plane.mtl\nusemtl grey\nv -2 0 2\nv 2 0 2\nv 2 0 -2\nv -2 0 -2\nf 1 2 3 4\n",
+        );
+        dir.write("plane.mtl", "newmtl grey\nKd 0.5 0.5 0.5\n");
+        // Two triangles facing down, area 0.5 each, one per OBJ.
+        dir.write(
+            "lamp.obj",
+            "mtllib lamp.mtl\nusemtl lamp\nv -0.5 1 -0.5\nv 0 1 0.5\nv 0.5 1 -0.5\nf 1 2 3\n",
+        );
+        dir.write(
+            "lamp2.obj",
+            "mtllib lamp.mtl\nusemtl lamp\nv -0.5 1.5 -0.5\nv 0 1.5 0.5\nv 0.5 1.5 -0.5\nf 1 2 3\n",
+        );
+        dir.write(
+            "lamp.mtl",
+            &format!("newmtl lamp\nKe {ke:e} {ke:e} {ke:e}\n"),
+        );
+        dir.write(
+            "scene.toml",
+            &format!("{SCENE}\n[[mesh]]\nobj = \"lamp.obj\"\n\n[[mesh]]\nobj = \"lamp2.obj\"\n"),
+        );
+        scene::load(&dir.0.join("scene.toml"))
+    };
+    let refused = |ke: f32| {
+        let message = load(ke).map(|_| ()).unwrap_err().to_string();
+        let path = dir.0.join("lamp.mtl").display().to_string();
+        assert!(
+            message.starts_with(&format!("{path}: material `lamp` Ke = ")),
+            "{message}"
+        );
+        (largest_named(&message), message)
+    };
+    let (largest, message) = refused(3e37);
+    // pi Ke (0.5 + 0.5) at most 2^64 with the weak light's 4 pi.
+    let expected = (2f64.powi(64) - 4.0 * std::f64::consts::PI) / std::f64::consts::PI;
+    assert!(
+        largest as f64 <= expected && largest as f64 > 0.99 * expected,
+        "{message}"
+    );
+    load(largest).unwrap_or_else(|e| panic!("the named largest Ke {largest:e}: {e}"));
+    let (named, message) = refused(largest * 1.01);
+    assert_eq!(named, largest, "{message}");
+}
+
 /// A light-field luminaire's atlas texel past the bound on emitted radiance is refused naming
 /// the atlas file, the texel and the largest value that works; that value loads.
 #[test]

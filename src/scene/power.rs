@@ -87,19 +87,37 @@ fn terms(scene: &Scene, sources: &PowerSources) -> Vec<Term> {
     for t in &scene.triangles {
         areas[t.material as usize] += t.area();
     }
+    // Each [[mesh]] parses its own copy of its MTL files, so a material two OBJs share is
+    // several scene materials; it is one field to edit, so one term, over all their triangles
+    // (else its largest value would hold the other copies fixed and itself be refused).
+    // Files compare by their canonical path where they are on disk (two OBJs in different
+    // folders may name one MTL by different paths).
+    let mut merged: Vec<(std::path::PathBuf, &str, String, usize, f64)> = Vec::new();
     for (k, m) in scene.materials.iter().enumerate() {
         if !m.is_emissive() {
             continue;
         }
-        let amount = m.ke.max_element() as f64;
         let file = sources.material_files.get(k).cloned().flatten();
+        let file = file.unwrap_or_else(|| sources.file.to_string());
+        let key = std::fs::canonicalize(&file).unwrap_or_else(|_| file.clone().into());
+        // Ke compared too: an MTL may repeat a name with other values (the OBJ uses one).
+        match merged.iter_mut().find(|(f, name, _, j, _)| {
+            *f == key && *name == m.name && scene.materials[*j].ke == m.ke
+        }) {
+            Some((.., area)) => *area += areas[k],
+            None => merged.push((key, &m.name, file, k, areas[k])),
+        }
+    }
+    for (_, name, file, k, area) in merged {
+        let m = &scene.materials[k];
+        let amount = m.ke.max_element() as f64;
         terms.push(Term {
-            file: file.unwrap_or_else(|| sources.file.to_string()),
-            field: format!("material `{}` Ke", m.name),
+            file,
+            field: format!("material `{name}` Ke"),
             value: fmt3(m.ke),
             amount,
-            power: PI * amount * areas[k],
-            what: format!("pi Ke A, A = {:.3e} its triangles' area", areas[k]),
+            power: PI * amount * area,
+            what: format!("pi Ke A, A = {area:.3e} its triangles' area"),
             radiance_limit: MAX_RADIANCE,
             brightest: amount,
         });
