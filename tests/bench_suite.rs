@@ -1086,6 +1086,47 @@ fn converged_references_resume_bit_exactly_and_the_suite_uses_them() {
     let _ = fs::remove_dir_all(&dir);
 }
 
+/// A run of `irad bench references` that ends before its first chunk is saved (stopped, or a
+/// chunk failing) leaves no folder behind: a folder without a record among those kept beside
+/// a scene would be taken for a damaged reference by whatever walks them.
+#[test]
+fn a_converged_reference_stopped_before_its_first_chunk_leaves_no_folder() {
+    use irad::bench::suite::converged::{self, ConvergedKey, ExtendOptions};
+    use irad::methods::Renderers;
+    use irad::scene::gpu::GpuScene;
+    use std::sync::atomic::AtomicBool;
+
+    let dir = temp_dir("converged-empty");
+    copy_plane_scene(&dir.join("plane"));
+    let text = &PLANE_SUITE.replace("NAME", "converged-empty");
+    let suite = Suite::parse("converged-empty.toml", text, &dir).unwrap();
+    let s = &suite.scenes[0];
+    let key_dir = ConvergedKey::new(&s.scene, &s.reference).dir(&dir.join("plane"));
+    common::with_gpu(|ctx| {
+        let gpu = GpuScene::upload(ctx, &s.scene).unwrap();
+        let stop = AtomicBool::new(true);
+        let options = ExtendOptions {
+            target_rel_mse: 1e-12,
+            deadline: None,
+            chunk_spp: 3,
+            stop: Some(&stop),
+        };
+        let done = converged::extend(
+            ctx,
+            &Renderers::default(),
+            &s.scene,
+            &gpu,
+            &s.reference,
+            &options,
+            |_| {},
+        )
+        .unwrap();
+        assert_eq!(done.record.chunks, 0);
+    });
+    assert!(!key_dir.exists(), "{} left behind", key_dir.display());
+    let _ = fs::remove_dir_all(&dir);
+}
+
 /// `irad bench references` holds the converged reference's folder while it writes: a second
 /// writer is refused with the folder and the holder named, and a lock left by a process that
 /// is gone is taken over with a note. A record whose samples per half disagree with its chunks
