@@ -1341,6 +1341,19 @@ fn a_refused_resume_names_the_edit() {
             let r = run_suite_events(ctx, &suite, &out, &cache, Shard::WHOLE, &mut Vec::new());
             format!("{:#}", r.unwrap_err())
         };
+        // The suite's hash alone changed (results.json edited, or another irad's hashing):
+        // no field or scene to name, and the message says so.
+        let path = out.join("results.json");
+        let written = fs::read_to_string(&path).unwrap();
+        let mut json: serde_json::Value = serde_json::from_str(&written).unwrap();
+        json["suite_hash"] = serde_json::json!("0123456789abcdef");
+        fs::write(&path, serde_json::to_string_pretty(&json).unwrap()).unwrap();
+        let e = refused(&text);
+        assert!(
+            e.contains("before an edit: the suite file edited.toml or a scene it names: its text differs in a way irad cannot name (suite hash 0123456789abcdef"),
+            "{e}"
+        );
+        fs::write(&path, written).unwrap();
         let e = refused(&text.replace("repeats = 1", "repeats = 2"));
         assert!(e.contains("`repeats` was 1, now 2"), "{e}");
         let e = refused(&text.replace("spp = 8", "spp = 8\nmax_depth = 3"));
