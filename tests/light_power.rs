@@ -14,12 +14,12 @@ use irad::gpu::Context;
 use irad::image::{exr, Image};
 use irad::methods::paths::LightSampler;
 use irad::methods::reference::{Reference, ReferenceSettings};
-use irad::methods::restir::{Restir, RestirSettings};
+use irad::methods::restir::{Combination, Restir, RestirSettings};
 use irad::methods::{RenderOutput, Renderer};
 use irad::scene::gpu::GpuScene;
 use irad::scene::{self, Light, Scene};
 
-use common::shapes::{camera, material, plane_y, scene as scene_of};
+use common::shapes::{camera, flat, material, plane_y, scene as scene_of};
 use common::with_gpu;
 
 /// A scratch folder under the system temp dir, removed when dropped.
@@ -336,54 +336,111 @@ fn overflowing(height: f32, intensity: f32) -> Scene {
     scene
 }
 
+/// The plane under a small emissive triangle (area 0.01) of radiance `ke` 1 unit above its
+/// centre, facing down, and the weak point light, built in code past the loader's check.
+fn small_lamp(ke: f32) -> Scene {
+    let mut scene = overflowing(1.0, 0.0);
+    scene.lights.truncate(1);
+    scene.materials.push(material("lamp", 0.0, 0.0, 0.0, ke));
+    scene.triangles.push(flat(
+        [
+            Vec3::new(-0.1, 1.0, -0.05),
+            Vec3::new(0.1, 1.0, -0.05),
+            Vec3::new(0.0, 1.0, 0.05),
+        ],
+        1,
+    ));
+    scene
+}
+
 /// Restir's reservoirs whose weights leave f32's range are dropped and counted: in the
 /// candidates' pass (a light of 1e38 at 0.1 above the plane: targets f I cos / d^2 past
 /// f32::MAX; through the light BVH its power 4 pi I is infinite, its pmf NaN) and in spatial
 /// reuse and temporal reuse, each alone (3e38 and 1e38 at 1 above: finite targets, but
-/// confidence M times a target overflows in the MIS weights).
+/// confidence M times a target overflows in the MIS weights). And in spatial reuse's
+/// one-over-z and biased combinations, where Z p^ overflows while the weight sum stays finite
+/// (a small lamp of 3e37 with neighbours within 3 pixels, so most are taken: W about the lamp's
+/// area, 0.01, so the sum is about 0.01 Z p^; 27 reservoirs, uncounted before, and none in mis).
 #[test]
 fn restir_counts_the_reservoirs_it_drops_when_their_weights_overflow() {
-    // (name, height, intensity, sampler, temporal, neighbours)
+    // (name, scene, sampler, temporal, neighbours, radius, combination)
     let cases = [
         (
             "candidates, by power",
-            0.1,
-            1e38,
+            overflowing(0.1, 1e38),
             LightSampler::Power,
             true,
             5,
+            30,
+            Combination::Mis,
         ),
         (
             "candidates, light BVH",
-            0.1,
-            1e38,
+            overflowing(0.1, 1e38),
             LightSampler::Bvh,
             true,
             5,
+            30,
+            Combination::Mis,
         ),
-        ("spatial reuse", 1.0, 3e38, LightSampler::Power, false, 5),
-        ("temporal reuse", 1.0, 1e38, LightSampler::Power, true, 0),
+        (
+            "spatial reuse",
+            overflowing(1.0, 3e38),
+            LightSampler::Power,
+            false,
+            5,
+            30,
+            Combination::Mis,
+        ),
+        (
+            "temporal reuse",
+            overflowing(1.0, 1e38),
+            LightSampler::Power,
+            true,
+            0,
+            30,
+            Combination::Mis,
+        ),
+        (
+            "spatial reuse, one-over-z",
+            small_lamp(3e37),
+            LightSampler::Power,
+            false,
+            5,
+            3,
+            Combination::OneOverZ,
+        ),
+        (
+            "spatial reuse, biased",
+            small_lamp(3e37),
+            LightSampler::Power,
+            false,
+            5,
+            3,
+            Combination::Biased,
+        ),
     ];
     let mut unreported = Vec::new();
     with_gpu(|ctx| {
         let restir = Renderer::<Restir>::new(ctx).unwrap();
-        for (name, height, intensity, light_sampler, temporal, neighbours) in cases {
-            let scene = overflowing(height, intensity);
-            let gpu = GpuScene::upload(ctx, &scene).unwrap();
+        for (name, scene, light_sampler, temporal, neighbours, radius, combination) in &cases {
+            let gpu = GpuScene::upload(ctx, scene).unwrap();
             let settings = RestirSettings {
                 frames: 2,
                 seed: 1,
-                light_sampler,
-                temporal,
-                neighbours,
+                light_sampler: *light_sampler,
+                temporal: *temporal,
+                neighbours: *neighbours,
+                radius: *radius,
+                combination: *combination,
                 ..Default::default()
             };
             let out = restir
-                .render(ctx, &scene, &gpu, &settings, |_, _| {})
+                .render(ctx, scene, &gpu, &settings, |_, _| {})
                 .unwrap();
             println!("{name}: {} dropped", out.nonfinite_estimates);
             if out.nonfinite_estimates == 0 {
-                unreported.push(name);
+                unreported.push(*name);
             }
             let pixels = out.image.pixels.iter().flatten();
             assert!(pixels.clone().all(|v| v.is_finite()), "{name}");
