@@ -1086,6 +1086,47 @@ fn converged_references_resume_bit_exactly_and_the_suite_uses_them() {
     let _ = fs::remove_dir_all(&dir);
 }
 
+/// A run of `irad bench references` that ends before its first chunk is saved (stopped, or a
+/// chunk failing) leaves no folder behind: a folder without a record among those kept beside
+/// a scene would be taken for a damaged reference by whatever walks them.
+#[test]
+fn a_converged_reference_stopped_before_its_first_chunk_leaves_no_folder() {
+    use irad::bench::suite::converged::{self, ConvergedKey, ExtendOptions};
+    use irad::methods::Renderers;
+    use irad::scene::gpu::GpuScene;
+    use std::sync::atomic::AtomicBool;
+
+    let dir = temp_dir("converged-empty");
+    copy_plane_scene(&dir.join("plane"));
+    let text = &PLANE_SUITE.replace("NAME", "converged-empty");
+    let suite = Suite::parse("converged-empty.toml", text, &dir).unwrap();
+    let s = &suite.scenes[0];
+    let key_dir = ConvergedKey::new(&s.scene, &s.reference).dir(&dir.join("plane"));
+    common::with_gpu(|ctx| {
+        let gpu = GpuScene::upload(ctx, &s.scene).unwrap();
+        let stop = AtomicBool::new(true);
+        let options = ExtendOptions {
+            target_rel_mse: 1e-12,
+            deadline: None,
+            chunk_spp: 3,
+            stop: Some(&stop),
+        };
+        let done = converged::extend(
+            ctx,
+            &Renderers::default(),
+            &s.scene,
+            &gpu,
+            &s.reference,
+            &options,
+            |_| {},
+        )
+        .unwrap();
+        assert_eq!(done.record.chunks, 0);
+    });
+    assert!(!key_dir.exists(), "{} left behind", key_dir.display());
+    let _ = fs::remove_dir_all(&dir);
+}
+
 /// `irad bench references` holds the converged reference's folder while it writes: a second
 /// writer is refused with the folder and the holder named, and a lock left by a process that
 /// is gone is taken over with a note. A record whose samples per half disagree with its chunks
@@ -1300,6 +1341,19 @@ fn a_refused_resume_names_the_edit() {
             let r = run_suite_events(ctx, &suite, &out, &cache, Shard::WHOLE, &mut Vec::new());
             format!("{:#}", r.unwrap_err())
         };
+        // The suite's hash alone changed (results.json edited, or another irad's hashing):
+        // no field or scene to name, and the message says so.
+        let path = out.join("results.json");
+        let written = fs::read_to_string(&path).unwrap();
+        let mut json: serde_json::Value = serde_json::from_str(&written).unwrap();
+        json["suite_hash"] = serde_json::json!("0123456789abcdef");
+        fs::write(&path, serde_json::to_string_pretty(&json).unwrap()).unwrap();
+        let e = refused(&text);
+        assert!(
+            e.contains("before an edit: the suite file edited.toml or a scene it names: its text differs in a way irad cannot name (suite hash 0123456789abcdef"),
+            "{e}"
+        );
+        fs::write(&path, written).unwrap();
         let e = refused(&text.replace("repeats = 1", "repeats = 2"));
         assert!(e.contains("`repeats` was 1, now 2"), "{e}");
         let e = refused(&text.replace("spp = 8", "spp = 8\nmax_depth = 3"));

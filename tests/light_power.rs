@@ -14,12 +14,12 @@ use irad::gpu::Context;
 use irad::image::{exr, Image};
 use irad::methods::paths::LightSampler;
 use irad::methods::reference::{Reference, ReferenceSettings};
-use irad::methods::restir::{Restir, RestirSettings};
+use irad::methods::restir::{Combination, Restir, RestirSettings};
 use irad::methods::{RenderOutput, Renderer};
 use irad::scene::gpu::GpuScene;
 use irad::scene::{self, Light, Scene};
 
-use common::shapes::{camera, material, plane_y, scene as scene_of};
+use common::shapes::{camera, flat, material, plane_y, scene as scene_of};
 use common::with_gpu;
 
 /// A scratch folder under the system temp dir, removed when dropped.
@@ -226,6 +226,94 @@ fn an_emissive_triangle_at_the_power_bound_renders_and_above_it_is_refused() {
 fn an_environment_map_at_the_power_bound_renders_and_above_it_is_refused() {
     boundary(&CASES[3]);
 }
+/// One emissive material in an MTL that two OBJs load (each [[mesh]] parses its own copy) is
+/// one field: the largest `Ke` a refusal names counts both OBJs' triangles, so it loads, and
+/// one just above it is refused with the same largest value.
+#[test]
+fn a_material_two_objs_share_is_bounded_once_and_its_named_largest_ke_loads() {
+    let dir = Scratch::new("shared-mtl");
+    let load = |ke: f32| {
+        dir.write(
+            "plane.obj",
+            "mtllib plane.mtl\nusemtl grey\nv -2 0 2\nv 2 0 2\nv 2 0 -2\nv -2 0 -2\nf 1 2 3 4\n",
+        );
+        dir.write("plane.mtl", "newmtl grey\nKd 0.5 0.5 0.5\n");
+        // Two triangles facing down, area 0.5 each, one per OBJ.
+        dir.write(
+            "lamp.obj",
+            "mtllib lamp.mtl\nusemtl lamp\nv -0.5 1 -0.5\nv 0 1 0.5\nv 0.5 1 -0.5\nf 1 2 3\n",
+        );
+        dir.write(
+            "lamp2.obj",
+            "mtllib lamp.mtl\nusemtl lamp\nv -0.5 1.5 -0.5\nv 0 1.5 0.5\nv 0.5 1.5 -0.5\nf 1 2 3\n",
+        );
+        dir.write(
+            "lamp.mtl",
+            &format!("newmtl lamp\nKe {ke:e} {ke:e} {ke:e}\n"),
+        );
+        dir.write(
+            "scene.toml",
+            &format!("{SCENE}\n[[mesh]]\nobj = \"lamp.obj\"\n\n[[mesh]]\nobj = \"lamp2.obj\"\n"),
+        );
+        scene::load(&dir.0.join("scene.toml"))
+    };
+    let refused = |ke: f32| {
+        let message = load(ke).map(|_| ()).unwrap_err().to_string();
+        let path = dir.0.join("lamp.mtl").display().to_string();
+        assert!(
+            message.starts_with(&format!("{path}: material `lamp` Ke = ")),
+            "{message}"
+        );
+        (largest_named(&message), message)
+    };
+    let (largest, message) = refused(3e37);
+    // pi Ke (0.5 + 0.5) at most 2^64 with the weak light's 4 pi.
+    let expected = (2f64.powi(64) - 4.0 * std::f64::consts::PI) / std::f64::consts::PI;
+    assert!(
+        largest as f64 <= expected && largest as f64 > 0.99 * expected,
+        "{message}"
+    );
+    load(largest).unwrap_or_else(|e| panic!("the named largest Ke {largest:e}: {e}"));
+    let (named, message) = refused(largest * 1.01);
+    assert_eq!(named, largest, "{message}");
+}
+
+/// A light-field luminaire's atlas texel past the bound on emitted radiance is refused naming
+/// the atlas file, the texel and the largest value that works; that value loads.
+#[test]
+fn a_luminaire_atlas_texel_past_the_radiance_bound_is_refused() {
+    let dir = Scratch::new("luminaire");
+    dir.write(
+        "luminaire.toml",
+        "grid = [1, 1]\npitch = [0.01, 0.01]\nbasis = \"bilinear\"\ndelta = 0.05\n\
+         image_size = [0.2, 0.2]\natlas = \"images.exr\"\n",
+    );
+    let atlas = dir.0.join("images.exr");
+    let load = |texel: f32| {
+        let mut image = Image::new(2, 2);
+        image.pixels.fill([1.0; 3]);
+        image.pixels[3] = [1.0, texel, 1.0];
+        exr::write(&atlas, &image).unwrap();
+        irad::scene::luminaire::Luminaire::load(&dir.0.join("luminaire.toml"))
+    };
+    let refused = |texel: f32| {
+        let message = load(texel).map(|_| ()).unwrap_err().to_string();
+        assert!(
+            message.starts_with(&format!("{}: texel (x 1, y 1) = ", atlas.display())),
+            "{message}"
+        );
+        (largest_named(&message), message)
+    };
+    let (largest, message) = refused(3e37);
+    assert!(
+        largest as f64 <= 2f64.powi(64) && largest as f64 > 0.99 * 2f64.powi(64),
+        "{message}"
+    );
+    load(largest).unwrap_or_else(|e| panic!("the named largest texel {largest:e}: {e}"));
+    let (named, message) = refused(largest * 1.01);
+    assert_eq!(named, largest, "{message}");
+}
+
 /// The plane under a point light (and the weak one) at `height` above its centre, built in
 /// code past the loader's check.
 fn overflowing(height: f32, intensity: f32) -> Scene {
@@ -248,54 +336,111 @@ fn overflowing(height: f32, intensity: f32) -> Scene {
     scene
 }
 
+/// The plane under a small emissive triangle (area 0.01) of radiance `ke` 1 unit above its
+/// centre, facing down, and the weak point light, built in code past the loader's check.
+fn small_lamp(ke: f32) -> Scene {
+    let mut scene = overflowing(1.0, 0.0);
+    scene.lights.truncate(1);
+    scene.materials.push(material("lamp", 0.0, 0.0, 0.0, ke));
+    scene.triangles.push(flat(
+        [
+            Vec3::new(-0.1, 1.0, -0.05),
+            Vec3::new(0.1, 1.0, -0.05),
+            Vec3::new(0.0, 1.0, 0.05),
+        ],
+        1,
+    ));
+    scene
+}
+
 /// Restir's reservoirs whose weights leave f32's range are dropped and counted: in the
 /// candidates' pass (a light of 1e38 at 0.1 above the plane: targets f I cos / d^2 past
 /// f32::MAX; through the light BVH its power 4 pi I is infinite, its pmf NaN) and in spatial
 /// reuse and temporal reuse, each alone (3e38 and 1e38 at 1 above: finite targets, but
-/// confidence M times a target overflows in the MIS weights).
+/// confidence M times a target overflows in the MIS weights). And in spatial reuse's
+/// one-over-z and biased combinations, where Z p^ overflows while the weight sum stays finite
+/// (a small lamp of 3e37 with neighbours within 3 pixels, so most are taken: W about the lamp's
+/// area, 0.01, so the sum is about 0.01 Z p^; 27 reservoirs, uncounted before, and none in mis).
 #[test]
 fn restir_counts_the_reservoirs_it_drops_when_their_weights_overflow() {
-    // (name, height, intensity, sampler, temporal, neighbours)
+    // (name, scene, sampler, temporal, neighbours, radius, combination)
     let cases = [
         (
             "candidates, by power",
-            0.1,
-            1e38,
+            overflowing(0.1, 1e38),
             LightSampler::Power,
             true,
             5,
+            30,
+            Combination::Mis,
         ),
         (
             "candidates, light BVH",
-            0.1,
-            1e38,
+            overflowing(0.1, 1e38),
             LightSampler::Bvh,
             true,
             5,
+            30,
+            Combination::Mis,
         ),
-        ("spatial reuse", 1.0, 3e38, LightSampler::Power, false, 5),
-        ("temporal reuse", 1.0, 1e38, LightSampler::Power, true, 0),
+        (
+            "spatial reuse",
+            overflowing(1.0, 3e38),
+            LightSampler::Power,
+            false,
+            5,
+            30,
+            Combination::Mis,
+        ),
+        (
+            "temporal reuse",
+            overflowing(1.0, 1e38),
+            LightSampler::Power,
+            true,
+            0,
+            30,
+            Combination::Mis,
+        ),
+        (
+            "spatial reuse, one-over-z",
+            small_lamp(3e37),
+            LightSampler::Power,
+            false,
+            5,
+            3,
+            Combination::OneOverZ,
+        ),
+        (
+            "spatial reuse, biased",
+            small_lamp(3e37),
+            LightSampler::Power,
+            false,
+            5,
+            3,
+            Combination::Biased,
+        ),
     ];
     let mut unreported = Vec::new();
     with_gpu(|ctx| {
         let restir = Renderer::<Restir>::new(ctx).unwrap();
-        for (name, height, intensity, light_sampler, temporal, neighbours) in cases {
-            let scene = overflowing(height, intensity);
-            let gpu = GpuScene::upload(ctx, &scene).unwrap();
+        for (name, scene, light_sampler, temporal, neighbours, radius, combination) in &cases {
+            let gpu = GpuScene::upload(ctx, scene).unwrap();
             let settings = RestirSettings {
                 frames: 2,
                 seed: 1,
-                light_sampler,
-                temporal,
-                neighbours,
+                light_sampler: *light_sampler,
+                temporal: *temporal,
+                neighbours: *neighbours,
+                radius: *radius,
+                combination: *combination,
                 ..Default::default()
             };
             let out = restir
-                .render(ctx, &scene, &gpu, &settings, |_, _| {})
+                .render(ctx, scene, &gpu, &settings, |_, _| {})
                 .unwrap();
             println!("{name}: {} dropped", out.nonfinite_estimates);
             if out.nonfinite_estimates == 0 {
-                unreported.push(name);
+                unreported.push(*name);
             }
             let pixels = out.image.pixels.iter().flatten();
             assert!(pixels.clone().all(|v| v.is_finite()), "{name}");

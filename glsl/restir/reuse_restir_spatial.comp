@@ -186,7 +186,19 @@ void main() {
         }
         result.sample_point = vec4(y, uintBitsToFloat(entry));
         result.weights.z = target;
-        result.weights.x = visible && z > 0.0 ? weight_sum / (z * target) : 0.0;
+        // Z p^ past f32's range (or W = weight_sum / (Z p^) past it) drops the reservoir,
+        // counted as the weight sums' overflow is: a finite weight sum over an infinite Z p^
+        // would otherwise give W = 0, a dark pixel without a sign.
+        float w = 0.0;
+        if (visible && z > 0.0) {
+            float denominator = z * target;
+            w = weight_sum / denominator;
+            if (isinf(denominator) || isinf(w) || isnan(w)) {
+                count_nonfinite_estimate();
+                w = 0.0;
+            }
+        }
+        result.weights.x = w;
     }
     final_reservoirs[index] = result;
 }

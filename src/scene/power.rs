@@ -87,23 +87,45 @@ fn terms(scene: &Scene, sources: &PowerSources) -> Vec<Term> {
     for t in &scene.triangles {
         areas[t.material as usize] += t.area();
     }
+    // Each [[mesh]] parses its own copy of its MTL files, so a material two OBJs share is
+    // several scene materials; it is one field to edit, so one term, over all their triangles
+    // (else its largest value would hold the other copies fixed and itself be refused).
+    // Files compare by their canonical path where they are on disk (two OBJs in different
+    // folders may name one MTL by different paths).
+    let mut merged: Vec<(std::path::PathBuf, &str, String, usize, f64)> = Vec::new();
     for (k, m) in scene.materials.iter().enumerate() {
         if !m.is_emissive() {
             continue;
         }
-        let amount = m.ke.max_element() as f64;
         let file = sources.material_files.get(k).cloned().flatten();
+        let file = file.unwrap_or_else(|| sources.file.to_string());
+        let key = std::fs::canonicalize(&file).unwrap_or_else(|_| file.clone().into());
+        // Ke compared too: an MTL may repeat a name with other values (the OBJ uses one).
+        match merged.iter_mut().find(|(f, name, _, j, _)| {
+            *f == key && *name == m.name && scene.materials[*j].ke == m.ke
+        }) {
+            Some((.., area)) => *area += areas[k],
+            None => merged.push((key, &m.name, file, k, areas[k])),
+        }
+    }
+    for (_, name, file, k, area) in merged {
+        let m = &scene.materials[k];
+        let amount = m.ke.max_element() as f64;
         terms.push(Term {
-            file: file.unwrap_or_else(|| sources.file.to_string()),
-            field: format!("material `{}` Ke", m.name),
+            file,
+            field: format!("material `{name}` Ke"),
             value: fmt3(m.ke),
             amount,
-            power: PI * amount * areas[k],
-            what: format!("pi Ke A, A = {:.3e} its triangles' area", areas[k]),
+            power: PI * amount * area,
+            what: format!("pi Ke A, A = {area:.3e} its triangles' area"),
             radiance_limit: MAX_RADIANCE,
             brightest: amount,
         });
     }
+    // Light-field luminaires ([[luminaire]]) are no term: they are sampled by the lightfield
+    // method alone, never through the light table or the light BVH whose f32 sums this total
+    // bounds. Their atlas texels are held to MAX_RADIANCE where they are read
+    // (src/scene/luminaire/mod.rs), as the lightfield method's f32 tables sum them.
     if let (Some(env), Some((scale, map))) = (&scene.environment, &sources.environment) {
         let (_, radius) = super::gpu::bounds(scene);
         let r2 = (radius as f64).powi(2);
@@ -177,7 +199,8 @@ fn fmt3(v: glam::Vec3) -> String {
     format!("[{}, {}, {}]", fmt1(v.x), fmt1(v.y), fmt1(v.z))
 }
 
-fn shown(x: f64) -> String {
+/// `x` as a message shows the largest value that works: three digits, rounded down.
+pub(super) fn shown(x: f64) -> String {
     fmt1(round_down(x) as f32)
 }
 

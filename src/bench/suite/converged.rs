@@ -351,7 +351,10 @@ pub fn extend(
         &dir,
         "wait for it to finish (or stop it); it extends the same converged reference",
     )?;
-    let _lock = acquired.lock;
+    let _lock = RecordOrNothing {
+        lock: Some(acquired.lock),
+        dir: &dir,
+    };
     if let Some(holder) = acquired.stale {
         on(Progress::StaleLock { dir: &dir, holder });
     }
@@ -449,6 +452,41 @@ pub fn extend(
         });
     }
     Ok(current)
+}
+
+/// The lock `extend` holds on a reference's folder; on drop, whatever the exit (a failed
+/// first chunk, a stop before one), the folder is removed when it holds no record (and
+/// `converged/` when it is left empty), so no folder without `reference.json` is left among
+/// the references kept beside their scene (and walked, as the tests do). Its other files then belong to no record: halves saved just
+/// before an interruption stopped their record.
+struct RecordOrNothing<'a> {
+    lock: Option<HolderLock>,
+    dir: &'a Path,
+}
+
+impl Drop for RecordOrNothing<'_> {
+    fn drop(&mut self) {
+        let lock = self.lock.take();
+        if self.dir.join("reference.json").exists() {
+            return;
+        }
+        // Removed while the lock is held, so no other writer's file goes, then the lock file
+        // (the lock's drop), then the folder, which `remove_dir` leaves if another process
+        // has just put its lock file there.
+        if let Ok(entries) = fs::read_dir(self.dir) {
+            for entry in entries.flatten() {
+                if entry.file_name() != crate::lock::LOCK_FILE {
+                    let _ = fs::remove_file(entry.path());
+                }
+            }
+        }
+        drop(lock);
+        let _ = fs::remove_dir(self.dir);
+        // And `converged/` when this was its only reference.
+        if let Some(parent) = self.dir.parent() {
+            let _ = fs::remove_dir(parent);
+        }
+    }
 }
 
 /// Writes the halves under a new name, then the record naming them, then removes the old

@@ -43,11 +43,20 @@ pub fn check(
     let hash = format!("{:016x}", suite.hash);
     let old_shard = old.shard.unwrap_or(Shard::WHOLE);
     if old.suite == suite.name && old_shard == shard && old.suite_hash != hash {
+        let mut edits = edits(&old, suite);
+        // Nothing named (results.json edited by hand, or written by an irad that hashed
+        // suites otherwise): say so rather than leave the edit blank.
+        if edits.is_empty() {
+            edits.push(format!(
+                "the suite file {} or a scene it names: its text differs in a way irad cannot name",
+                suite.file
+            ));
+        }
         bail!(
             "{} holds the results of suite `{}` before an edit: {} (suite hash {}, now {hash}): choose another output folder, or remove it to replace them",
             out.display(),
             old.suite,
-            edits(&old, suite).join("; "),
+            edits.join("; "),
             old.suite_hash,
         );
     }

@@ -330,6 +330,27 @@ impl Luminaire {
                     problem: "must be finite and >= 0 in every channel".into(),
                 });
             }
+            // The lightfield method sums texels into f32 tables (column CDFs, marginals,
+            // summed-area tables), so they are held to the bound on every emitter's radiance.
+            let max = super::power::MAX_RADIANCE;
+            if let Some(k) = atlas
+                .pixels
+                .iter()
+                .position(|p| p.iter().any(|&c| c as f64 > max))
+            {
+                let brightest = atlas.pixels[k].iter().fold(0.0f32, |a, &c| a.max(c));
+                return Err(SceneError::Invalid {
+                    file: atlas_path.display().to_string(),
+                    field: format!("texel (x {}, y {})", k % aw, k / aw),
+                    value: format!("{:?}", atlas.pixels[k]),
+                    problem: format!(
+                        "radiance up to {brightest:.3e}, over {max:.3e}, the most irad's f32 \
+                         kernels carry with room for what they compute from it; at most {} \
+                         works",
+                        super::power::shown(max)
+                    ),
+                });
+            }
             let [rs, rt] = [aw / w, ah / h];
             sequence.push(
                 (0..w * h)
