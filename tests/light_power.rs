@@ -360,7 +360,8 @@ fn small_lamp(ke: f32) -> Scene {
 /// confidence M times a target overflows in the MIS weights). And in spatial reuse's
 /// one-over-z and biased combinations, where Z p^ overflows while the weight sum stays finite
 /// (a small lamp of 3e37 with neighbours within 3 pixels, so most are taken: W about the lamp's
-/// area, 0.01, so the sum is about 0.01 Z p^; 27 reservoirs, uncounted before, and none in mis).
+/// area, 0.01, so the sum is about 0.01 Z p^; 27 reservoirs, uncounted before, and none in mis),
+/// and likewise in temporal reuse alone (the lamp at 1e38).
 #[test]
 fn restir_counts_the_reservoirs_it_drops_when_their_weights_overflow() {
     // (name, scene, sampler, temporal, neighbours, radius, combination)
@@ -416,6 +417,24 @@ fn restir_counts_the_reservoirs_it_drops_when_their_weights_overflow() {
             LightSampler::Power,
             false,
             5,
+            3,
+            Combination::Biased,
+        ),
+        (
+            "temporal reuse, one-over-z",
+            small_lamp(1e38),
+            LightSampler::Power,
+            true,
+            0,
+            3,
+            Combination::OneOverZ,
+        ),
+        (
+            "temporal reuse, biased",
+            small_lamp(1e38),
+            LightSampler::Power,
+            true,
+            0,
             3,
             Combination::Biased,
         ),

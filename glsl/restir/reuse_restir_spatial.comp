@@ -139,9 +139,15 @@ void main() {
         // Weights past f32's range drop the reservoir, counted (as the candidates' pass does).
         bool finite = !(isnan(weight_sum) || isinf(weight_sum));
         if (!finite) count_nonfinite_estimate();
-        if (weight_sum > 0.0 && finite && target > 0.0) {
+        float w = finite && target > 0.0 ? weight_sum / target : 0.0;
+        // W past f32's range (a tiny target) drops the reservoir too, counted.
+        if (finite && (isinf(w) || isnan(w))) {
+            count_nonfinite_estimate();
+            w = 0.0;
+        }
+        if (weight_sum > 0.0 && w > 0.0) {
             result.weights.z = target;
-            result.weights.x = weight_sum / target;
+            result.weights.x = w;
         } else {
             result = empty_reservoir(m_sum);
         }

@@ -85,10 +85,16 @@ void main() {
         // Weights past f32's range drop the reservoir, counted (as the other passes do).
         bool finite = !(isnan(weight_sum) || isinf(weight_sum));
         if (!finite) count_nonfinite_estimate();
-        if (weight_sum > 0.0 && finite && target > 0.0) {
+        float w = finite && target > 0.0 ? weight_sum / target : 0.0;
+        // W past f32's range (a tiny target) drops the reservoir too, counted.
+        if (finite && (isinf(w) || isnan(w))) {
+            count_nonfinite_estimate();
+            w = 0.0;
+        }
+        if (weight_sum > 0.0 && w > 0.0) {
             r.sample_point = from_previous ? previous.sample_point : current.sample_point;
             r.weights.z = target;
-            r.weights.x = weight_sum / target;
+            r.weights.x = w;
         }
         reservoirs[index] = r;
         return;
@@ -123,7 +129,18 @@ void main() {
         }
         r.sample_point = vec4(y, uintBitsToFloat(entry));
         r.weights.z = target;
-        r.weights.x = visible && z > 0.0 ? weight_sum / (z * target) : 0.0;
+        // Z p^ past f32's range (or W past it) drops the reservoir, counted, as in the spatial
+        // pass.
+        float w = 0.0;
+        if (visible && z > 0.0) {
+            float denominator = z * target;
+            w = weight_sum / denominator;
+            if (isinf(denominator) || isinf(w) || isnan(w)) {
+                count_nonfinite_estimate();
+                w = 0.0;
+            }
+        }
+        r.weights.x = w;
     }
     reservoirs[index] = r;
 }
