@@ -85,6 +85,8 @@ pub struct SequenceRecord {
     pub device: String,
     pub driver: String,
     pub irad_version: String,
+    /// The PNGs' exposure in stops.
+    pub exposure: f32,
     /// Each complete frame, in order.
     pub rendered: Vec<FrameSummary>,
     /// Against the reference frames, when given: the mean over frames, the worst frame and
@@ -184,6 +186,7 @@ pub fn render_sequence(
         device: info.name.clone(),
         driver: info.driver.clone(),
         irad_version: image::sidecar::IRAD_VERSION.into(),
+        exposure: job.exposure,
         rendered: vec![],
         reference: job.reference.as_ref().map(|r| r.display().to_string()),
         metrics: None,
@@ -201,6 +204,12 @@ pub fn render_sequence(
                 job.out.display()
             );
         }
+        // Frames an earlier run rendered outside this range stay listed.
+        record.rendered = earlier
+            .rendered
+            .into_iter()
+            .filter(|r| !job.frames.contains(&r.frame))
+            .collect();
     }
     let renderers = Renderers::default();
     let total = job.frames.len() as u32;
@@ -215,6 +224,7 @@ pub fn render_sequence(
             .map(|dir| frame_stem(dir, f).with_extension("exr"));
         if let Some(earlier) = complete_frame(&stem, job.scene, &method, f)? {
             record.rendered.push(FrameSummary::of(&earlier));
+            record.rendered.sort_by_key(|r| r.frame);
             resumed.push(f);
             continue;
         }
@@ -232,22 +242,23 @@ pub fn render_sequence(
             .with_context(|| format!("rendering animation frame {f}"))?;
         on_frame(f, &report);
         record.rendered.push(FrameSummary::of(&report.record));
+        record.rendered.sort_by_key(|r| r.frame);
         write_json(&record_path, &record)?;
     }
     progress(total, total, job.frames.end);
     if let Some(dir) = &job.reference {
+        // Frame by frame (two in memory), kept frames included: their records may predate the
+        // reference.
         let read = |d: &Path, f: u32| exr::read(&frame_stem(d, f).with_extension("exr"));
-        let frames: Vec<_> = job
-            .frames
-            .clone()
-            .map(|f| read(&job.out, f))
-            .collect::<Result<_>>()?;
-        let refs: Vec<_> = job
-            .frames
-            .clone()
-            .map(|f| read(dir, f))
-            .collect::<Result<_>>()?;
-        let (_, summary) = image::compare_sequence(&frames, &refs)?;
+        let mut score = image::SequenceScore::default();
+        for summary in record.rendered.iter_mut() {
+            if job.frames.contains(&summary.frame) {
+                let f = summary.frame;
+                summary.metrics = Some(score.push(read(&job.out, f)?, read(dir, f)?)?);
+            }
+        }
+        let (_, mut summary) = score.finish();
+        summary.worst_frame += job.frames.start as usize;
         record.metrics = Some(summary);
     }
     write_json(&record_path, &record)?;
@@ -307,11 +318,20 @@ fn differs(earlier: &SequenceRecord, now: &SequenceRecord) -> Option<String> {
     if earlier.seed != now.seed {
         return Some(format!("seed {}, now {}", earlier.seed, now.seed));
     }
+    if earlier.exposure != now.exposure {
+        return Some(format!(
+            "exposure {}, now {}",
+            earlier.exposure, now.exposure
+        ));
+    }
     if earlier.parameters != now.parameters {
-        let changed: Vec<String> = earlier
+        let keys: std::collections::BTreeSet<&String> = earlier
             .parameters
             .keys()
             .chain(now.parameters.keys())
+            .collect();
+        let changed: Vec<String> = keys
+            .into_iter()
             .filter(|k| earlier.parameters.get(*k) != now.parameters.get(*k))
             .map(|k| {
                 let show = |v: Option<&serde_json::Value>| {
@@ -324,8 +344,6 @@ fn differs(earlier: &SequenceRecord, now: &SequenceRecord) -> Option<String> {
                 )
             })
             .collect();
-        let mut changed = changed;
-        changed.dedup();
         return Some(changed.join(", "));
     }
     None
@@ -381,11 +399,14 @@ fn previews(
     exposure: f32,
 ) -> Result<(Vec<PathBuf>, Vec<String>)> {
     let apng = out.join("preview.png");
-    let images: Vec<image::Image> = frames
-        .clone()
-        .map(|f| exr::read(&frame_stem(out, f).with_extension("exr")))
-        .collect::<Result<_>>()?;
-    image::png::write_animated(&apng, &images, fps, exposure)?;
+    let first = frames.start;
+    image::png::write_animated(
+        &apng,
+        frames.len(),
+        |i| exr::read(&frame_stem(out, first + i as u32).with_extension("exr")),
+        fps,
+        exposure,
+    )?;
     let mut written = vec![apng];
     let mut warnings = vec![];
     let ffmpeg_found = std::env::var_os("PATH")

@@ -1281,6 +1281,36 @@ fn bad_tracks_are_refused_naming_the_field_and_value() {
         );
         s.error(parts);
     }
+    // The only light switched off from frame 12: a frame without light, refused by name.
+    let off =
+        "target = \"light[0].intensity\"\ntimes = [0.0, 0.5]\nvalues = [[1, 1, 1], [0, 0, 0]]";
+    scratch("all-off", &animated(off, "frames = 24"), OBJ, MTL)
+        .error(&["[animation] = frame 12", "nothing emits light"]);
+    // An emission scale below zero: at its key, and where a smooth track overshoots.
+    let lamp = format!("{MTL}newmtl lamp\nKe 1 1 1\n");
+    let negative = "target = \"material.lamp.emission\"\ntimes = [0.0]\nvalues = [-1.0]";
+    scratch(
+        "emission-negative",
+        &animated(negative, "frames = 4"),
+        OBJ,
+        &lamp,
+    )
+    .error(&[
+        "animation.track[0].values[0] = -1",
+        "emission scale must be >= 0",
+    ]);
+    let overshoot = "target = \"material.lamp.emission\"\ninterpolation = \"smooth\"\n\
+                     times = [0.0, 0.25, 0.5, 1.0]\nvalues = [1.0, 0.0, 0.0, 1.0]";
+    scratch(
+        "emission-overshoot",
+        &animated(overshoot, "frames = 25"),
+        OBJ,
+        &lamp,
+    )
+    .error(&[
+        "animation.track[0] (material.lamp.emission) at animation frame",
+        "overshoots",
+    ]);
     // Two tracks on one target, and an unknown key in a track.
     let twice = format!(
         "{}[[animation.track]]\n{MOVING}\n",

@@ -177,6 +177,8 @@ fn frames_are_stills_and_an_interrupted_sequence_resumes_to_the_same_files() {
         let cut = dir.0.join("cut");
         run(&cut, 0..2, &jittered).unwrap();
         std::fs::remove_file(cut.join("sequence.json")).unwrap();
+        // Frame 2 cut short: an image without its JSON (written last) is not a complete frame.
+        std::fs::write(sequence::frame_stem(&cut, 2).with_extension("exr"), b"half").unwrap();
         let resumed = run(&cut, 0..FRAMES, &jittered).unwrap();
         assert_eq!(resumed.resumed, vec![0, 1]);
         for f in 0..FRAMES {

@@ -96,7 +96,25 @@ pub fn run(options: &ContextOptions, args: RenderArgs) -> Result<()> {
             bail!("--sequence renders every frame: --frame is for one render");
         }
         let method = match args.samples_per_frame {
-            Some(k) => method.with_count(k),
+            Some(k) => {
+                let flag = format!("--{}", method.count_key().replace('_', "-"));
+                let given =
+                    std::env::args().any(|a| a == flag || a.starts_with(&format!("{flag}=")));
+                if given {
+                    bail!(
+                        "--samples-per-frame {k} and {flag} both set {}'s count a frame: give one",
+                        method.name()
+                    );
+                }
+                // Through the settings table, so the count's range is checked as {flag}'s is.
+                let mut values = method.parameters();
+                values.insert(method.count_key().to_string(), k.into());
+                values.insert("seed".into(), method.seed().into());
+                let table: toml::Table = toml::from_str(&toml::to_string(&values)?)?;
+                irad::methods::Registry::builtin()
+                    .from_params(method.name(), &table)
+                    .map_err(|e| anyhow::anyhow!("--samples-per-frame {k}: {e}"))?
+            }
             None => method,
         };
         return super::sequence::run(

@@ -129,7 +129,7 @@ pub fn run(
              {:.3}%, flicker {:.4e}",
             m.mean.rel_mse,
             m.worst_rel_mse,
-            report.record.frames[0] as usize + m.worst_frame,
+            m.worst_frame,
             100.0 * m.mean.bias,
             m.flicker
         );

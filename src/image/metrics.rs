@@ -295,39 +295,16 @@ pub fn sequence_flicker(frames: &[Image], references: &[Image]) -> Result<f64, M
             count: frames.len().min(references.len()),
         });
     }
-    for (index, (x, r)) in frames.iter().zip(references).enumerate() {
-        check(x, "image")?;
-        check(r, "reference")?;
-        let first = (references[0].width, references[0].height);
-        for size in [(x.width, x.height), (r.width, r.height)] {
-            if size != first {
-                return Err(MetricsError::SeedSizeMismatch { index, size, first });
-            }
-        }
+    let mut score = SequenceScore::default();
+    for (x, r) in frames.iter().zip(references) {
+        score.push(x.clone(), r.clone())?;
     }
-    let mut total = 0.0f64;
-    for f in 1..frames.len() {
-        let (x0, x1, r0, r1) = (
-            &frames[f - 1],
-            &frames[f],
-            &references[f - 1],
-            &references[f],
-        );
-        for i in 0..r0.pixels.len() {
-            for c in 0..3 {
-                let (a, b) = (r0.pixels[i][c] as f64, r1.pixels[i][c] as f64);
-                let de = (x1.pixels[i][c] as f64 - b) - (x0.pixels[i][c] as f64 - a);
-                let m = 0.5 * (a + b);
-                total += de * de / (2.0 * (m * m + REL_MSE_EPSILON));
-            }
-        }
-    }
-    let count = (frames.len() - 1) * 3 * references[0].pixels.len();
-    Ok((total / count as f64).sqrt())
+    Ok(score.finish().1.flicker)
 }
 
-/// A sequence scored frame by frame against its frames' references: each frame's metrics,
-/// their mean, the worst frame's relMSE, and `sequence_flicker`.
+/// A sequence scored frame by frame against its frames' references: the mean of each frame's
+/// metrics, the worst frame's relMSE and which frame (an index into the frames scored), and
+/// `sequence_flicker`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SequenceMetrics {
     pub mean: Metrics,
@@ -338,41 +315,80 @@ pub struct SequenceMetrics {
     pub flicker: f64,
 }
 
-/// `frames` against `references`, frame by frame (`compare`), and the sequence's figures; the
-/// flicker is NaN for a single frame.
+/// Scores a sequence one frame at a time (`push` each frame and its reference in order), so
+/// only two frames are in memory: each frame's `compare`, and the flicker's sums over
+/// consecutive pairs.
+#[derive(Default)]
+pub struct SequenceScore {
+    per_frame: Vec<Metrics>,
+    flicker_sum: f64,
+    flicker_count: usize,
+    previous: Option<(Image, Image)>,
+}
+
+impl SequenceScore {
+    pub fn push(&mut self, x: Image, r: Image) -> Result<Metrics, MetricsError> {
+        let metrics = compare(&x, &r)?;
+        if let Some((x0, r0)) = &self.previous {
+            if (r0.width, r0.height) != (r.width, r.height) {
+                return Err(MetricsError::SizeMismatch {
+                    test: (r.width, r.height),
+                    reference: (r0.width, r0.height),
+                });
+            }
+            for i in 0..r.pixels.len() {
+                for c in 0..3 {
+                    let (a, b) = (r0.pixels[i][c] as f64, r.pixels[i][c] as f64);
+                    let de = (x.pixels[i][c] as f64 - b) - (x0.pixels[i][c] as f64 - a);
+                    let m = 0.5 * (a + b);
+                    self.flicker_sum += de * de / (2.0 * (m * m + REL_MSE_EPSILON));
+                }
+            }
+            self.flicker_count += 3 * r.pixels.len();
+        }
+        self.previous = Some((x, r));
+        self.per_frame.push(metrics);
+        Ok(metrics)
+    }
+
+    /// Each frame's metrics and the sequence's; the flicker is NaN for a single frame.
+    pub fn finish(self) -> (Vec<Metrics>, SequenceMetrics) {
+        let (worst_frame, worst_rel_mse) =
+            self.per_frame.iter().map(|m| m.rel_mse).enumerate().fold(
+                (0, f64::NAN),
+                |(k, w), (i, v)| {
+                    if w.is_nan() || v > w {
+                        (i, v)
+                    } else {
+                        (k, w)
+                    }
+                },
+            );
+        let flicker = if self.flicker_count > 0 {
+            (self.flicker_sum / self.flicker_count as f64).sqrt()
+        } else {
+            f64::NAN
+        };
+        let summary = SequenceMetrics {
+            mean: Metrics::mean(&self.per_frame),
+            worst_rel_mse,
+            worst_frame,
+            flicker,
+        };
+        (self.per_frame, summary)
+    }
+}
+
+/// `frames` against `references`, frame by frame (`compare`), and the sequence's figures.
 pub fn compare_sequence(
     frames: &[Image],
     references: &[Image],
 ) -> Result<(Vec<Metrics>, SequenceMetrics), MetricsError> {
-    let per_frame = frames
-        .iter()
-        .zip(references)
-        .map(|(x, r)| compare(x, r))
-        .collect::<Result<Vec<_>, _>>()?;
-    let (worst_frame, worst_rel_mse) =
-        per_frame
-            .iter()
-            .map(|m| m.rel_mse)
-            .enumerate()
-            .fold((0, f64::NAN), |(k, w), (i, v)| {
-                if w.is_nan() || v > w {
-                    (i, v)
-                } else {
-                    (k, w)
-                }
-            });
-    let flicker = if frames.len() > 1 {
-        sequence_flicker(frames, references)?
-    } else {
-        f64::NAN
-    };
-    let summary = SequenceMetrics {
-        mean: Metrics::mean(&per_frame),
-        worst_rel_mse,
-        worst_frame,
-        flicker,
-    };
-    Ok((per_frame, summary))
+    let mut score = SequenceScore::default();
+    for (x, r) in frames.iter().zip(references) {
+        score.push(x.clone(), r.clone())?;
+    }
+    Ok(score.finish())
 }
 
 /// Y = 0.2126 R + 0.7152 G + 0.0722 B of linear RGB.

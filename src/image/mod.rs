@@ -8,7 +8,9 @@ pub mod preview;
 pub mod sidecar;
 pub mod tonemap;
 
-pub use metrics::{compare, compare_sequence, Metrics, MetricsError, SequenceMetrics};
+pub use metrics::{
+    compare, compare_sequence, Metrics, MetricsError, SequenceMetrics, SequenceScore,
+};
 pub use sidecar::{output_paths, write_all, OutputFiles, PassRecord, RenderRecord};
 
 /// A linear RGB image, row 0 at the top, `pixels[y * width + x]`.

@@ -41,8 +41,9 @@ pub enum Target {
     LightPosition(usize),
     LightDirection(usize),
     LightIntensity(usize),
-    /// The materials of one name (each mesh reads its own copy of an MTL) whose Ke is scaled.
-    Emission(Vec<usize>),
+    /// The materials of one name (each mesh reads its own copy of an MTL) whose Ke is scaled:
+    /// the name and their indices.
+    Emission(String, Vec<usize>),
     /// Degrees about +Y, right-handed.
     EnvironmentRotation,
     LuminairePosition(usize),
@@ -54,7 +55,7 @@ impl Target {
     fn scalar(&self) -> bool {
         matches!(
             self,
-            Target::CameraFov | Target::Emission(_) | Target::EnvironmentRotation
+            Target::CameraFov | Target::Emission(..) | Target::EnvironmentRotation
         )
     }
 }
@@ -254,6 +255,13 @@ impl Animation {
                         "must be finite".into(),
                     ));
                 }
+                if matches!(target, Target::Emission(..)) && value.x < 0.0 {
+                    return Err(invalid(
+                        format!("{}[{i}]", field("values")),
+                        key_text(v),
+                        "an emission scale must be >= 0".into(),
+                    ));
+                }
                 values.push(value);
             }
             if let Some(other) = tracks.iter().position(|o: &Track| o.target == target) {
@@ -295,7 +303,7 @@ impl Animation {
         let mut luminaires = self.luminaires.clone();
         let mut emission = vec![1.0f32; materials];
         let mut environment_rotation = 0.0;
-        for track in &self.tracks {
+        for (k, track) in self.tracks.iter().enumerate() {
             let v = track.at(t);
             match track.target {
                 Target::CameraPosition => camera.position = v.to_array(),
@@ -304,7 +312,23 @@ impl Animation {
                 Target::LightPosition(i) => lights[i].position = v.to_array(),
                 Target::LightDirection(i) => lights[i].direction = Some(v.to_array()),
                 Target::LightIntensity(i) => lights[i].intensity = v.to_array(),
-                Target::Emission(ref ms) => ms.iter().for_each(|&m| emission[m] = v.x),
+                Target::Emission(ref name, ref ms) => {
+                    if v.x.is_nan() || v.x < 0.0 {
+                        return Err(SceneError::Invalid {
+                            file: file.to_string(),
+                            field: format!(
+                                "animation.track[{k}] (material.{name}.emission) at animation \
+                                 frame {f}"
+                            ),
+                            value: v.x.to_string(),
+                            problem: "an emission scale must be >= 0: the smooth track \
+                                      overshoots below zero between its keys (use \
+                                      interpolation = \"linear\" there)"
+                                .into(),
+                        });
+                    }
+                    ms.iter().for_each(|&m| emission[m] = v.x)
+                }
                 Target::EnvironmentRotation => environment_rotation = v.x,
                 Target::LuminairePosition(i) => luminaires[i].position = v.to_array(),
                 Target::LuminaireLookAt(i) => luminaires[i].look_at = v.to_array(),
@@ -337,16 +361,6 @@ impl Animation {
             .map(|(k, l)| PlacedLuminaire::frame(file, k, l))
             .collect::<Result<Vec<_>, _>>()
             .map_err(at_frame)?;
-        if let Some(m) = emission.iter().position(|s| s.is_nan() || *s < 0.0) {
-            return Err(SceneError::Invalid {
-                file: file.to_string(),
-                field: format!("the emission scale of material {m} at animation frame {f}"),
-                value: emission[m].to_string(),
-                problem: "must be >= 0 (a smooth track overshoots between its keys: use \
-                          interpolation = \"linear\")"
-                    .into(),
-            });
-        }
         Ok(FrameState {
             camera,
             lights,
@@ -371,7 +385,7 @@ impl Animation {
                 .collect();
             for track in &self.tracks {
                 match track.target {
-                    Target::Emission(ref ms) => ms.iter().for_each(|&m| e[m] = track.at(t).x),
+                    Target::Emission(_, ref ms) => ms.iter().for_each(|&m| e[m] = track.at(t).x),
                     Target::LightIntensity(i) => l[i] = track.at(t),
                     _ => {}
                 }
@@ -460,7 +474,7 @@ fn parse_target(
                 "material `{name}` emits nothing (Ke = 0): its emission cannot be scaled"
             ))
         } else {
-            Ok(Target::Emission(named))
+            Ok(Target::Emission(name.to_string(), named))
         };
     }
     Err(unknown())

@@ -330,6 +330,7 @@ fn build(file: &str, toml_text: &str, files: &Files) -> Result<Scene, SceneError
         &scene.materials,
         scene.environment.is_some(),
     )?;
+    no_frame_without_light(file, &scene, &animation)?;
     // The power bound at each light's and material's brightest over the frames.
     let (emission, intensity) = animation.brightest(scene.materials.len());
     let mut brightest = scene.clone();
@@ -361,6 +362,57 @@ fn build(file: &str, toml_text: &str, files: &Files) -> Result<Scene, SceneError
         animation: Some(animation),
         ..scene
     })
+}
+
+/// Refuses an animation with a frame in which nothing emits (every light switched off), as a
+/// still scene without light is refused: the light tables have nothing to sample there.
+fn no_frame_without_light(
+    file: &str,
+    scene: &Scene,
+    animation: &Animation,
+) -> Result<(), SceneError> {
+    let mut used = vec![false; scene.materials.len()];
+    for t in &scene.triangles {
+        used[t.material as usize] = true;
+    }
+    let bright = |e: &Environment| e.texels.iter().any(|t| t.max_element() > 0.0);
+    let maps: Vec<bool> = if scene.environment_sequence.is_empty() {
+        scene.environment.iter().map(bright).collect()
+    } else {
+        scene.environment_sequence.iter().map(bright).collect()
+    };
+    let luminaires = scene.luminaires.iter().any(|l| {
+        l.luminaire
+            .frames()
+            .into_iter()
+            .flatten()
+            .flatten()
+            .any(|t| t.max_element() > 0.0)
+    });
+    for f in 0..animation.frames {
+        let state = animation.state(f, scene.materials.len())?;
+        let emits = luminaires
+            || (!maps.is_empty() && maps[f as usize % maps.len()])
+            || state.lights.iter().any(|l| match l {
+                super::Light::Point { intensity, .. } | super::Light::Spot { intensity, .. } => {
+                    intensity.max_element() > 0.0
+                }
+            })
+            || (0..scene.materials.len())
+                .any(|m| used[m] && scene.materials[m].is_emissive() && state.emission[m] > 0.0);
+        if !emits {
+            return Err(SceneError::Invalid {
+                file: file.to_string(),
+                field: "[animation]".into(),
+                value: format!("frame {f}"),
+                problem: "nothing emits light in this frame (every light and emitter off); a \
+                          frame without light is refused as a still scene without light is: \
+                          keep one on"
+                    .into(),
+            });
+        }
+    }
+    Ok(())
 }
 
 /// The maps of `[environment]`, one per frame (one for a still map).
