@@ -1386,3 +1386,22 @@ fn a_refused_resume_names_the_edit() {
     });
     let _ = fs::remove_dir_all(&dir);
 }
+
+/// An animated scene in a suite is refused by name: suites time still scenes.
+#[test]
+fn an_animated_scene_in_a_suite_is_refused() {
+    let text = TINY_SUITE.replace(
+        "point-light-plane/scene.toml",
+        "cornell-circling/scene.toml",
+    );
+    let e = Suite::parse("animated.toml", &text, &scenes_dir())
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(
+        e.contains("scene[1].path")
+            && e.contains("animated (24 frames)")
+            && e.contains("--sequence"),
+        "{e}"
+    );
+}

@@ -116,7 +116,29 @@ fn a_point_light_moving_over_a_plane_matches_its_closed_form_in_every_frame() {
         )
         .unwrap();
         assert_eq!(frames_seen, FRAMES);
+
+        // The animated scene whole (the file's own values, not a frame's) is refused.
+        let gpu = irad::scene::gpu::GpuScene::upload(ctx, &scene).unwrap();
+        let e = irad::methods::Renderers::default()
+            .run(ctx, &path_tracer(1, 0), &scene, &gpu, |_, _| {})
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(
+            e.contains("is animated (5 frames)") && e.contains("--frame N"),
+            "{e}"
+        );
     });
+}
+
+/// A resolution set on the loaded scene (a suite's width, a test's size) holds in every frame.
+#[test]
+fn frames_keep_the_resolution_the_scene_was_given() {
+    let dir = Scratch::new("resolution");
+    let mut scene = moving_light(&dir.0);
+    (scene.camera.width, scene.camera.height) = (8, 4);
+    let still = scene.at_frame(2).unwrap();
+    assert_eq!((still.camera.width, still.camera.height), (8, 4));
 }
 
 /// Frame f of `render_sequence` against `irad render --frame f`'s path (the frame's still

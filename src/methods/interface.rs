@@ -172,6 +172,19 @@ pub(crate) fn render<M: RenderMethod>(
     if let Some(why) = declines::<M>(scene) {
         return Err(RunError::Declined(why));
     }
+    // The loaded scene holds the file's own values, which frame 0's tracks may override (a
+    // light on a track starting switched off): a render shows one frame, built by at_frame.
+    if let Some(animation) = &scene.animation {
+        return Err(RunError::Animated(format!(
+            "{} is animated ({} frames): render one frame of it (Scene::at_frame, `irad render \
+             --frame N`) or all of them (irad::sequence, `irad render --sequence`)",
+            scene
+                .source
+                .as_ref()
+                .map_or(scene.name.clone(), |p| p.display().to_string()),
+            animation.frames
+        )));
+    }
     let limit = ctx.info().max_storage_buffer_range;
     M::fits(settings, scene, limit).map_err(|e| RunError::Gpu(GpuError::DoesNotFit(e)))?;
     // A cut traversal left over from an earlier render (one that failed before its check)

@@ -28,6 +28,9 @@ pub enum RunError {
     /// The method does not render this scene's lights (lights.rs says why).
     #[error("{0}")]
     Declined(String),
+    /// An animated scene given whole: a render shows one of its frames (`Scene::at_frame`).
+    #[error("{0}")]
+    Animated(String),
     #[error(transparent)]
     Gpu(#[from] GpuError),
 }

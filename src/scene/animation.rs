@@ -511,7 +511,13 @@ impl Scene {
         let state = animation.state(f, self.materials.len())?;
         let mut scene = self.clone();
         scene.animation = None;
-        scene.camera = state.camera;
+        // The resolution is not animated, and a caller may have set it (a suite's width).
+        let (width, height) = (self.camera.width, self.camera.height);
+        scene.camera = Camera {
+            width,
+            height,
+            ..state.camera
+        };
         scene.lights = state.lights;
         for (m, s) in scene.materials.iter_mut().zip(&state.emission) {
             m.ke *= *s;

@@ -469,6 +469,18 @@ fn load_scene(
             cause: Box::new(source),
         })?
     };
+    if let Some(animation) = &scene.animation {
+        return Err(field_error(
+            file,
+            &format!("scene[{i}].path"),
+            format!("{:?}", entry.path),
+            &format!(
+                "the scene is animated ({} frames): suites time still scenes, so render it with \
+                 `irad render --sequence` (frame-time budgets in suites are still to come)",
+                animation.frames
+            ),
+        ));
+    }
     let own = check_resolution(file, &format!("scene[{i}].resolution"), entry.resolution)?;
     if let Some((w, h)) = own {
         scene.camera.width = w;

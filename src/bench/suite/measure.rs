@@ -27,6 +27,7 @@ impl From<RunError> for MeasureError {
         match e {
             RunError::Declined(why) => MeasureError::Declined(why),
             RunError::Gpu(g) => MeasureError::Failed(g.to_string()),
+            RunError::Animated(why) => MeasureError::Failed(why),
         }
     }
 }
