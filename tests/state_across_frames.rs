@@ -3,7 +3,7 @@
 //! environment map, on a map sequence that dims, turns and brightens from frame to frame, keeps
 //! the image mean the path tracer gives each map, averaged over the maps its frames show: a
 //! method that reused an earlier frame's map (restir's temporal reservoirs weighed by this
-//! frame's map kept 0.56 of the light here), sampled by an earlier frame's table, or showed
+//! frame's map kept 0.65 of the light here), sampled by an earlier frame's table, or showed
 //! another frame's map (10 frames show maps 0 and 1 three times, 2 and 3 twice, and the maps'
 //! brightnesses differ) fails.
 //!

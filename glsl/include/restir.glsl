@@ -21,7 +21,7 @@
 // RESTIR_PREVIOUS_FRAME: the temporal pass). With this frame's map there instead, the balance
 // heuristic's weights of the two domains no longer sum to one where the map changed: a sun that
 // moved into a direction got the previous domain's share there, which cannot produce it, and
-// 44% of a map sequence's light was lost (docs/DESIGN.md "State across frames").
+// 35% of a map sequence's light was lost (docs/DESIGN.md "State across frames").
 //
 // Bindings 13-15 (16 with RESTIR_PREVIOUS_FRAME). Needs scene.glsl, sampling.glsl, bsdf.glsl,
 // lights.glsl, gbuffer.glsl, and bvh.glsl unless RESTIR_NO_TRACE is defined (restir_visible
