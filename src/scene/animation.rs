@@ -334,20 +334,7 @@ impl Animation {
                 Target::LuminaireLookAt(i) => luminaires[i].look_at = v.to_array(),
             }
         }
-        let at_frame = |e: SceneError| match e {
-            SceneError::Invalid {
-                file,
-                field,
-                value,
-                problem,
-            } => SceneError::Invalid {
-                file,
-                field: format!("{field} at animation frame {f}"),
-                value,
-                problem,
-            },
-            other => other,
-        };
+        let at_frame = |e: SceneError| e.in_context(&format!("at animation frame {f}"));
         let camera = camera::build(file, &camera).map_err(at_frame)?;
         let lights = lights
             .iter()

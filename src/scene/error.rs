@@ -54,3 +54,24 @@ pub enum SceneError {
     )]
     NoLight { file: String },
 }
+
+impl SceneError {
+    /// An `Invalid` error with `suffix` after its field ("at animation frame 3"); others as
+    /// they are.
+    pub fn in_context(self, suffix: &str) -> SceneError {
+        match self {
+            SceneError::Invalid {
+                file,
+                field,
+                value,
+                problem,
+            } => SceneError::Invalid {
+                file,
+                field: format!("{field} {suffix}"),
+                value,
+                problem,
+            },
+            other => other,
+        }
+    }
+}

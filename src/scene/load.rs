@@ -276,14 +276,7 @@ fn build(file: &str, toml_text: &str, files: &Files) -> Result<Scene, SceneError
             .iter()
             .chain(&environment_sequence)
             .any(|e| e.texels.iter().any(|t| t.max_element() > 0.0))
-        || luminaires.iter().any(|l| {
-            l.luminaire
-                .frames()
-                .into_iter()
-                .flatten()
-                .flatten()
-                .any(|t| t.max_element() > 0.0)
-        });
+        || luminaires.iter().any(|l| l.luminaire.emits());
     if !emits {
         return Err(SceneError::NoLight {
             file: file.to_string(),
@@ -344,20 +337,8 @@ fn build(file: &str, toml_text: &str, files: &Files) -> Result<Scene, SceneError
             }
         }
     }
-    power::check(&brightest, &sources).map_err(|e| match e {
-        SceneError::Invalid {
-            file,
-            field,
-            value,
-            problem,
-        } => SceneError::Invalid {
-            file,
-            field: format!("{field} (at its brightest over [animation])"),
-            value,
-            problem,
-        },
-        other => other,
-    })?;
+    power::check(&brightest, &sources)
+        .map_err(|e| e.in_context("(at its brightest over [animation])"))?;
     Ok(Scene {
         animation: Some(animation),
         ..scene
@@ -381,14 +362,7 @@ fn no_frame_without_light(
     } else {
         scene.environment_sequence.iter().map(bright).collect()
     };
-    let luminaires = scene.luminaires.iter().any(|l| {
-        l.luminaire
-            .frames()
-            .into_iter()
-            .flatten()
-            .flatten()
-            .any(|t| t.max_element() > 0.0)
-    });
+    let luminaires = scene.luminaires.iter().any(|l| l.luminaire.emits());
     for f in 0..animation.frames {
         let state = animation.state(f, scene.materials.len())?;
         let emits = luminaires

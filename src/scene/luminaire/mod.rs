@@ -386,6 +386,15 @@ impl Luminaire {
         })
     }
 
+    /// Whether any texel of any atlas is above zero.
+    pub fn emits(&self) -> bool {
+        self.frames()
+            .into_iter()
+            .flatten()
+            .flatten()
+            .any(|t| t.max_element() > 0.0)
+    }
+
     /// The atlases a render shows in turn: the sequence, or the one still atlas.
     pub fn frames(&self) -> Vec<&Vec<Vec<Vec3>>> {
         if self.sequence.is_empty() {
