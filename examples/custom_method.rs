@@ -20,7 +20,8 @@ use irad::gpu::{bind, Commands, Context, ContextOptions, GpuResult, Kernel};
 use irad::methods::gbuffer::PixelSampling;
 use irad::methods::settings::{Kind, Setting, Value};
 use irad::methods::{
-    Lights, Method, MethodFrames, Registry, RenderMethod, Renderers, Shared, SharedPasses, Support,
+    AcrossFrames, AnimationFrame, Lights, Method, MethodFrames, Registry, RenderMethod, Renderers,
+    Shared, SharedPasses, Support,
 };
 use irad::scene::gpu::GpuScene;
 use irad::scene::Scene;
@@ -110,6 +111,8 @@ impl RenderMethod for AmbientOcclusion {
         point: Support::Renders,
         luminaires: Support::Renders,
     };
+    /// Nothing: each animation frame's occlusion is traced from scratch.
+    const ACROSS_FRAMES: AcrossFrames = AcrossFrames::NOTHING;
 
     fn new(ctx: &Context) -> GpuResult<Self> {
         Ok(AmbientOcclusion {
@@ -131,6 +134,7 @@ impl RenderMethod for AmbientOcclusion {
         _scene: &Scene,
         _gpu_scene: &GpuScene,
         settings: &'a AoSettings,
+        _animation: &AnimationFrame<'_>,
     ) -> GpuResult<Box<dyn MethodFrames + 'a>> {
         Ok(Box::new(AoFrames { ao: self, settings }))
     }

@@ -9,7 +9,7 @@ use anyhow::{bail, Context as _, Result};
 
 use crate::gpu::{Context, PassTotals};
 use crate::image::{self, exr, Image, Metrics, OutputFiles, PassRecord, RenderRecord};
-use crate::methods::{Method, Renderers};
+use crate::methods::{AnimationFrame, Method, Renderers};
 use crate::scene::gpu::GpuScene;
 use crate::scene::Scene;
 
@@ -119,15 +119,25 @@ pub fn render_checked(
     checked: Checked,
     progress: impl FnMut(u32, u32),
 ) -> Result<RenderReport> {
-    render_checked_with(ctx, &Renderers::default(), job, checked, progress)
+    let animation = AnimationFrame::alone(job.frame.unwrap_or(0));
+    render_checked_with(
+        ctx,
+        &Renderers::default(),
+        job,
+        checked,
+        &animation,
+        progress,
+    )
 }
 
-/// `render_checked` with kernels built once for many renders (a sequence's frames).
+/// `render_checked` with kernels built once for many renders (a sequence's frames), handing
+/// the method `animation` (the frame and the one rendered before it).
 pub fn render_checked_with(
     ctx: &Context,
     renderers: &Renderers,
     job: &RenderJob,
     checked: Checked,
+    animation: &AnimationFrame<'_>,
     progress: impl FnMut(u32, u32),
 ) -> Result<RenderReport> {
     let cam = &job.scene.camera;
@@ -150,7 +160,8 @@ pub fn render_checked_with(
             ));
         }
     }
-    let output = renderers.run(ctx, &job.method, job.scene, &gpu_scene, progress)?;
+    let output =
+        renderers.run_frame(ctx, &job.method, job.scene, &gpu_scene, animation, progress)?;
     if output.nonfinite_estimates > 0 {
         warnings.push(format!(
             "{} per-pixel estimates were NaN or Inf and were dropped (counted as black)",

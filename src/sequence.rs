@@ -19,7 +19,7 @@ use serde::{Deserialize, Serialize};
 use crate::gpu::Context;
 use crate::image::{self, exr, Metrics, RenderRecord, SequenceMetrics};
 use crate::lock::HolderLock;
-use crate::methods::{Method, RenderOutput, Renderers};
+use crate::methods::{AnimationFrame, Changes, Method, PreviousFrame, RenderOutput, Renderers};
 use crate::render::{self, RenderJob, RenderReport};
 use crate::scene::gpu::GpuScene;
 use crate::scene::Scene;
@@ -44,15 +44,44 @@ pub fn render_frames(
     mut on_frame: impl FnMut(u32, &Scene, RenderOutput) -> Result<()>,
 ) -> Result<()> {
     let renderers = Renderers::default();
+    let mut previous: Option<(u32, Scene)> = None;
     for f in frames {
         let still = scene.at_frame(f)?;
         // Geometry does not move, but the lights, emission and map that the upload's tables
         // are built from do: the frame's scene is uploaded whole.
         let gpu = GpuScene::upload(ctx, &still).context("uploading the scene")?;
-        let output = renderers.run(ctx, &frame_method(method, f), &still, &gpu, |_, _| {})?;
+        let animation = animation_frame(f, previous.as_ref(), &still);
+        let output = renderers.run_frame(
+            ctx,
+            &frame_method(method, f),
+            &still,
+            &gpu,
+            &animation,
+            |_, _| {},
+        )?;
         on_frame(f, &still, output)?;
+        previous = Some((f, still));
     }
     Ok(())
+}
+
+/// What the driver hands a method rendering frame `f` (`still`): the frame rendered just
+/// before with the same kernels, where it is `f`'s predecessor, and what changed since.
+fn animation_frame<'a>(
+    f: u32,
+    previous: Option<&'a (u32, Scene)>,
+    still: &Scene,
+) -> AnimationFrame<'a> {
+    AnimationFrame {
+        frame: f,
+        previous: previous
+            .filter(|(p, _)| p.checked_add(1) == Some(f))
+            .map(|(p, scene)| PreviousFrame {
+                frame: *p,
+                scene,
+                changed: Changes::between(scene, still),
+            }),
+    }
 }
 
 /// A sequence to render into a folder.
@@ -78,6 +107,9 @@ pub struct SequenceRecord {
     /// The method's settings but the seed (each frame's is `seed` + its frame).
     pub parameters: BTreeMap<String, serde_json::Value>,
     pub seed: u32,
+    /// What the method keeps from one frame to the next (`RenderMethod::ACROSS_FRAMES`).
+    #[serde(default)]
+    pub across_frames: String,
     /// The animation's frame count and rate; `frames` the range rendered.
     pub animation_frames: u32,
     pub fps: f32,
@@ -180,6 +212,7 @@ pub fn render_sequence(
         method: job.method.name().into(),
         parameters: job.method.parameters(),
         seed: job.method.seed(),
+        across_frames: job.method.across_frames().describe(),
         animation_frames: animation.frames,
         fps: animation.fps,
         frames: [job.frames.start, job.frames.end],
@@ -214,6 +247,10 @@ pub fn render_sequence(
     let renderers = Renderers::default();
     let total = job.frames.len() as u32;
     let mut resumed = vec![];
+    // The frame rendered just before, for a method that carries state across frames; a frame
+    // kept from an earlier run leaves none.
+    let mut previous: Option<(u32, Scene)> = None;
+    let carries = job.method.across_frames();
     for (done, f) in job.frames.clone().enumerate() {
         progress(done as u32, total, f);
         let method = frame_method(&job.method, f);
@@ -226,9 +263,22 @@ pub fn render_sequence(
             record.rendered.push(FrameSummary::of(&earlier));
             record.rendered.sort_by_key(|r| r.frame);
             resumed.push(f);
+            previous = None;
             continue;
         }
         let still = job.scene.at_frame(f)?;
+        if !carries.carries_nothing()
+            && previous.is_none()
+            && resumed.last() == Some(&(f.wrapping_sub(1)))
+        {
+            warnings.push(format!(
+                "{} carries state across frames ({}); frame {f}, the first rendered after frames \
+                 kept from an earlier run, starts without it, so frames from {f} on may differ \
+                 from a sequence rendered straight through",
+                job.method.name(),
+                carries.describe()
+            ));
+        }
         let frame_job = RenderJob {
             scene: &still,
             method,
@@ -238,12 +288,21 @@ pub fn render_sequence(
             frame: Some(f),
         };
         let checked = frame_job.check()?;
-        let report = render::render_checked_with(ctx, &renderers, &frame_job, checked, |_, _| {})
-            .with_context(|| format!("rendering animation frame {f}"))?;
+        let animation = animation_frame(f, previous.as_ref(), &still);
+        let report = render::render_checked_with(
+            ctx,
+            &renderers,
+            &frame_job,
+            checked,
+            &animation,
+            |_, _| {},
+        )
+        .with_context(|| format!("rendering animation frame {f}"))?;
         on_frame(f, &report);
         record.rendered.push(FrameSummary::of(&report.record));
         record.rendered.sort_by_key(|r| r.frame);
         write_json(&record_path, &record)?;
+        previous = Some((f, still));
     }
     progress(total, total, job.frames.end);
     if let Some(dir) = &job.reference {

@@ -253,3 +253,189 @@ fn frames_are_stills_and_an_interrupted_sequence_resumes_to_the_same_files() {
         );
     });
 }
+
+/// A method that renders nothing and writes down what the driver hands its `set_up`: the
+/// frame, the previous frame's number, its camera and light, and what changed.
+mod probe {
+    use std::sync::Mutex;
+
+    use irad::gpu::{Commands, Context, GpuResult};
+    use irad::methods::gbuffer::PixelSampling;
+    use irad::methods::settings::{Kind, Setting, Value};
+    use irad::methods::{
+        AcrossFrames, AnimationFrame, Carried, Change, Lights, MethodFrames, RenderMethod, Shared,
+        SharedPasses, Support,
+    };
+    use irad::scene::gpu::GpuScene;
+    use irad::scene::{Light, Scene};
+
+    /// (frame, previous frame, the previous frame's light position, changes) per set_up.
+    pub type Seen = (u32, Option<u32>, Option<[f32; 3]>, Vec<&'static str>);
+    pub static SEEN: Mutex<Vec<Seen>> = Mutex::new(Vec::new());
+
+    pub struct Probe;
+
+    #[derive(Clone, Debug, PartialEq, Default)]
+    pub struct ProbeSettings {
+        frames: u32,
+        seed: u32,
+    }
+
+    const SETTINGS: &[Setting<ProbeSettings>] = &[
+        Setting::new(
+            "frames",
+            Kind::Count { min: 1, max: 4 },
+            "Frames.",
+            |s| Some(Value::Count(s.frames)),
+            |s, v| s.frames = v.count(),
+        ),
+        Setting::new(
+            "seed",
+            Kind::Count {
+                min: 0,
+                max: u32::MAX,
+            },
+            "Seed.",
+            |s| Some(Value::Count(s.seed)),
+            |s, v| s.seed = v.count(),
+        ),
+    ];
+
+    impl RenderMethod for Probe {
+        type Settings = ProbeSettings;
+        const NAME: &'static str = "probe";
+        const SUMMARY: &'static str = "Writes down what the driver hands it.";
+        const SETTINGS: &'static [Setting<ProbeSettings>] = SETTINGS;
+        const COUNT: &'static str = "frames";
+        const LIGHTS: Lights = Lights {
+            environment: Support::Renders,
+            area: Support::Renders,
+            point: Support::Renders,
+            luminaires: Support::Renders,
+        };
+        const ACROSS_FRAMES: AcrossFrames = AcrossFrames {
+            carries: &[Carried {
+                state: "nothing real (a test)",
+                invalidated_by: &[Change::Lights],
+            }],
+        };
+
+        fn new(_ctx: &Context) -> GpuResult<Self> {
+            Ok(Probe)
+        }
+
+        fn shared_passes(_settings: &ProbeSettings) -> SharedPasses {
+            SharedPasses {
+                pixels: PixelSampling::Centres,
+                direct: None,
+            }
+        }
+
+        fn set_up<'a>(
+            &'a self,
+            _ctx: &Context,
+            scene: &Scene,
+            _gpu_scene: &GpuScene,
+            _settings: &'a ProbeSettings,
+            animation: &AnimationFrame<'_>,
+        ) -> GpuResult<Box<dyn MethodFrames + 'a>> {
+            let light = |s: &Scene| match s.lights[0] {
+                Light::Point { position, .. } => position.to_array(),
+                _ => unreachable!(),
+            };
+            let previous = animation.previous.as_ref();
+            if let Some(p) = previous {
+                // The previous frame's scene is the one at_frame gives, not this frame's.
+                assert_ne!(light(p.scene), light(scene));
+            }
+            SEEN.lock().unwrap().push((
+                animation.frame,
+                previous.map(|p| p.frame),
+                previous.map(|p| light(p.scene)),
+                previous.map_or(vec![], |p| p.changed.iter().map(Change::name).collect()),
+            ));
+            Ok(Box::new(Nothing))
+        }
+    }
+
+    struct Nothing;
+
+    impl MethodFrames for Nothing {
+        fn record<'a>(
+            &'a self,
+            _shared: &Shared<'a>,
+            _cmd: &mut Commands<'a>,
+            _frame: u32,
+        ) -> GpuResult<()> {
+            Ok(())
+        }
+    }
+}
+
+/// The driver hands a method each frame with the previous frame's scene and what changed
+/// (the light moves, nothing else), in `render_frames` and `render_sequence`; a frame kept
+/// from an earlier run leaves the next without a previous frame, and a method that carries
+/// state is warned of it.
+#[test]
+fn the_driver_hands_each_frame_the_previous_frames_scene() {
+    let dir = Scratch::new("probe");
+    let scene = moving_light(&dir.0);
+    let registry = irad::methods::Registry::builtin()
+        .clone()
+        .with::<probe::Probe>();
+    let method = registry
+        .from_params("probe", &toml::from_str("frames = 1").unwrap())
+        .unwrap();
+    assert_eq!(
+        method.across_frames().describe(),
+        "nothing real (a test) (invalidated by a change of lights)"
+    );
+    let x = |f: u32| -1.0 + f as f32 / 2.0;
+    let seen = || std::mem::take(&mut *probe::SEEN.lock().unwrap());
+    with_gpu(|ctx| {
+        seen();
+        sequence::render_frames(ctx, &scene, &method, 1..4, |_, _, _| Ok(())).unwrap();
+        let got = seen();
+        assert_eq!(got.len(), 3);
+        assert_eq!(got[0], (1, None, None, vec![]), "the first frame rendered");
+        for (k, f) in [2u32, 3].into_iter().enumerate() {
+            assert_eq!(
+                got[k + 1],
+                (
+                    f,
+                    Some(f - 1),
+                    Some([x(f - 1), HEIGHT, 0.0]),
+                    vec!["lights"]
+                ),
+                "frame {f}"
+            );
+        }
+
+        // Frames 0 and 1 rendered, then 0..4 resumed: 2 starts without a previous frame
+        // (1 was kept from disk), 3 gets 2.
+        let out = dir.0.join("probe-sequence");
+        let job = |frames| SequenceJob {
+            scene: &scene,
+            method: method.clone(),
+            frames,
+            out: out.clone(),
+            exposure: 0.0,
+            reference: None,
+        };
+        sequence::render_sequence(ctx, &job(0..2), |_, _, _| {}, |_, _| {}).unwrap();
+        seen();
+        let report = sequence::render_sequence(ctx, &job(0..4), |_, _, _| {}, |_, _| {}).unwrap();
+        assert_eq!(report.resumed, [0, 1]);
+        let got = seen();
+        assert_eq!(got[0], (2, None, None, vec![]));
+        assert_eq!(got[1].1, Some(2));
+        assert!(
+            report
+                .warnings
+                .iter()
+                .any(|w| w.contains("probe carries state across frames") && w.contains("frame 2")),
+            "{:?}",
+            report.warnings
+        );
+    });
+}

@@ -26,6 +26,10 @@ pub fn run(args: &MethodsArgs) -> Result<()> {
     let (settings, about) = (entry.docs(), entry.summary());
     println!("{name}: {about}");
     println!(
+        "across animation frames it keeps {}",
+        entry.across_frames().describe()
+    );
+    println!(
         "settings: `irad render --method {name} --FLAG VALUE` (a switch: `--FLAG` or \
          `--FLAG=false`), or `KEY = VALUE` in a suite's params"
     );

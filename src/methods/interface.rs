@@ -21,6 +21,7 @@ use crate::gpu::{Context, GpuError, GpuResult};
 use crate::scene::gpu::GpuScene;
 use crate::scene::Scene;
 
+use super::across_frames::{AcrossFrames, AnimationFrame};
 use super::direct::{DirectLightOptions, GBufferAndDirectLight};
 use super::driver::{self, MethodFrames, Plan};
 use super::gbuffer::PixelSampling;
@@ -48,6 +49,9 @@ pub trait RenderMethod: Sized + 'static {
     /// The lights it renders, declines or needs: data, turned into refusals in one place
     /// (lights.rs).
     const LIGHTS: Lights;
+    /// What it keeps from one animation frame to the next and what invalidates it
+    /// (across_frames.rs): `AcrossFrames::NOTHING` where each frame starts from scratch.
+    const ACROSS_FRAMES: AcrossFrames;
 
     /// Builds the method's kernels (once per `Renderers`, however many renders follow).
     fn new(ctx: &Context) -> GpuResult<Self>;
@@ -56,13 +60,16 @@ pub trait RenderMethod: Sized + 'static {
     /// and the direct light, if any.
     fn shared_passes(settings: &Self::Settings) -> SharedPasses;
 
-    /// Sets up one render (buffers, tables) and returns its frames for the driver.
+    /// Sets up one render (buffers, tables) and returns its frames for the driver. `animation`
+    /// says which animation frame `scene` is and hands the previous frame's scene with what
+    /// changed since, for a method that carries state across frames (`ACROSS_FRAMES`).
     fn set_up<'a>(
         &'a self,
         ctx: &Context,
         scene: &Scene,
         gpu_scene: &GpuScene,
         settings: &'a Self::Settings,
+        animation: &AnimationFrame<'_>,
     ) -> GpuResult<Box<dyn MethodFrames + 'a>>;
 
     /// Work in units that scale the method's cost at a fixed resolution, for time estimates;
@@ -160,6 +167,7 @@ pub fn assert_table<M: RenderMethod>() {
 
 /// Renders `scene` with `method`'s kernels and the shared `passes`: the refusals (lights,
 /// device sizes), then the driver.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn render<M: RenderMethod>(
     passes: &GBufferAndDirectLight,
     method: &M,
@@ -167,6 +175,7 @@ pub(crate) fn render<M: RenderMethod>(
     scene: &Scene,
     gpu_scene: &GpuScene,
     settings: &M::Settings,
+    animation: &AnimationFrame<'_>,
     progress: impl FnMut(u32, u32),
 ) -> Result<RenderOutput, RunError> {
     if let Some(why) = declines::<M>(scene) {
@@ -199,7 +208,7 @@ pub(crate) fn render<M: RenderMethod>(
         direct: shared.direct,
         start,
     };
-    let setup = || method.set_up(ctx, scene, gpu_scene, settings);
+    let setup = || method.set_up(ctx, scene, gpu_scene, settings, animation);
     Ok(driver::render(
         ctx, passes, gpu_scene, plan, setup, progress,
     )?)
@@ -239,6 +248,27 @@ impl<M: RenderMethod> Renderer<M> {
         settings: &M::Settings,
         progress: impl FnMut(u32, u32),
     ) -> Result<RenderOutput, RunError> {
+        self.render_frame(
+            ctx,
+            scene,
+            gpu_scene,
+            settings,
+            &AnimationFrame::STILL,
+            progress,
+        )
+    }
+
+    /// `render` of one animation frame (`scene` the frame's, `Scene::at_frame`), handing the
+    /// method `animation`.
+    pub fn render_frame(
+        &self,
+        ctx: &Context,
+        scene: &Scene,
+        gpu_scene: &GpuScene,
+        settings: &M::Settings,
+        animation: &AnimationFrame<'_>,
+        progress: impl FnMut(u32, u32),
+    ) -> Result<RenderOutput, RunError> {
         render(
             &self.passes,
             &self.method,
@@ -246,6 +276,7 @@ impl<M: RenderMethod> Renderer<M> {
             scene,
             gpu_scene,
             settings,
+            animation,
             progress,
         )
     }

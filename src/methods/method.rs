@@ -10,6 +10,7 @@ use std::sync::Arc;
 
 use crate::scene::Scene;
 
+use super::across_frames::AcrossFrames;
 use super::interface::RenderMethod;
 use super::lights;
 use super::registry::{self, MethodEntry, Registry};
@@ -83,6 +84,11 @@ impl Method {
     /// every other method's `frames` (`RenderMethod::COUNT`); `samples()` reads it.
     pub fn count_key(&self) -> &'static str {
         self.entry.count_key()
+    }
+
+    /// What the method keeps from one animation frame to the next (`RenderMethod::ACROSS_FRAMES`).
+    pub fn across_frames(&self) -> AcrossFrames {
+        self.entry.across_frames()
     }
 
     /// The same method and settings with `count_key()` set to `count`.

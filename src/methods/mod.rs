@@ -2,6 +2,7 @@
 //! G-buffer, BVH, samplers and accumulation buffer. `reference` is the ground truth.
 
 pub mod accumulation;
+pub mod across_frames;
 pub mod bir;
 pub mod bsdf_draws;
 pub mod bundles;
@@ -28,6 +29,7 @@ pub mod restir;
 pub mod scene_kernel;
 pub mod settings;
 
+pub use across_frames::{AcrossFrames, AnimationFrame, Carried, Change, Changes, PreviousFrame};
 pub use driver::{Extras, MethodFrames, Shared};
 pub use interface::{Lights, RenderMethod, Renderer, SharedPasses, Support};
 pub use method::Method;

@@ -8,6 +8,7 @@ use crate::gpu::{Buffer, Commands, Context, GpuResult};
 use crate::scene::gpu::GpuScene;
 use crate::scene::Scene;
 
+use super::across_frames::{AcrossFrames, AnimationFrame};
 use super::direct_alpha::ShadeDirectAlpha;
 use super::driver::{Extras, MethodFrames, Shared};
 use super::envmap;
@@ -132,6 +133,7 @@ impl RenderMethod for Reference {
         point: Support::Renders,
         luminaires: Support::Declines("the path tracer does not model them"),
     };
+    const ACROSS_FRAMES: AcrossFrames = AcrossFrames::NOTHING;
 
     fn new(ctx: &Context) -> GpuResult<Reference> {
         Ok(Reference {
@@ -153,6 +155,7 @@ impl RenderMethod for Reference {
         _scene: &Scene,
         gpu_scene: &GpuScene,
         settings: &'a ReferenceSettings,
+        _animation: &AnimationFrame<'_>,
     ) -> GpuResult<Box<dyn MethodFrames + 'a>> {
         Ok(Box::new(ReferenceFrames {
             reference: self,

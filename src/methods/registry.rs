@@ -14,6 +14,7 @@ use crate::gpu::Context;
 use crate::scene::gpu::GpuScene;
 use crate::scene::Scene;
 
+use super::across_frames::{AcrossFrames, AnimationFrame};
 use super::interface::{self, RenderMethod};
 use super::lights::Lights;
 use super::settings::{self, ParamError, SettingDoc, Value};
@@ -120,6 +121,8 @@ pub trait MethodEntry: sealed::Sealed + Sync {
     fn name(&self) -> &'static str;
     fn summary(&self) -> &'static str;
     fn lights(&self) -> Lights;
+    /// `RenderMethod::ACROSS_FRAMES`.
+    fn across_frames(&self) -> AcrossFrames;
     /// `RenderMethod::COUNT`.
     fn count_key(&self) -> &'static str;
     fn docs(&self) -> Vec<SettingDoc>;
@@ -147,6 +150,7 @@ pub trait MethodEntry: sealed::Sealed + Sync {
         s: &dyn Any,
         scene: &Scene,
         gpu_scene: &GpuScene,
+        animation: &AnimationFrame<'_>,
         progress: &mut dyn FnMut(u32, u32),
     ) -> Result<RenderOutput, RunError>;
 }
@@ -188,6 +192,10 @@ impl<M: RenderMethod> MethodEntry for Entry<M> {
 
     fn lights(&self) -> Lights {
         M::LIGHTS
+    }
+
+    fn across_frames(&self) -> AcrossFrames {
+        M::ACROSS_FRAMES
     }
 
     fn count_key(&self) -> &'static str {
@@ -270,6 +278,7 @@ impl<M: RenderMethod> MethodEntry for Entry<M> {
         s: &dyn Any,
         scene: &Scene,
         gpu_scene: &GpuScene,
+        animation: &AnimationFrame<'_>,
         progress: &mut dyn FnMut(u32, u32),
     ) -> Result<RenderOutput, RunError> {
         let (passes, method) = renderers.kernels::<M>(ctx)?;
@@ -280,6 +289,7 @@ impl<M: RenderMethod> MethodEntry for Entry<M> {
             scene,
             gpu_scene,
             settings_of::<M>(s),
+            animation,
             progress,
         )
     }

@@ -11,6 +11,7 @@ use crate::gpu::{Context, GpuError, GpuResult};
 use crate::scene::gpu::GpuScene;
 use crate::scene::Scene;
 
+use super::across_frames::AnimationFrame;
 use super::direct::GBufferAndDirectLight;
 use super::interface::RenderMethod;
 use super::{Method, RenderOutput};
@@ -45,6 +46,28 @@ impl Renderers {
         method: &Method,
         scene: &Scene,
         gpu_scene: &GpuScene,
+        progress: impl FnMut(u32, u32),
+    ) -> Result<RenderOutput, RunError> {
+        self.run_frame(
+            ctx,
+            method,
+            scene,
+            gpu_scene,
+            &AnimationFrame::STILL,
+            progress,
+        )
+    }
+
+    /// `run` for one animation frame: `scene` is the frame's (`Scene::at_frame`), and the
+    /// method gets `animation` (the frame, and the previous frame's scene where this
+    /// `Renderers` rendered it just before; src/sequence.rs hands it).
+    pub fn run_frame(
+        &self,
+        ctx: &Context,
+        method: &Method,
+        scene: &Scene,
+        gpu_scene: &GpuScene,
+        animation: &AnimationFrame<'_>,
         mut progress: impl FnMut(u32, u32),
     ) -> Result<RenderOutput, RunError> {
         // Refused before any kernel is built.
@@ -60,6 +83,7 @@ impl Renderers {
             method.settings_any(),
             scene,
             gpu_scene,
+            animation,
             &mut progress,
         )
     }

@@ -19,6 +19,7 @@ use std::mem::size_of;
 
 use crate::gpu::{Buffer, Commands, Context, GpuError, GpuResult};
 use crate::methods::accumulation::Accumulation;
+use crate::methods::across_frames::{AcrossFrames, AnimationFrame};
 use crate::methods::compensation::{ClampCompensation, ClampSettings, FrameClamp, VplSource};
 use crate::methods::device_fit;
 use crate::methods::direct::{DirectLightOptions, DirectLightPaths};
@@ -354,6 +355,7 @@ impl RenderMethod for Bir {
         point: Support::Renders,
         luminaires: Support::Declines(NO_LUMINAIRES),
     };
+    const ACROSS_FRAMES: AcrossFrames = AcrossFrames::NOTHING;
 
     fn new(ctx: &Context) -> GpuResult<Self> {
         Ok(Bir {
@@ -411,6 +413,7 @@ impl RenderMethod for Bir {
         scene: &Scene,
         gpu_scene: &GpuScene,
         settings: &'a BirSettings,
+        _animation: &AnimationFrame<'_>,
     ) -> GpuResult<Box<dyn MethodFrames + 'a>> {
         let rho = mean_albedo(scene);
         let (vpls_per_frame, batch) = batching(settings.vpls, settings.batch);

@@ -17,6 +17,7 @@ pub mod ray_bundles;
 use std::mem::size_of;
 
 use crate::gpu::{Buffer, Commands, Context, GpuResult};
+use crate::methods::across_frames::{AcrossFrames, AnimationFrame};
 use crate::methods::compensation::ClampSettings;
 use crate::methods::device_fit;
 use crate::methods::direct::{DirectLightOptions, DirectLightPaths};
@@ -362,6 +363,7 @@ impl RenderMethod for Bundles {
         point: Support::Renders,
         luminaires: Support::Declines(NO_LUMINAIRES),
     };
+    const ACROSS_FRAMES: AcrossFrames = AcrossFrames::NOTHING;
 
     fn new(ctx: &Context) -> GpuResult<Self> {
         Ok(Bundles {
@@ -418,6 +420,7 @@ impl RenderMethod for Bundles {
         scene: &Scene,
         gpu_scene: &GpuScene,
         settings: &'a BundlesSettings,
+        _animation: &AnimationFrame<'_>,
     ) -> GpuResult<Box<dyn MethodFrames + 'a>> {
         let per_frame = settings.iterations.max(1);
         let chunk = Self::chunk_size(per_frame, gpu_scene.pixel_count());

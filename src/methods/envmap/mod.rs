@@ -11,6 +11,7 @@ use std::mem::size_of;
 
 use crate::gpu::{Buffer, Commands, Context, GpuResult};
 use crate::image::Image;
+use crate::methods::across_frames::{AcrossFrames, AnimationFrame};
 use crate::methods::device_fit;
 use crate::methods::direct::{DirectLightOptions, DirectLightPaths};
 use crate::methods::driver::{Extras, MethodFrames, Shared};
@@ -258,6 +259,7 @@ impl RenderMethod for Env {
         point: Support::Declines(MAP_ONLY),
         luminaires: Support::Declines(NO_LUMINAIRES),
     };
+    const ACROSS_FRAMES: AcrossFrames = AcrossFrames::NOTHING;
 
     fn new(ctx: &Context) -> GpuResult<Self> {
         Ok(Env {
@@ -302,6 +304,7 @@ impl RenderMethod for Env {
         _scene: &Scene,
         gpu_scene: &GpuScene,
         settings: &'a EnvSettings,
+        _animation: &AnimationFrame<'_>,
     ) -> GpuResult<Box<dyn MethodFrames + 'a>> {
         let spp = settings.spp.max(1);
         let strategy = settings.strategy;

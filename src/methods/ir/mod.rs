@@ -11,6 +11,7 @@ pub mod walk;
 use std::mem::size_of;
 
 use crate::gpu::{Buffer, Commands, Context, GpuResult};
+use crate::methods::across_frames::{AcrossFrames, AnimationFrame};
 use crate::methods::compensation::{ClampCompensation, ClampSettings, FrameClamp, VplSource};
 use crate::methods::device_fit;
 use crate::methods::direct::{DirectLightOptions, DirectLightPaths};
@@ -165,6 +166,7 @@ impl RenderMethod for InstantRadiosity {
         point: Support::Renders,
         luminaires: Support::Declines(NO_LUMINAIRES),
     };
+    const ACROSS_FRAMES: AcrossFrames = AcrossFrames::NOTHING;
 
     fn new(ctx: &Context) -> GpuResult<Self> {
         Ok(InstantRadiosity {
@@ -218,6 +220,7 @@ impl RenderMethod for InstantRadiosity {
         scene: &Scene,
         gpu_scene: &GpuScene,
         settings: &'a IrSettings,
+        _animation: &AnimationFrame<'_>,
     ) -> GpuResult<Box<dyn MethodFrames + 'a>> {
         let vpls = VplBuffers::new(ctx, Self::schedule(scene, settings))?;
         let interleave = settings.interleave.max(1);

@@ -15,6 +15,7 @@ use serde_json::json;
 
 use crate::gpu::{bind, Buffer, Commands, Context, GpuError, GpuResult, Kernel};
 use crate::image::Image;
+use crate::methods::across_frames::{AcrossFrames, AnimationFrame};
 use crate::methods::direct::{DirectLightOptions, DirectLightPaths};
 use crate::methods::driver::{Extras, MethodFrames, Shared};
 use crate::methods::gbuffer::PixelSampling;
@@ -339,6 +340,7 @@ impl RenderMethod for Lightfield {
         point: Support::Renders,
         luminaires: Support::Needs("it renders light-field luminaires' direct light"),
     };
+    const ACROSS_FRAMES: AcrossFrames = AcrossFrames::NOTHING;
 
     fn new(ctx: &Context) -> GpuResult<Self> {
         Ok(Lightfield {
@@ -378,6 +380,7 @@ impl RenderMethod for Lightfield {
         scene: &Scene,
         gpu_scene: &GpuScene,
         settings: &'a LightfieldSettings,
+        _animation: &AnimationFrame<'_>,
     ) -> GpuResult<Box<dyn MethodFrames + 'a>> {
         let luminaires = scene
             .luminaires

@@ -17,6 +17,7 @@ use crate::gpu::{Commands, Context, GpuResult};
 use crate::scene::gpu::GpuScene;
 use crate::scene::Scene;
 
+use super::across_frames::{AcrossFrames, AnimationFrame};
 use super::direct::{DirectLightOptions, DirectLightPaths};
 use super::driver::{MethodFrames, Shared};
 use super::gbuffer::PixelSampling;
@@ -216,6 +217,7 @@ impl RenderMethod for Restir {
         point: Support::Renders,
         luminaires: Support::Declines(NO_LUMINAIRES),
     };
+    const ACROSS_FRAMES: AcrossFrames = AcrossFrames::NOTHING;
 
     fn new(ctx: &Context) -> GpuResult<Self> {
         Ok(Restir {
@@ -248,6 +250,7 @@ impl RenderMethod for Restir {
         _scene: &Scene,
         gpu_scene: &GpuScene,
         settings: &'a RestirSettings,
+        _animation: &AnimationFrame<'_>,
     ) -> GpuResult<Box<dyn MethodFrames + 'a>> {
         Ok(Box::new(RestirFrames {
             restir: self,
