@@ -439,3 +439,62 @@ fn the_driver_hands_each_frame_the_previous_frames_scene() {
         );
     });
 }
+
+/// Every built-in method renders a sequence frame by frame (the baseline: each frame on its
+/// own), on the first shipped animated scene whose lights it renders: each frame finite and
+/// lit, frames 0 and 1 different images, and frame 1 the bits of frame 1 rendered alone.
+#[test]
+fn every_builtin_method_renders_an_animated_scene_frame_by_frame() {
+    let scenes = [
+        "cornell-circling",
+        "moving-sun-sequence",
+        "car-headlights-sweep",
+    ]
+    .map(|name| common::scene_file(name, 16, 12));
+    let registry = irad::methods::Registry::builtin();
+    with_gpu(|ctx| {
+        for name in registry.names() {
+            let method = registry
+                .from_params(name, &toml::Table::new())
+                .unwrap()
+                .with_count(2)
+                .with_seed(5);
+            let Some(scene) = scenes
+                .iter()
+                .find(|s| method.declines(&s.at_frame(0).unwrap()).is_none())
+            else {
+                panic!("{name} renders none of the shipped animated scenes");
+            };
+            let mut images = vec![];
+            sequence::render_frames(ctx, scene, &method, 0..2, |f, _, out| {
+                let mean = common::luminance_mean(&out.image);
+                assert!(
+                    mean.is_finite() && mean > 0.0,
+                    "{name} frame {f} of {}: mean {mean}",
+                    scene.name
+                );
+                assert_eq!(out.nonfinite_estimates, 0, "{name} frame {f}");
+                images.push(out.image);
+                Ok(())
+            })
+            .unwrap();
+            assert_ne!(images[0].pixels, images[1].pixels, "{name}: frames 0 and 1");
+            let still = scene.at_frame(1).unwrap();
+            let gpu = irad::scene::gpu::GpuScene::upload(ctx, &still).unwrap();
+            let alone = irad::methods::Renderers::default()
+                .run(
+                    ctx,
+                    &sequence::frame_method(&method, 1),
+                    &still,
+                    &gpu,
+                    |_, _| {},
+                )
+                .unwrap();
+            assert_eq!(
+                alone.image.pixels, images[1].pixels,
+                "{name}: frame 1 alone"
+            );
+            eprintln!("{name}: {} frames 0 and 1 rendered", scene.name);
+        }
+    });
+}
