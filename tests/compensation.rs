@@ -70,6 +70,7 @@ fn check_mean(label: &str, images: &[Image], r: f64, noisiest: f64) {
 }
 
 #[test]
+#[ignore = "statistical tier: scripts/test.sh --statistical"]
 fn compensated_clamp_keeps_the_mean_and_removes_spikes_in_the_corner_light() {
     with_gpu(|ctx| {
         let scene = scene_file("failure/corner-light", 32, 32);

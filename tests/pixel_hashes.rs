@@ -2,8 +2,9 @@
 //! counts and fixed seeds, and the image's bits must hash to what tests/data/pixel_hashes.txt
 //! recorded (FNV-1a over every f32 of the image, then each extra map). The bits are the
 //! device's: the file holds lavapipe's (this project's CI device); elsewhere the test only
-//! reports. `IRAD_RECORD_PIXEL_HASHES=1` rewrites the file, for a change that means to alter
-//! images (say which in its commit).
+//! reports. `scripts/record-pixel-hashes.sh` rewrites the file (`IRAD_RECORD_PIXEL_HASHES=1`),
+//! for a change that means to alter images (say which in its commit), after the statistical
+//! tier has passed: these hashes stand in CI for the statistical tests (scripts/test.sh).
 
 mod common;
 

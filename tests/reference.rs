@@ -397,6 +397,7 @@ fn luminance(p: [f32; 3]) -> f64 {
 /// estimated over the first 32 (the thesis:
 /// 26% lower on its glossy scene under five area lights, without visibility).
 #[test]
+#[ignore = "statistical tier: scripts/test.sh --statistical"]
 fn alpha_direct_light_is_unbiased_and_lowers_the_variance() {
     with_gpu(|ctx| {
         let scene = veach_plates(48);
