@@ -107,6 +107,10 @@ pub enum MetricsError {
     },
     #[error("the reference has {count} NaN or infinite values; a reference must be finite")]
     NonFiniteReference { count: u64 },
+    #[error("the image under test has {count} NaN or infinite values; FLIP needs finite images")]
+    NonFiniteTest { count: u64 },
+    #[error("pixels per degree must be in (0, 10000], got {value}")]
+    PixelsPerDegree { value: f32 },
     #[error("variance across seeds needs at least 2 images, got {count}")]
     TooFewImages { count: usize },
 }
@@ -453,7 +457,7 @@ fn relative_bias(mean_x: f64, mean_r: f64) -> f64 {
     }
 }
 
-fn check(image: &Image, which: &'static str) -> Result<(), MetricsError> {
+pub(super) fn check(image: &Image, which: &'static str) -> Result<(), MetricsError> {
     let (width, height) = (image.width, image.height);
     if image.pixels.len() != width as usize * height as usize {
         return Err(MetricsError::Malformed {
@@ -473,7 +477,7 @@ fn check(image: &Image, which: &'static str) -> Result<(), MetricsError> {
     Ok(())
 }
 
-fn count_non_finite(image: &Image) -> u64 {
+pub(super) fn count_non_finite(image: &Image) -> u64 {
     image
         .pixels
         .iter()

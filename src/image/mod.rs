@@ -2,6 +2,7 @@
 //! tone map, the JSON sidecar, and the error metrics every accuracy figure uses.
 
 pub mod exr;
+pub mod flip;
 pub mod metrics;
 pub mod png;
 pub mod preview;
