@@ -237,3 +237,50 @@ fn black_references_and_huge_values_give_finite_errors() {
     assert!(got.mean.is_finite() && got.error_map.iter().all(|e| e.is_finite()));
 }
 
+#[test]
+fn metrics_carry_flip_on_request() {
+    use irad::image::metrics::{compare, compare_with_flip, Metrics, SequenceScore};
+    let all = cases();
+    let (_, reference, test) = &all[1];
+    let ppd = DEFAULT_PIXELS_PER_DEGREE;
+    let plain = compare(test, reference).unwrap();
+    assert_eq!(plain.flip, None);
+    let with = compare_with_flip(test, reference, ppd).unwrap();
+    let want = hdr_flip(reference, test, ppd).unwrap().mean;
+    assert_eq!(with.flip, Some(want));
+    assert_eq!(Metrics { flip: None, ..with }, plain);
+
+    // A NaN in the image under test: the other figures as ever, no FLIP.
+    let mut nan = test.clone();
+    nan.pixels[3][2] = f32::NAN;
+    let m = compare_with_flip(&nan, reference, ppd).unwrap();
+    assert_eq!((m.nan_inf, m.flip), (1, None));
+    assert!(m.rel_mse.is_finite());
+    assert!(compare_with_flip(test, reference, -1.0).is_err());
+
+    // The mean has FLIP when every image has it.
+    let both = Metrics::mean(&[with, with]);
+    assert_eq!(both.flip, Some(want));
+    assert_eq!(Metrics::mean(&[with, plain]).flip, None);
+    assert_eq!(Metrics::mean(&[]).flip, None);
+
+    // Sequences: per frame and in the mean, only when asked for.
+    let frames = [
+        (test, reference),
+        (&all[2].2, &all[2].1),
+        (&all[4].2, &all[4].1),
+    ];
+    let mut score = SequenceScore::with_flip(ppd);
+    let mut plain_score = SequenceScore::default();
+    let mut sum = 0.0;
+    for (x, r) in frames {
+        let m = score.push(x.clone(), r.clone()).unwrap();
+        sum += hdr_flip(r, x, ppd).unwrap().mean;
+        assert!(m.flip.is_some());
+        assert_eq!(plain_score.push(x.clone(), r.clone()).unwrap().flip, None);
+    }
+    let (per_frame, summary) = score.finish();
+    assert_eq!(per_frame.len(), 3);
+    assert!((summary.mean.flip.unwrap() - sum / 3.0).abs() < 1e-15);
+    assert_eq!(plain_score.finish().1.mean.flip, None);
+}

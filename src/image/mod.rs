@@ -10,7 +10,8 @@ pub mod sidecar;
 pub mod tonemap;
 
 pub use metrics::{
-    compare, compare_sequence, Metrics, MetricsError, SequenceMetrics, SequenceScore,
+    compare, compare_sequence, compare_with_flip, Metrics, MetricsError, SequenceMetrics,
+    SequenceScore,
 };
 pub use sidecar::{output_paths, write_all, OutputFiles, PassRecord, RenderRecord};
 
