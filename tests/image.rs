@@ -614,6 +614,7 @@ fn record() -> RenderRecord {
             bias: 7.0e-300,
             outliers: 0.25,
             nan_inf: 0,
+            flip: Some(0.125),
         }),
         warnings: vec!["spot light 2: \"cone\" wider than 90 degrees".into()],
         stats: [("kept_reverse_fraction".to_string(), 0.25)]
@@ -637,7 +638,21 @@ fn json_round_trip() {
     assert_eq!(value["resolution"], serde_json::json!([256, 192]));
     assert_eq!(value["passes"][1]["gpu_ms"], serde_json::Value::Null);
     assert_eq!(value["metrics"]["outliers"], 0.25);
+    assert_eq!(value["metrics"]["flip"], 0.125);
     assert_eq!(RenderRecord::read(&path).unwrap(), rec);
+
+    // A record written before metrics had FLIP reads back with it `None`, which is not written.
+    let mut old = value.clone();
+    old["metrics"].as_object_mut().unwrap().remove("flip");
+    std::fs::write(&path, serde_json::to_string(&old).unwrap()).unwrap();
+    let read = RenderRecord::read(&path).unwrap();
+    let without = metrics::Metrics {
+        flip: None,
+        ..rec.metrics.unwrap()
+    };
+    assert_eq!(read.metrics, Some(without));
+    read.write(&path).unwrap();
+    assert!(!std::fs::read_to_string(&path).unwrap().contains("flip"));
 
     // Without a reference the metrics are null.
     let bare = RenderRecord {

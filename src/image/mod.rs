@@ -2,6 +2,7 @@
 //! tone map, the JSON sidecar, and the error metrics every accuracy figure uses.
 
 pub mod exr;
+pub mod flip;
 pub mod metrics;
 pub mod png;
 pub mod preview;
@@ -9,7 +10,8 @@ pub mod sidecar;
 pub mod tonemap;
 
 pub use metrics::{
-    compare, compare_sequence, Metrics, MetricsError, SequenceMetrics, SequenceScore,
+    compare, compare_sequence, compare_with_flip, Metrics, MetricsError, SequenceMetrics,
+    SequenceScore,
 };
 pub use sidecar::{output_paths, write_all, OutputFiles, PassRecord, RenderRecord};
 

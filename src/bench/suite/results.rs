@@ -473,6 +473,7 @@ mod tests {
                 bias: 0.0,
                 outliers: 0.0,
                 nan_inf: 0,
+                flip: None,
             }),
             flicker: None,
             image_mean_offset: None,
