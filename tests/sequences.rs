@@ -230,8 +230,8 @@ fn frames_are_stills_and_an_interrupted_sequence_resumes_to_the_same_files() {
         .unwrap();
         let m = same.record.metrics.unwrap();
         assert_eq!(
-            (m.mean.rel_mse, m.worst_rel_mse, m.flicker),
-            (0.0, 0.0, 0.0)
+            (m.mean.rel_mse, m.worst_rel_mse, m.flicker, m.mean.flip),
+            (0.0, 0.0, 0.0, Some(0.0))
         );
         assert!(same
             .record
@@ -243,6 +243,13 @@ fn frames_are_stills_and_an_interrupted_sequence_resumes_to_the_same_files() {
         let other = scored(&dir.0.join("other"), 0..FRAMES, &jittered, Some(centres)).unwrap();
         let m = other.record.metrics.unwrap();
         assert!(m.mean.rel_mse > 0.0 && m.flicker > 0.0, "{m:?}");
+        // HDR-FLIP per frame: each frame's and their mean.
+        assert!(m.mean.flip.is_some_and(|f| f > 0.0 && f < 1.0), "{m:?}");
+        assert!(other
+            .record
+            .rendered
+            .iter()
+            .all(|f| f.metrics.as_ref().unwrap().flip.is_some()));
         assert!(m.worst_rel_mse >= m.mean.rel_mse);
 
         // Another sequence (other samples a frame) into the same folder: refused, files kept.

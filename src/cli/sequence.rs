@@ -133,6 +133,9 @@ pub fn run(
             100.0 * m.mean.bias,
             m.flicker
         );
+        if let Some(flip) = m.mean.flip {
+            println!("HDR-FLIP mean over frames {flip:.4}");
+        }
     }
     let previews: Vec<String> = report
         .previews
