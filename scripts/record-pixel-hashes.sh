@@ -2,9 +2,9 @@
 # Records tests/data/pixel_hashes.txt anew, for a change that means to alter images (say which
 # in its commit), after the statistical tier has passed on the change: the hashes stand in
 # CI for the statistical tests (scripts/test.sh), so they are only recorded for images those
-# tests have judged. Takes about 20 minutes on the 2-core machine.
+# tests have judged. Recorded on lavapipe, whatever GPU the machine has.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-bash scripts/test.sh --statistical
-IRAD_RECORD_PIXEL_HASHES=1 cargo test --locked --test pixel_hashes
+IRAD_DEVICE=llvmpipe bash scripts/test.sh --statistical
+IRAD_DEVICE=llvmpipe IRAD_RECORD_PIXEL_HASHES=1 cargo test --locked --test pixel_hashes
 git --no-pager diff --stat -- tests/data/pixel_hashes.txt

@@ -1,20 +1,21 @@
 #!/usr/bin/env bash
 # Runs the test suite on lavapipe with the Khronos validation layer on (any validation
-# message fails a test), after installing what is missing. Extra arguments go to `cargo test`.
+# message fails a test), after installing what is missing. Extra arguments go to `cargo test`
+# (`scripts/test.sh --statistical [CARGO ARGS] [-- HARNESS ARGS]` runs the statistical tier).
 # This is the README's test command and CI's (.ci/run), kept within 12 minutes on the 2-core
 # CI machine, build included.
 #
 # Two tiers (docs/DESIGN.md "Tests"). The long statistical tests, each a mean or an error of
-# many renders against a reference (minutes of lavapipe each; about 9 of the 14 minutes the
-# first pass took when they were all in it), carry `#[ignore = "statistical tier: ..."]` and
-# run with `bash scripts/test.sh --statistical`. CI keeps what can find a change they would
-# judge: tests/pixel_hashes.rs pins the bits of every configuration they render (strategies,
-# clamps, absorption, interleaving, alpha, shared samples, bundle directions, glossy
-# suppression, the map sequence across restir's temporal reuse) at 24 x 16, so a change to any
-# of their images fails CI until the hashes are recorded again, and
+# many renders against a reference (a minute or more of lavapipe each; together most of the
+# first pass's 14 minutes when they were in it), carry `#[ignore = "statistical tier: ..."]`
+# and run with `bash scripts/test.sh --statistical`. CI keeps what can find a change they
+# would judge: tests/pixel_hashes.rs pins the bits of each of their configurations (method,
+# strategy and settings, on their scenes or one lit the same way) at 24 x 16, so a change to
+# their kernels fails CI until the hashes are recorded again, and
 # scripts/record-pixel-hashes.sh records them only after the statistical tier has passed.
-# The analytic tests (closed forms, furnaces, pdfs, tables), setting_maxima's means and the
-# cheaper statistical tests stay in CI.
+# What the pins cannot see is a fault that shows only at the tier's sizes and counts; the
+# analytic tests (closed forms, furnaces, pdfs, tables), setting_maxima's means at every
+# count's maximum and the cheaper statistical tests stay in CI.
 #
 # Without arguments, the GPU tests then run once more the way a discrete GPU runs them
 # (docs/DESIGN.md "Staging" and "Subgroup widths"): IRAD_FORCE_STAGING=1 puts every buffer
@@ -23,9 +24,11 @@
 # staging path and the subgroup-width-dependent kernels (scans, env and luminaire tables, bir's
 # resampling) run at both widths, pixel hashes included.
 
-# The statistical tier's test names, from their attributes.
+# The statistical tier's test names: the first `fn` after each attribute. Integration tests
+# are top-level functions, so the name is what `--exact` matches.
 statistical_tests() {
-  grep -h -A1 '#\[ignore = "statistical tier' tests/*.rs | sed -n 's/^fn \([a-z0-9_]*\).*/\1/p'
+  awk '/#\[ignore = "statistical tier/ { want = 1; next }
+       want && match($0, /fn [A-Za-z0-9_]+/) { print substr($0, RSTART + 3, RLENGTH - 3); want = 0 }' tests/*.rs
 }
 
 set -euo pipefail
@@ -34,8 +37,19 @@ bash scripts/setup.sh
 if [ "${1:-}" = "--statistical" ]; then
   shift
   mapfile -t names < <(statistical_tests)
+  marked=$(grep -c '#\[ignore = "statistical tier' tests/*.rs | awk -F: '{ n += $2 } END { print n }')
+  if [ "${#names[@]}" -eq 0 ] || [ "${#names[@]}" -ne "$marked" ]; then
+    # With no names, --ignored would run every ignored test, the scene generators included.
+    echo "scripts/test.sh: found ${#names[@]} statistical test names for $marked attributes" >&2
+    exit 1
+  fi
+  # cargo's arguments, then the harness's (after a `--` of the caller's, if any).
+  cargo_args=() harness_args=()
+  while [ "$#" -gt 0 ] && [ "$1" != "--" ]; do cargo_args+=("$1"); shift; done
+  [ "$#" -gt 0 ] && shift
+  harness_args=("$@")
   echo "== the statistical tier: ${#names[@]} tests"
-  exec cargo test --locked "$@" -- --ignored --exact "${names[@]}"
+  exec cargo test --locked "${cargo_args[@]}" -- "${harness_args[@]}" --ignored --exact "${names[@]}"
 fi
 cargo test --locked "$@"
 if [ "$#" -eq 0 ]; then

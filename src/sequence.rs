@@ -44,6 +44,9 @@ pub fn render_frames(
     mut on_frame: impl FnMut(u32, &Scene, RenderOutput) -> Result<()>,
 ) -> Result<()> {
     let renderers = Renderers::default();
+    // Only a method that carries state across frames gets the previous frame (a second scene
+    // in memory and a comparison of the two each frame).
+    let carries = !method.across_frames().carries_nothing();
     let mut previous: Option<(u32, Scene)> = None;
     for f in frames {
         let still = scene.at_frame(f)?;
@@ -60,7 +63,7 @@ pub fn render_frames(
             |_, _| {},
         )?;
         on_frame(f, &still, output)?;
-        previous = Some((f, still));
+        previous = carries.then_some((f, still));
     }
     Ok(())
 }
@@ -96,6 +99,9 @@ pub struct SequenceJob<'a> {
     /// A folder of the same animation's reference frames (an earlier sequence, its
     /// frame_NNNN.exr): each frame is scored against its own, and the sequence as a whole.
     pub reference: Option<PathBuf>,
+    /// With a reference: HDR-FLIP per frame too (src/image/flip.rs; about 40 ms a frame at
+    /// 128x96 in release).
+    pub flip: bool,
 }
 
 /// OUT/sequence.json: what was rendered, once, and each frame's record in brief.
@@ -267,14 +273,16 @@ pub fn render_sequence(
             continue;
         }
         let still = job.scene.at_frame(f)?;
-        if !carries.carries_nothing()
-            && previous.is_none()
-            && resumed.last() == Some(&(f.wrapping_sub(1)))
-        {
+        let after_kept = resumed.last() == Some(&(f.wrapping_sub(1)));
+        let first_after_zero = f == job.frames.start && f > 0;
+        if !carries.carries_nothing() && previous.is_none() && (after_kept || first_after_zero) {
+            let why = match after_kept {
+                true => "the first rendered after frames kept from an earlier run",
+                false => "the first of a range that starts after frame 0",
+            };
             warnings.push(format!(
-                "{} carries state across frames ({}); frame {f}, the first rendered after frames \
-                 kept from an earlier run, starts without it, so frames from {f} on may differ \
-                 from a sequence rendered straight through",
+                "{} carries state across frames ({}); frame {f}, {why}, starts without it, so \
+                 frames from {f} on may differ from a sequence rendered straight through from 0",
                 job.method.name(),
                 carries.describe()
             ));
@@ -302,15 +310,17 @@ pub fn render_sequence(
         record.rendered.push(FrameSummary::of(&report.record));
         record.rendered.sort_by_key(|r| r.frame);
         write_json(&record_path, &record)?;
-        previous = Some((f, still));
+        previous = (!carries.carries_nothing()).then_some((f, still));
     }
     progress(total, total, job.frames.end);
     if let Some(dir) = &job.reference {
         // Frame by frame (two in memory), kept frames included: their records may predate the
         // reference.
         let read = |d: &Path, f: u32| exr::read(&frame_stem(d, f).with_extension("exr"));
-        // HDR-FLIP per frame too: about 40 ms a frame at 128x96 in release (src/image/flip.rs).
-        let mut score = image::SequenceScore::with_flip(image::flip::DEFAULT_PIXELS_PER_DEGREE);
+        let mut score = match job.flip {
+            true => image::SequenceScore::with_flip(image::flip::DEFAULT_PIXELS_PER_DEGREE),
+            false => image::SequenceScore::default(),
+        };
         for summary in record.rendered.iter_mut() {
             if job.frames.contains(&summary.frame) {
                 let f = summary.frame;
@@ -374,6 +384,14 @@ fn differs(earlier: &SequenceRecord, now: &SequenceRecord) -> Option<String> {
     }
     if earlier.method != now.method {
         return Some(format!("method {}, now {}", earlier.method, now.method));
+    }
+    // Frames rendered with and without reuse across frames are not one sequence (an empty
+    // value: a record from before it was written down).
+    if !earlier.across_frames.is_empty() && earlier.across_frames != now.across_frames {
+        return Some(format!(
+            "what {} keeps across frames: {}, now {}",
+            now.method, earlier.across_frames, now.across_frames
+        ));
     }
     if earlier.seed != now.seed {
         return Some(format!("seed {}, now {}", earlier.seed, now.seed));

@@ -300,7 +300,6 @@ fn image_means(
 }
 
 #[test]
-#[ignore = "statistical tier: scripts/test.sh --statistical"]
 fn path_tracer_is_unbiased_with_either_sampler() {
     let scene = many_lights(200, 32);
     with_gpu(|ctx| {

@@ -61,9 +61,9 @@ const CASES: &[(&str, &str, &str)] = &[
         "failure/headlight-wall",
         "frames = 2\nseed = 3",
     ),
-    // The configurations of the statistical tests that scripts/test.sh's second pass (staged
-    // buffers, 4-lane subgroups) leaves out, so that their kernels' bits are still checked
-    // there, exactly: a statistical test reads its means and variances off these bits.
+    // The configurations of the statistical tier (scripts/test.sh --statistical, left out of
+    // both CI passes), so that their kernels' bits are checked in CI, exactly, at 8 and 4
+    // lanes and staged: a statistical test reads its means and variances off these bits.
     // reference: alpha_direct_light_is_unbiased_and_lowers_the_variance.
     (
         "reference",
@@ -222,6 +222,73 @@ const CASES: &[(&str, &str, &str)] = &[
         "failure/headlight-wall",
         "frames = 2\nshared_samples = true\nseed = 3",
     ),
+    // The rest of the statistical tier's configurations (scripts/test.sh --statistical), so
+    // that a change to any image those tests judge fails CI: the depth-limited path tracer at
+    // pixel centres (the env, bundles and lightfield tests' references), alpha's direct light
+    // on area lights and with a light share every frame, bundles without the two-bounce term,
+    // without a map, unsuppressed and with an unclamped two-bounce term and on a map sequence,
+    // ir's VPL direct light unclamped and its one-sample direct light, env's light samples
+    // alone with uniform faces.
+    (
+        "reference",
+        "cornell-box",
+        "spp = 4\nmax_depth = 1\npixel_centres = true\nseed = 3",
+    ),
+    (
+        "reference",
+        "glossy-env",
+        "spp = 4\nmax_depth = 2\npixel_centres = true\nseed = 3",
+    ),
+    (
+        "reference",
+        "failure/corner-light",
+        "spp = 4\nmax_depth = 3\npixel_centres = true\nseed = 3",
+    ),
+    (
+        "reference",
+        "cornell-box",
+        "spp = 4\nmax_depth = 1\nalpha_frames = 2\nseed = 3",
+    ),
+    (
+        "reference",
+        "cornell-box",
+        "spp = 2\nmax_depth = 1\nalpha_frames = 2\nseed = 3",
+    ),
+    (
+        "bundles",
+        "spot-light",
+        "frames = 2\niterations = 8\nstrategy = \"vpl\"\ntwo_bounce = false\nseed = 3",
+    ),
+    (
+        "bundles",
+        "failure/glossy-cornell",
+        "frames = 2\niterations = 8\nglossy = \"none\"\ntwo_bounce = false\nseed = 3",
+    ),
+    (
+        "bundles",
+        "failure/corner-light",
+        "frames = 2\niterations = 8\ntwo_bounce_clamp = 0\nseed = 3",
+    ),
+    (
+        "bundles",
+        "moving-sun",
+        "frames = 2\niterations = 8\nseed = 3",
+    ),
+    (
+        "ir",
+        "cornell-box",
+        "vpls = 64\nframes = 2\ndirect = \"vpl\"\nclamp = 0\nseed = 3",
+    ),
+    (
+        "ir",
+        "cornell-box",
+        "vpls = 64\nframes = 2\ndirect_spp = 1\nseed = 3",
+    ),
+    (
+        "env",
+        "glossy-env",
+        "frames = 2\nspp = 8\nstrategy = \"uniform-faces\"\nlight_only = true\nseed = 3",
+    ),
 ];
 
 fn fnv1a(hash: &mut u64, bytes: &[u8]) {
@@ -256,11 +323,16 @@ fn every_method_renders_the_recorded_bits() {
             lines.push(format!("{name} {scene_name} {hash:016x}"));
         }
         let text = lines.join("\n") + "\n";
+        let device = ctx.info().name.clone();
         if std::env::var("IRAD_RECORD_PIXEL_HASHES").is_ok_and(|v| v == "1") {
+            assert!(
+                device.contains("llvmpipe"),
+                "{device}: the file holds lavapipe's bits; record them on lavapipe \
+                 (IRAD_DEVICE=llvmpipe)"
+            );
             std::fs::write(data_file(), &text).unwrap();
             return;
         }
-        let device = ctx.info().name.clone();
         if !device.contains("llvmpipe") {
             eprintln!("{device}: the recorded bits are lavapipe's; this device renders:\n{text}");
             return;

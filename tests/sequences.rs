@@ -162,6 +162,7 @@ fn frames_are_stills_and_an_interrupted_sequence_resumes_to_the_same_files() {
                 frames,
                 out: out.to_path_buf(),
                 exposure: 0.0,
+                flip: reference.is_some(),
                 reference,
             };
             sequence::render_sequence(ctx, &job, |_, _, _| {}, |_, _| {})
@@ -355,6 +356,8 @@ mod probe {
                 // The previous frame's scene is the one at_frame gives, not this frame's.
                 assert_ne!(light(p.scene), light(scene));
             }
+            // The light moves every frame, and the state is invalidated by lights.
+            assert!(!animation.keeps(&Self::ACROSS_FRAMES.carries[0]));
             SEEN.lock().unwrap().push((
                 animation.frame,
                 previous.map(|p| p.frame),
@@ -428,6 +431,7 @@ fn the_driver_hands_each_frame_the_previous_frames_scene() {
             out: out.clone(),
             exposure: 0.0,
             reference: None,
+            flip: false,
         };
         sequence::render_sequence(ctx, &job(0..2), |_, _, _| {}, |_, _| {}).unwrap();
         seen();
@@ -441,6 +445,22 @@ fn the_driver_hands_each_frame_the_previous_frames_scene() {
                 .warnings
                 .iter()
                 .any(|w| w.contains("probe carries state across frames") && w.contains("frame 2")),
+            "{:?}",
+            report.warnings
+        );
+
+        // A range that starts after frame 0 starts without state, and says so.
+        let out = dir.0.join("probe-range");
+        let job = SequenceJob {
+            out: out.clone(),
+            ..job(2..3)
+        };
+        let report = sequence::render_sequence(ctx, &job, |_, _, _| {}, |_, _| {}).unwrap();
+        assert!(
+            report
+                .warnings
+                .iter()
+                .any(|w| w.contains("frame 2, the first of a range that starts after frame 0")),
             "{:?}",
             report.warnings
         );
@@ -489,11 +509,12 @@ fn every_builtin_method_renders_an_animated_scene_frame_by_frame() {
             let still = scene.at_frame(1).unwrap();
             let gpu = irad::scene::gpu::GpuScene::upload(ctx, &still).unwrap();
             let alone = irad::methods::Renderers::default()
-                .run(
+                .run_frame(
                     ctx,
                     &sequence::frame_method(&method, 1),
                     &still,
                     &gpu,
+                    &irad::methods::AnimationFrame::alone(1),
                     |_, _| {},
                 )
                 .unwrap();

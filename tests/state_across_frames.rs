@@ -100,7 +100,6 @@ fn method(name: &str, count: u32, seed: u32) -> Method {
 }
 
 #[test]
-#[ignore = "statistical tier: scripts/test.sh --statistical"]
 fn every_method_that_renders_a_map_follows_a_sequence_that_dims_turns_and_brightens() {
     with_gpu(|ctx| {
         let scene = map_sequence_scene();

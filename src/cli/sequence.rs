@@ -45,6 +45,7 @@ fn parse_range(text: &str, frames: u32) -> Result<Range<u32>> {
     Ok(a..end)
 }
 
+#[allow(clippy::too_many_arguments)]
 pub fn run(
     options: &ContextOptions,
     scene: &Scene,
@@ -53,6 +54,7 @@ pub fn run(
     out: Option<PathBuf>,
     exposure: f32,
     reference: Option<PathBuf>,
+    flip: bool,
 ) -> Result<()> {
     let Some(animation) = &scene.animation else {
         bail!(
@@ -89,6 +91,7 @@ pub fn run(
         out,
         exposure,
         reference,
+        flip,
     };
     let report = sequence::render_sequence(
         &ctx,

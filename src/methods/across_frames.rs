@@ -1,15 +1,21 @@
-//! State across animation frames (docs/DESIGN.md "State across frames"): what a method says it
+//! State across animation frames (docs/DESIGN.md "Animation"): what a method says it
 //! keeps from one animation frame to the next and what invalidates it (`AcrossFrames`, a
 //! constant of every `RenderMethod`), and what the driver hands a render about its frame
 //! (`AnimationFrame`: the frame's number and the previous frame's scene with what changed).
 //!
 //! Each animation frame is a render of its own (src/sequence.rs): the driver starts a new
-//! accumulation every frame, so nothing but what a method keeps itself (in its kernels'
-//! object, one per `Renderers`, which a sequence keeps for all its frames) crosses frames.
-//! Every built-in method renders each frame from scratch today (`AcrossFrames::NOTHING`, the
-//! baseline every reuse is judged against); a method that keeps tables, VPLs or reservoirs
-//! declares them with the changes that invalidate them, and checks `PreviousFrame::changed`
-//! against them before it reuses anything.
+//! accumulation every frame, so nothing but what a method keeps itself crosses frames. Every
+//! built-in method renders each frame from scratch today (`AcrossFrames::NOTHING`, the
+//! baseline every reuse is judged against). A method that keeps tables, VPLs or reservoirs
+//! declares them with the changes that invalidate them and keeps them in its kernels' object
+//! (one per `Renderers`, which a sequence keeps for all its frames; behind a `RefCell`), with
+//! the frame number they were made for. It reuses a piece only where `AnimationFrame::keeps`
+//! says so: the previous frame was rendered just before by the same `Renderers` and nothing
+//! that invalidates the piece changed. Where `previous` is None (a still, a sequence's first
+//! frame, a frame after frames kept from disk) it drops what it holds. Only the previous
+//! frame's CPU scene is handed on; its GPU scene (map texels, light table) and G-buffer are
+//! gone by then, so a method that needs them (restir's temporal reuse across animation
+//! frames) keeps its own copy.
 
 use std::fmt;
 
@@ -72,8 +78,7 @@ impl Changes {
             (Change::Emission, emission(previous) != emission(this)),
             (
                 Change::Environment,
-                previous.environment != this.environment
-                    || previous.environment_sequence != this.environment_sequence,
+                previous.environment != this.environment,
             ),
             (Change::Luminaires, previous.luminaires != this.luminaires),
         ];
@@ -174,9 +179,10 @@ pub struct AnimationFrame<'a> {
     /// The frame's number (0 for a still).
     pub frame: u32,
     /// The frame rendered just before this one with the same `Renderers`, when it is this
-    /// frame's predecessor in the animation: None for a still render, for the first frame a
-    /// sequence renders (a resumed sequence's too: no state is stored on disk), and after a
-    /// frame that failed.
+    /// frame's predecessor in the animation and the method carries state across frames
+    /// (`AcrossFrames`): None for a still render, for the first frame a sequence renders (a
+    /// resumed sequence's too: no state is stored on disk), and for a method that keeps
+    /// nothing.
     pub previous: Option<PreviousFrame<'a>>,
 }
 
@@ -193,5 +199,12 @@ impl AnimationFrame<'_> {
             frame,
             previous: None,
         }
+    }
+
+    /// Whether `carried`, as made for the previous frame, may be reused in this one: there
+    /// is a previous frame and none of the changes that invalidate it happened.
+    pub fn keeps(&self, carried: &Carried) -> bool {
+        self.previous
+            .is_some_and(|p| !p.changed.any_of(carried.invalidated_by))
     }
 }
