@@ -1405,3 +1405,195 @@ fn an_animated_scene_in_a_suite_is_refused() {
         "{e}"
     );
 }
+
+/// Copies the animated Cornell box (cornell-circling, which reads ../cornell-box's mesh) under
+/// `base` (scene folders of a test's own: converged references are written beside them).
+fn copy_circling_scene(base: &Path) {
+    for (folder, files) in [
+        ("cornell-circling", &["scene.toml"][..]),
+        ("cornell-box", &["cornell-box.obj", "cornell-box.mtl"][..]),
+    ] {
+        fs::create_dir_all(base.join(folder)).unwrap();
+        for f in files {
+            fs::copy(scenes_dir().join(folder).join(f), base.join(folder).join(f)).unwrap();
+        }
+    }
+}
+
+/// A suite of the copied animated Cornell box at 8x8, frames 0..3, and two frame budgets of
+/// the path tracer; NAME is replaced by the suite's name.
+const CIRCLING_SUITE: &str = r#"
+name = "NAME"
+warmup = 0
+repeats = 1
+flicker_frames = 0
+[reference]
+spp = 4
+[[scene]]
+path = "cornell-circling/scene.toml"
+resolution = [8, 8]
+frames = "0..3"
+[[method]]
+method = "reference"
+label = "pt"
+budgets = [{ frame_ms = 1 }, { frame_ms = 4 }]
+"#;
+
+/// The converged-reference folders beside the copied cornell-circling, by name.
+fn frame_reference_dirs(base: &Path) -> Vec<String> {
+    let Ok(entries) = fs::read_dir(base.join("cornell-circling").join("converged")) else {
+        return vec![];
+    };
+    let mut names: Vec<String> = entries
+        .map(|e| e.unwrap().file_name().into_string().unwrap())
+        .collect();
+    names.sort();
+    names
+}
+
+/// Issue 45 item 5: `irad bench references` renders one converged reference per animation
+/// frame (the suite's `frames`), keyed by the scene's hash and the frame (the frame's scene
+/// has the file's hash); a frame stopped after one chunk and resumed has the bits of one run
+/// straight through; `--shard I/N` takes frames f with f mod N = I, and a bad I/N is refused;
+/// the suite reads each frame's reference and names frames without one.
+#[test]
+fn per_frame_references_resume_shard_and_are_used_by_suites() {
+    use irad::bench::suite::converged::{self, ConvergedKey, ExtendOptions, Progress};
+    use irad::methods::Renderers;
+    use std::sync::atomic::{AtomicBool, Ordering};
+
+    let dir = temp_dir("frame-references");
+    let text = CIRCLING_SUITE.replace("NAME", "frames");
+    let (straight, parts) = (dir.join("straight"), dir.join("parts"));
+    copy_circling_scene(&straight);
+    copy_circling_scene(&parts);
+    fs::write(parts.join("frames.toml"), &text).unwrap();
+    let suite = Suite::parse("frames.toml", &text, &parts).unwrap();
+    let s = &suite.scenes[0];
+    assert_eq!(s.frames, Some(0..3));
+    // at_frame keeps the file's hash, so the key carries the frame.
+    let f1 = s.scene.at_frame(1).unwrap();
+    assert_eq!(f1.content_hash, s.scene.content_hash);
+    let key = |f: u32| ConvergedKey::of_frame(&s.scene, &s.reference, f);
+    assert_ne!(key(0), key(1));
+    assert_ne!(key(0).dir(&parts), key(1).dir(&parts));
+    assert_eq!(ConvergedKey::of_frame(&f1, &s.reference, 1), key(1));
+    common::with_gpu(|ctx| {
+        let renderers = Renderers::default();
+        let extend = |base: &Path, chunks: u32| {
+            let suite = Suite::parse("frames.toml", &text, base).unwrap();
+            let s = &suite.scenes[0];
+            let stop = AtomicBool::new(false);
+            let options = ExtendOptions {
+                target_rel_mse: 1e-12,
+                deadline: None,
+                chunk_spp: 2,
+                stop: Some(&stop),
+            };
+            converged::extend_frame(ctx, &renderers, &s.scene, 1, &s.reference, &options, |e| {
+                if let Progress::Saved { record, .. } = e {
+                    if record.chunks >= chunks {
+                        stop.store(true, Ordering::SeqCst);
+                    }
+                }
+            })
+            .unwrap()
+        };
+        let whole = extend(&straight, 3);
+        extend(&parts, 1);
+        let resumed = extend(&parts, 3);
+        assert_eq!(resumed.record.key.frame, Some(1));
+        assert_eq!(resumed.record.spp, whole.record.spp);
+        assert_eq!(resumed.record.sessions.len(), 2);
+        let bits = |c: &converged::Converged| -> Vec<u32> {
+            c.halves
+                .iter()
+                .flat_map(|h| h.pixels.iter().flatten().map(|v| v.to_bits()))
+                .collect()
+        };
+        assert_eq!(bits(&resumed), bits(&whole), "resumed frame 1 differs");
+    });
+    // The CLI: shard 1/2 of frames 0..3 is frame 1 (already converged to 6 spp here; the
+    // target is met at once), shard 0/2 frames 0 and 2; a bad shard is refused.
+    let suite_file = parts.join("frames.toml");
+    let suite_arg = suite_file.to_str().unwrap();
+    let refs = |shard: &str| {
+        irad(&[
+            "bench",
+            "references",
+            suite_arg,
+            "--chunk-spp",
+            "4",
+            "--target",
+            "0.5",
+            "--shard",
+            shard,
+        ])
+    };
+    for bad in ["2/2", "1/0", "x"] {
+        let out = refs(bad);
+        assert!(!out.status.success(), "--shard {bad} accepted");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains("--shard") && err.contains("I/N"), "{err}");
+    }
+    let before = frame_reference_dirs(&parts);
+    assert_eq!(before.len(), 1, "{before:?}");
+    let out = refs("1/2");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains("cornell-circling frame 1:"), "{stdout}");
+    assert!(
+        !stdout.contains("frame 0:") && !stdout.contains("frame 2:"),
+        "{stdout}"
+    );
+    assert_eq!(frame_reference_dirs(&parts), before);
+    let out = refs("0/2");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        stdout.contains("frame 0:") && stdout.contains("frame 2:"),
+        "{stdout}"
+    );
+    let dirs = frame_reference_dirs(&parts);
+    assert_eq!(dirs.len(), 3, "{dirs:?}");
+    for (f, d) in dirs.iter().enumerate() {
+        assert!(d.starts_with(&format!("8x8-frame{f:04}-")), "{d}");
+        let record = converged::load(&parts.join("cornell-circling/converged").join(d))
+            .unwrap()
+            .unwrap()
+            .record;
+        assert_eq!(record.key.frame, Some(f as u32));
+        let session = &record.sessions[0];
+        assert!(!session.device.is_empty() && !session.commit.is_empty());
+        assert!(record.total_spp() > 0 && record.gpu_ms > 0.0);
+    }
+    // The suite uses each frame's; with frame 2's moved away, it says frame 2 has none and
+    // uses the cache's for it.
+    fs::rename(
+        parts.join("cornell-circling/converged").join(&dirs[2]),
+        dir.join("moved"),
+    )
+    .unwrap();
+    let out_dir = dir.join("out");
+    common::with_gpu(|ctx| {
+        let results = run_suite(ctx, &suite, &out_dir, &dir.join("cache"), Shard::WHOLE);
+        let r = &results.references["cornell-circling"];
+        let converged: Vec<(u32, bool)> = r.frames.iter().map(|f| (f.frame, f.converged)).collect();
+        assert_eq!(converged, [(0, true), (1, true), (2, false)]);
+        assert!(!r.converged);
+    });
+    let report = fs::read_to_string(out_dir.join("report.md")).unwrap();
+    assert!(
+        report.contains("no converged reference for frames 2"),
+        "{report}"
+    );
+    let _ = fs::remove_dir_all(&dir);
+}
