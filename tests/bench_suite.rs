@@ -1597,3 +1597,174 @@ fn per_frame_references_resume_shard_and_are_used_by_suites() {
     );
     let _ = fs::remove_dir_all(&dir);
 }
+
+/// Issue 45 item 7: a suite with frame-time budgets on an animated scene calibrates the count
+/// per frame budget, renders the frames, and its results hold per-frame figures (one per frame
+/// of its `frames`), the worst frame and the flicker; the CSV has them, the report a
+/// frame-time table and a per-frame chart with a line per run and a point per frame, and the
+/// relMSE-vs-time chart is per frame.
+#[test]
+fn a_frame_time_suite_records_per_frame_figures_and_flicker() {
+    let dir = temp_dir("frame-time");
+    copy_circling_scene(&dir);
+    let text = CIRCLING_SUITE
+        .replace("NAME", "frame-time")
+        .replace("repeats = 1", "repeats = 2");
+    let suite = Suite::parse("frame-time.toml", &text, &dir).unwrap();
+    assert!(suite.runs.iter().all(|r| r.frame_ms.is_some()));
+    let out = dir.join("out");
+    common::with_gpu(|ctx| {
+        run_suite(ctx, &suite, &out, &dir.join("cache"), Shard::WHOLE);
+    });
+    let results = check_outputs(&out);
+    assert!(results.complete);
+    assert_eq!(results.runs.len(), 2);
+    let frames = &results.references["cornell-circling"].frames;
+    assert_eq!(
+        frames.iter().map(|f| f.frame).collect::<Vec<_>>(),
+        [0, 1, 2]
+    );
+    for r in &results.runs {
+        assert_eq!(r.status, Status::Ok, "{}: {}", r.id, r.note);
+        let seq = r.sequence.as_ref().unwrap();
+        assert_eq!(seq.frames, [0, 3]);
+        assert_eq!(seq.calibration_frame, 1);
+        assert_eq!(seq.per_frame.len(), 3);
+        assert_eq!(r.scored, 6);
+        assert!(r.calibrated_count.is_some() && !r.calibration.is_empty());
+        let rel: Vec<f64> = seq.per_frame.iter().map(|p| p.metrics.rel_mse).collect();
+        assert!(rel.iter().all(|e| e.is_finite() && *e > 0.0), "{rel:?}");
+        // The run's relMSE is the mean over frames (each the mean over seeds).
+        let mean = rel.iter().sum::<f64>() / 3.0;
+        assert!((r.metrics.unwrap().rel_mse - mean).abs() < 1e-9 * mean);
+        let worst = seq
+            .per_frame
+            .iter()
+            .max_by(|a, b| a.metrics.rel_mse.total_cmp(&b.metrics.rel_mse))
+            .unwrap();
+        assert_eq!(seq.worst_frame, worst.frame);
+        assert_eq!(seq.worst_rel_mse, Some(worst.metrics.rel_mse));
+        assert!(seq.flicker.is_some_and(|f| f.is_finite() && f > 0.0));
+        assert!(seq.per_frame.iter().all(|p| p.gpu_ms > 0.0));
+        assert!(r.gpu_ms.is_some_and(|t| t > 0.0));
+    }
+    let rows = csv_rows(&out.join("results.csv"));
+    for (row, r) in rows.iter().zip(&results.runs) {
+        assert_eq!(row["frames"], "0..3");
+        assert_eq!(row["frame_ms"], r.frame_ms.unwrap().to_string());
+        let seq = r.sequence.as_ref().unwrap();
+        assert_eq!(row["worst_frame"], seq.worst_frame.to_string());
+        assert_eq!(row["sequence_flicker"], seq.flicker.unwrap().to_string());
+    }
+    let svg =
+        fs::read_to_string(out.join(suite::output::frames_chart_path("cornell-circling"))).unwrap();
+    let points = chart::read_frames_svg(&svg);
+    assert_eq!(points.len(), 6, "{points:?}");
+    for r in &results.runs {
+        let name = format!("{} {}", r.label, r.budget);
+        for p in &r.sequence.as_ref().unwrap().per_frame {
+            assert!(
+                points.contains(&(name.clone(), p.frame, p.metrics.rel_mse)),
+                "{name} frame {}",
+                p.frame
+            );
+        }
+    }
+    let time_chart =
+        fs::read_to_string(out.join(suite::output::chart_path("cornell-circling"))).unwrap();
+    assert!(time_chart.contains("GPU time per frame"));
+    let report = fs::read_to_string(out.join("report.md")).unwrap();
+    for needle in [
+        "charts/cornell-circling-frames.svg",
+        "| worst frame | worst relMSE | flicker |",
+        "Every frame's is a converged reference",
+        "No frame has a converged reference",
+    ] {
+        assert_eq!(
+            report.contains(needle),
+            needle != "Every frame's is a converged reference",
+            "{needle}: {report}"
+        );
+    }
+    let _ = fs::remove_dir_all(&dir);
+}
+
+/// Animated scenes take frame-time budgets only, and frame-time budgets animated scenes only:
+/// each wrong combination is refused at load, naming the field and the scene.
+#[test]
+fn animated_scenes_and_frame_budgets_refuse_bad_combinations_naming_the_field() {
+    let dir = temp_dir("frame-time-refusals");
+    copy_circling_scene(&dir);
+    copy_plane_scene(&dir.join("plane"));
+    let base = CIRCLING_SUITE.replace("NAME", "refusals");
+    let still = PLANE_SUITE.replace("NAME", "refusals");
+    let cases: Vec<(String, &str, &str)> = vec![
+        (
+            base.replace("{ frame_ms = 1 }", "{ time_ms = 1 }"),
+            "method[0].budgets[0].time_ms = 1",
+            "animated",
+        ),
+        (
+            base.replace("{ frame_ms = 1 }", "{ spp = 2 }"),
+            "method[0].budgets[0].spp = 2",
+            "animated",
+        ),
+        (
+            base.replace("{ frame_ms = 1 }", "{}"),
+            "method[0].budgets[0] = { defaults }",
+            "frame_ms",
+        ),
+        (
+            base.replace("label = \"pt\"", "label = \"pt\"\nparams = { spp = 2 }"),
+            "method[0].params.spp = 2",
+            "calibrates spp itself",
+        ),
+        (
+            base.replace("{ frame_ms = 1 }", "{ frame_ms = 1, time_ms = 2 }"),
+            "method[0].budgets[0].frame_ms = 1",
+            "not both",
+        ),
+        (
+            base.replace("{ frame_ms = 1 }", "{ frame_ms = -1 }"),
+            "method[0].budgets[0].frame_ms = -1",
+            "GPU milliseconds",
+        ),
+        (
+            base.replace("\"0..3\"", "\"2..2\""),
+            "scene[0].frames = \"2..2\"",
+            "24 frames",
+        ),
+        (
+            base.replace("\"0..3\"", "\"0..25\""),
+            "scene[0].frames = \"0..25\"",
+            "24 frames",
+        ),
+        (
+            still.replace("{ spp = 1 }", "{ frame_ms = 5 }"),
+            "method[0].budgets[0].frame_ms = 5",
+            "is not animated",
+        ),
+        (
+            still.replace(
+                "path = \"plane/scene.toml\"",
+                "path = \"plane/scene.toml\"\nframes = \"0..2\"",
+            ),
+            "scene[0].frames = \"0..2\"",
+            "not animated",
+        ),
+    ];
+    for (text, field, problem) in cases {
+        let e = Suite::parse("refusals.toml", &text, &dir)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains(field) && e.contains(problem), "{field}: {e}");
+    }
+    // A mixed suite is fine where each method is limited to its kind of scene.
+    let mixed = format!(
+        "{base}\n[[scene]]\npath = \"plane/scene.toml\"\nresolution = [8, 8]\n[[method]]\nmethod = \"reference\"\nlabel = \"still\"\nscenes = [\"plane\"]\nbudgets = [{{ spp = 1 }}]\n"
+    )
+    .replace("label = \"pt\"", "label = \"pt\"\nscenes = [\"cornell-circling\"]");
+    let suite = Suite::parse("refusals.toml", &mixed, &dir).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(suite.runs.len(), 3);
+    let _ = fs::remove_dir_all(&dir);
+}
