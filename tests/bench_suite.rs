@@ -1387,7 +1387,8 @@ fn a_refused_resume_names_the_edit() {
     let _ = fs::remove_dir_all(&dir);
 }
 
-/// An animated scene in a suite is refused by name: suites time still scenes.
+/// An animated scene in a suite with still budgets (a fixed count) is refused naming the
+/// budget and the scene: its runs are timed per frame (`frame_ms`).
 #[test]
 fn an_animated_scene_in_a_suite_is_refused() {
     let text = TINY_SUITE.replace(
@@ -1399,9 +1400,9 @@ fn an_animated_scene_in_a_suite_is_refused() {
         .unwrap()
         .to_string();
     assert!(
-        e.contains("scene[1].path")
-            && e.contains("animated (24 frames)")
-            && e.contains("--sequence"),
+        e.contains("method[0].budgets[0].spp = 1")
+            && e.contains("scene[1] (cornell-circling) is animated (24 frames)")
+            && e.contains("frame_ms"),
         "{e}"
     );
 }
