@@ -6,7 +6,9 @@
 
 use std::fmt::Write as _;
 
-use super::layout::{decade_label, decade_range, labelled_decades, FONT, LEGEND_STEP, RADIUS};
+use super::layout::{
+    decade_label, decade_range, labelled_decades, text_width, FONT, LEGEND_STEP, RADIUS,
+};
 use super::svg::{esc, style};
 
 /// One line: a name and (frame, value) points.
@@ -23,7 +25,8 @@ pub struct FrameChart {
     pub series: Vec<FrameSeries>,
 }
 
-const WIDTH: f64 = 720.0;
+/// The canvas's width at least (it widens for a long legend).
+const MIN_WIDTH: f64 = 720.0;
 const LEFT: f64 = 72.0;
 const TOP: f64 = 44.0;
 const RIGHT: f64 = 500.0;
@@ -43,6 +46,12 @@ impl FrameChart {
         let x_at = |f: u32| LEFT + (RIGHT - LEFT) * f64::from(f - f0) / f64::from(f1 - f0);
         let y_at = |v: f64| BOTTOM - (BOTTOM - TOP) * (v.log10() - y0) / (y1 - y0);
         let legend_rows = self.series.len() as f64;
+        let legend = self
+            .series
+            .iter()
+            .map(|s| text_width(&s.name, FONT))
+            .fold(0.0, f64::max);
+        let width = MIN_WIDTH.max(RIGHT + 42.0 + legend + 8.0);
         let height = (BOTTOM + 60.0).max(TOP + 20.0 + legend_rows * LEGEND_STEP);
         let mut s = String::new();
         let mut line = |t: String| {
@@ -50,10 +59,10 @@ impl FrameChart {
             s.push('\n');
         };
         line(format!(
-            r#"<svg xmlns="http://www.w3.org/2000/svg" width="{WIDTH}" height="{height}" viewBox="0 0 {WIDTH} {height}" font-family="sans-serif" font-size="{FONT}">"#
+            r#"<svg xmlns="http://www.w3.org/2000/svg" width="{width}" height="{height}" viewBox="0 0 {width} {height}" font-family="sans-serif" font-size="{FONT}">"#
         ));
         line(format!(
-            r#"<rect width="{WIDTH}" height="{height}" fill="white"/>"#
+            r#"<rect width="{width}" height="{height}" fill="white"/>"#
         ));
         line(format!(
             r#"<text x="{}" y="24" text-anchor="middle" font-size="14">{}</text>"#,

@@ -618,13 +618,14 @@ fn check_reference_seeds(
     counts: &Counts,
 ) -> Result<(), SuiteError> {
     let seed = counts.seed;
-    // A sequence's frame f renders with its run's seed + f (`sequence::frame_seed`).
+    // A frame-time run's sequence r renders frame f with seed + r B + f, B the end of its
+    // scene's frames (suite/sequence.rs).
     let frames = scenes
         .iter()
         .filter_map(|s| s.frames.as_ref().map(|r| u64::from(r.end)))
         .max()
-        .unwrap_or(0);
-    let renders = counts.warmup as u64 + counts.repeats.max(counts.flicker_frames) as u64 + frames;
+        .unwrap_or(1);
+    let renders = counts.warmup as u64 + counts.repeats.max(counts.flicker_frames) as u64 * frames;
     let run_seed = |s: u32| (s.wrapping_sub(seed) as u64) < renders;
     for (i, s) in scenes.iter().enumerate() {
         // The reference is two halves, seeds r and r + 1 (references.rs).
@@ -635,7 +636,7 @@ fn check_reference_seeds(
                 "reference.seed",
                 r.to_string(),
                 &format!(
-                    "the reference of scene[{i}] would share random numbers with the runs, which use seeds {seed}..{} (seed + warm-up + repeats or flicker frames + an animated scene's frames): pick a seed far from them",
+                    "the reference of scene[{i}] would share random numbers with the runs, which use seeds {seed}..{} (seed + warm-up + repeats or flicker frames, times an animated scene's frames): pick a seed far from them",
                     seed as u64 + renders
                 ),
             ));
