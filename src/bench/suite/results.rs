@@ -410,6 +410,8 @@ const COLUMNS: &[Column] = &[
     ("device", |r| r.device.clone()),
     ("driver", |r| r.driver.clone()),
     ("scene_hash", |r| r.scene_hash.clone()),
+    ("note", |r| r.note.clone()),
+    // Frame-time runs (animated scenes); after the older columns, which keep their places.
     ("frame_ms", |r| figure(r.frame_ms)),
     ("frames", |r| {
         r.sequence
@@ -429,7 +431,6 @@ const COLUMNS: &[Column] = &[
     ("sequence_flicker", |r| {
         figure(r.sequence.as_ref().and_then(|s| s.flicker))
     }),
-    ("note", |r| r.note.clone()),
 ];
 
 /// The CSV's first columns, in order (the names of `COLUMNS`).
@@ -687,7 +688,8 @@ mod tests {
              expected_failure,home,pareto,width,height,seed,warmup,repeats,flicker_frames,scored,\
              gpu_ms,wall_ms,rel_mse,rel_mse_min,rel_mse_max,rmse,lab_error,bias,outliers,nan_inf,flicker,\
              image_mean_offset,image_mean_spread,nonfinite_estimates,reference_spp,reference_seed,\
-             reference_rel_mse,device,driver,scene_hash,note,param:spp,param:strategy,\
+             reference_rel_mse,device,driver,scene_hash,note,frame_ms,frames,worst_frame,\
+             worst_frame_rel_mse,sequence_flicker,param:spp,param:strategy,\
              param:vpls,pass_ms:shade,pass_ms:trace,stat:kept"
         );
         assert!(header.starts_with(&FIXED_COLUMNS.join(",")));
@@ -709,9 +711,9 @@ mod tests {
             "3,cornell-box/12.5/0.031,cornell-box,embedded:cornell-box,reference,pt,time 20ms,\
              20,7,false,ok,false,true,true,1,1,0,0,1,0,1,12.5,,0.031,0.02,0.04,0,0,0,0,0,0.002,-0.01,0.05,0,1,9,\
              0.00001,\
-             \"gpu, \"\"fast\"\"\",,,\"two\nlines\",,bir,64,,3.25,0.75\n\
+             \"gpu, \"\"fast\"\"\",,,\"two\nlines\",,,,,,,bir,64,,3.25,0.75\n\
              4,veach/1/0.5,veach,,reference,pt,,,,false,declined,true,false,false,1,1,0,0,1,0,1,,,,,,,,,,\
-             ,,,,0,1,9,,cpu,,,,16,,,,,\n"
+             ,,,,0,1,9,,cpu,,,,,,,,,16,,,,,\n"
         );
     }
 }
