@@ -306,13 +306,18 @@ fn equal_time_table(runs: &[&RunRecord]) -> String {
             .collect();
         let _ = writeln!(
             md,
-            "Equal time, {budget} GPU ms ({HOME_MARK}: the scene's home method; image mean: the \
+            "Equal time, {budget} GPU ms{} ({HOME_MARK}: the scene's home method; image mean: the \
              mean over the run's images (successive seeds) of the image mean against the \
              reference's; spread: the standard deviation of those images' means, how far one \
              render's brightness moves from the next's; net relMSE: relMSE less the reference's own, estimated from its two \
              halves, so an estimate of the error against the converged image (- where the \
              reference's noise swamps it); speed: the path tracer's net relMSE x GPU time over \
-             the run's, both from this device):\n"
+             the run's, both from this device):\n",
+            if at.iter().any(|r| r.frame_ms.is_some()) {
+                " per frame (figures: means over the frames and seeds; the reference's own relMSE: the highest of the frames')"
+            } else {
+                ""
+            }
         );
         md +=
             "| | method | count | GPU ms | relMSE | net relMSE | image mean | spread | outliers |";
