@@ -391,11 +391,16 @@ fn found_reference(
     on: &mut impl FnMut(Event),
 ) -> std::result::Result<FoundReference, String> {
     let scene = &suite_scene.scene;
+    // Progress names the frame of an animated scene.
+    let label = match frame {
+        Some(f) => format!("{} frame {f}", scene.name),
+        None => scene.name.clone(),
+    };
     let stored = converged::lookup_frame(scene, &suite_scene.reference, frame)
         .map_err(|e| format!("{e:#}"))?;
     if let Some(c) = stored {
         on(Event::Reference {
-            scene: &scene.name,
+            scene: &label,
             done: 1,
             total: 1,
             cached: true,
@@ -422,7 +427,7 @@ fn found_reference(
         &suite_scene.reference,
         |done, total| {
             on(Event::Reference {
-                scene: &scene.name,
+                scene: &label,
                 done,
                 total,
                 cached: false,
@@ -432,7 +437,7 @@ fn found_reference(
     .map_err(|e| format!("{e:#}"))?;
     if reference.reused {
         on(Event::Reference {
-            scene: &scene.name,
+            scene: &label,
             done: 1,
             total: 1,
             cached: true,
