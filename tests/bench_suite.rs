@@ -1613,9 +1613,27 @@ fn a_frame_time_suite_records_per_frame_figures_and_flicker() {
         .replace("repeats = 1", "repeats = 2");
     let suite = Suite::parse("frame-time.toml", &text, &dir).unwrap();
     assert!(suite.runs.iter().all(|r| r.frame_ms.is_some()));
-    let out = dir.join("out");
+    let (out, cache) = (dir.join("out"), dir.join("cache"));
     common::with_gpu(|ctx| {
-        run_suite(ctx, &suite, &out, &dir.join("cache"), Shard::WHOLE);
+        let whole = run_suite(ctx, &suite, &out, &cache, Shard::WHOLE);
+        // Interrupted after its first run: resumed with that run (its calibrated count and
+        // per-frame figures) kept as it was, the second rendered again.
+        let mut cut = whole.clone();
+        cut.runs.truncate(1);
+        cut.complete = false;
+        cut.runs[0].wall_ms = Some(123456.0);
+        fs::write(out.join("results.json"), cut.json()).unwrap();
+        let mut events = Vec::new();
+        let resumed =
+            run_suite_events(ctx, &suite, &out, &cache, Shard::WHOLE, &mut events).unwrap();
+        assert_eq!(events, ["resumed [0]"]);
+        assert_eq!(
+            resumed.runs[0].wall_ms,
+            Some(123456.0),
+            "run 0 rendered again"
+        );
+        assert_eq!(resumed.runs[0].sequence, whole.runs[0].sequence);
+        assert!(resumed.complete);
     });
     let results = check_outputs(&out);
     assert!(results.complete);
