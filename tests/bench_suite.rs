@@ -1387,7 +1387,8 @@ fn a_refused_resume_names_the_edit() {
     let _ = fs::remove_dir_all(&dir);
 }
 
-/// An animated scene in a suite is refused by name: suites time still scenes.
+/// An animated scene in a suite with still budgets (a fixed count) is refused naming the
+/// budget and the scene: its runs are timed per frame (`frame_ms`).
 #[test]
 fn an_animated_scene_in_a_suite_is_refused() {
     let text = TINY_SUITE.replace(
@@ -1399,9 +1400,390 @@ fn an_animated_scene_in_a_suite_is_refused() {
         .unwrap()
         .to_string();
     assert!(
-        e.contains("scene[1].path")
-            && e.contains("animated (24 frames)")
-            && e.contains("--sequence"),
+        e.contains("method[0].budgets[0].spp = 1")
+            && e.contains("scene[1] (cornell-circling) is animated (24 frames)")
+            && e.contains("frame_ms"),
         "{e}"
     );
+}
+
+/// Copies the animated Cornell box (cornell-circling, which reads ../cornell-box's mesh) under
+/// `base` (scene folders of a test's own: converged references are written beside them).
+fn copy_circling_scene(base: &Path) {
+    for (folder, files) in [
+        ("cornell-circling", &["scene.toml"][..]),
+        ("cornell-box", &["cornell-box.obj", "cornell-box.mtl"][..]),
+    ] {
+        fs::create_dir_all(base.join(folder)).unwrap();
+        for f in files {
+            fs::copy(scenes_dir().join(folder).join(f), base.join(folder).join(f)).unwrap();
+        }
+    }
+}
+
+/// A suite of the copied animated Cornell box at 8x8, frames 0..3, and two frame budgets of
+/// the path tracer; NAME is replaced by the suite's name.
+const CIRCLING_SUITE: &str = r#"
+name = "NAME"
+warmup = 0
+repeats = 1
+flicker_frames = 0
+[reference]
+spp = 4
+[[scene]]
+path = "cornell-circling/scene.toml"
+resolution = [8, 8]
+frames = "0..3"
+[[method]]
+method = "reference"
+label = "pt"
+budgets = [{ frame_ms = 1 }, { frame_ms = 4 }]
+"#;
+
+/// The converged-reference folders beside the copied cornell-circling, by name.
+fn frame_reference_dirs(base: &Path) -> Vec<String> {
+    let Ok(entries) = fs::read_dir(base.join("cornell-circling").join("converged")) else {
+        return vec![];
+    };
+    let mut names: Vec<String> = entries
+        .map(|e| e.unwrap().file_name().into_string().unwrap())
+        .collect();
+    names.sort();
+    names
+}
+
+/// Issue 45 item 5: `irad bench references` renders one converged reference per animation
+/// frame (the suite's `frames`), keyed by the scene's hash and the frame (the frame's scene
+/// has the file's hash); a frame stopped after one chunk and resumed has the bits of one run
+/// straight through; `--shard I/N` takes frames f with f mod N = I, and a bad I/N is refused;
+/// the suite reads each frame's reference and names frames without one.
+#[test]
+fn per_frame_references_resume_shard_and_are_used_by_suites() {
+    use irad::bench::suite::converged::{self, ConvergedKey, ExtendOptions, Progress};
+    use irad::methods::Renderers;
+    use std::sync::atomic::{AtomicBool, Ordering};
+
+    let dir = temp_dir("frame-references");
+    let text = CIRCLING_SUITE.replace("NAME", "frames");
+    let (straight, parts) = (dir.join("straight"), dir.join("parts"));
+    copy_circling_scene(&straight);
+    copy_circling_scene(&parts);
+    fs::write(parts.join("frames.toml"), &text).unwrap();
+    let suite = Suite::parse("frames.toml", &text, &parts).unwrap();
+    let s = &suite.scenes[0];
+    assert_eq!(s.frames, Some(0..3));
+    // at_frame keeps the file's hash, so the key carries the frame.
+    let f1 = s.scene.at_frame(1).unwrap();
+    assert_eq!(f1.content_hash, s.scene.content_hash);
+    let key = |f: u32| ConvergedKey::of_frame(&s.scene, &s.reference, f);
+    assert_ne!(key(0), key(1));
+    assert_ne!(key(0).dir(&parts), key(1).dir(&parts));
+    assert_eq!(ConvergedKey::of_frame(&f1, &s.reference, 1), key(1));
+    common::with_gpu(|ctx| {
+        let renderers = Renderers::default();
+        let extend = |base: &Path, chunks: u32| {
+            let suite = Suite::parse("frames.toml", &text, base).unwrap();
+            let s = &suite.scenes[0];
+            let stop = AtomicBool::new(false);
+            let options = ExtendOptions {
+                target_rel_mse: 1e-12,
+                deadline: None,
+                chunk_spp: 2,
+                stop: Some(&stop),
+            };
+            converged::extend_frame(ctx, &renderers, &s.scene, 1, &s.reference, &options, |e| {
+                if let Progress::Saved { record, .. } = e {
+                    if record.chunks >= chunks {
+                        stop.store(true, Ordering::SeqCst);
+                    }
+                }
+            })
+            .unwrap()
+        };
+        let whole = extend(&straight, 3);
+        extend(&parts, 1);
+        let resumed = extend(&parts, 3);
+        assert_eq!(resumed.record.key.frame, Some(1));
+        assert_eq!(resumed.record.spp, whole.record.spp);
+        assert_eq!(resumed.record.sessions.len(), 2);
+        let bits = |c: &converged::Converged| -> Vec<u32> {
+            c.halves
+                .iter()
+                .flat_map(|h| h.pixels.iter().flatten().map(|v| v.to_bits()))
+                .collect()
+        };
+        assert_eq!(bits(&resumed), bits(&whole), "resumed frame 1 differs");
+    });
+    // The CLI: shard 1/2 of frames 0..3 is frame 1 (already converged to 6 spp here; the
+    // target is met at once), shard 0/2 frames 0 and 2; a bad shard is refused.
+    let suite_file = parts.join("frames.toml");
+    let suite_arg = suite_file.to_str().unwrap();
+    let refs = |shard: &str| {
+        irad(&[
+            "bench",
+            "references",
+            suite_arg,
+            "--chunk-spp",
+            "4",
+            "--target",
+            "0.5",
+            "--shard",
+            shard,
+        ])
+    };
+    for bad in ["2/2", "1/0", "x"] {
+        let out = refs(bad);
+        assert!(!out.status.success(), "--shard {bad} accepted");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains("--shard") && err.contains("I/N"), "{err}");
+    }
+    let before = frame_reference_dirs(&parts);
+    assert_eq!(before.len(), 1, "{before:?}");
+    let out = refs("1/2");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains("cornell-circling frame 1:"), "{stdout}");
+    assert!(
+        !stdout.contains("frame 0:") && !stdout.contains("frame 2:"),
+        "{stdout}"
+    );
+    assert_eq!(frame_reference_dirs(&parts), before);
+    let out = refs("0/2");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        stdout.contains("frame 0:") && stdout.contains("frame 2:"),
+        "{stdout}"
+    );
+    let dirs = frame_reference_dirs(&parts);
+    assert_eq!(dirs.len(), 3, "{dirs:?}");
+    for (f, d) in dirs.iter().enumerate() {
+        assert!(d.starts_with(&format!("8x8-frame{f:04}-")), "{d}");
+        let record = converged::load(&parts.join("cornell-circling/converged").join(d))
+            .unwrap()
+            .unwrap()
+            .record;
+        assert_eq!(record.key.frame, Some(f as u32));
+        let session = &record.sessions[0];
+        assert!(!session.device.is_empty() && !session.commit.is_empty());
+        assert!(record.total_spp() > 0 && record.gpu_ms > 0.0);
+    }
+    // The suite uses each frame's; with frame 2's moved away, it says frame 2 has none and
+    // uses the cache's for it.
+    fs::rename(
+        parts.join("cornell-circling/converged").join(&dirs[2]),
+        dir.join("moved"),
+    )
+    .unwrap();
+    let out_dir = dir.join("out");
+    common::with_gpu(|ctx| {
+        let results = run_suite(ctx, &suite, &out_dir, &dir.join("cache"), Shard::WHOLE);
+        let r = &results.references["cornell-circling"];
+        let converged: Vec<(u32, bool)> = r.frames.iter().map(|f| (f.frame, f.converged)).collect();
+        assert_eq!(converged, [(0, true), (1, true), (2, false)]);
+        assert!(!r.converged);
+    });
+    let report = fs::read_to_string(out_dir.join("report.md")).unwrap();
+    assert!(
+        report.contains("no converged reference for frames 2"),
+        "{report}"
+    );
+    let _ = fs::remove_dir_all(&dir);
+}
+
+/// Issue 45 item 7: a suite with frame-time budgets on an animated scene calibrates the count
+/// per frame budget, renders the frames, and its results hold per-frame figures (one per frame
+/// of its `frames`), the worst frame and the flicker; the CSV has them, the report a
+/// frame-time table and a per-frame chart with a line per run and a point per frame, and the
+/// relMSE-vs-time chart is per frame.
+#[test]
+fn a_frame_time_suite_records_per_frame_figures_and_flicker() {
+    let dir = temp_dir("frame-time");
+    copy_circling_scene(&dir);
+    let text = CIRCLING_SUITE
+        .replace("NAME", "frame-time")
+        .replace("repeats = 1", "repeats = 2");
+    let suite = Suite::parse("frame-time.toml", &text, &dir).unwrap();
+    assert!(suite.runs.iter().all(|r| r.frame_ms.is_some()));
+    let (out, cache) = (dir.join("out"), dir.join("cache"));
+    common::with_gpu(|ctx| {
+        let whole = run_suite(ctx, &suite, &out, &cache, Shard::WHOLE);
+        // Interrupted after its first run: resumed with that run (its calibrated count and
+        // per-frame figures) kept as it was, the second rendered again.
+        let mut cut = whole.clone();
+        cut.runs.truncate(1);
+        cut.complete = false;
+        cut.runs[0].wall_ms = Some(123456.0);
+        fs::write(out.join("results.json"), cut.json()).unwrap();
+        let mut events = Vec::new();
+        let resumed =
+            run_suite_events(ctx, &suite, &out, &cache, Shard::WHOLE, &mut events).unwrap();
+        assert_eq!(events, ["resumed [0]"]);
+        assert_eq!(
+            resumed.runs[0].wall_ms,
+            Some(123456.0),
+            "run 0 rendered again"
+        );
+        assert_eq!(resumed.runs[0].sequence, whole.runs[0].sequence);
+        assert!(resumed.complete);
+    });
+    let results = check_outputs(&out);
+    assert!(results.complete);
+    assert_eq!(results.runs.len(), 2);
+    let frames = &results.references["cornell-circling"].frames;
+    assert_eq!(
+        frames.iter().map(|f| f.frame).collect::<Vec<_>>(),
+        [0, 1, 2]
+    );
+    for r in &results.runs {
+        assert_eq!(r.status, Status::Ok, "{}: {}", r.id, r.note);
+        let seq = r.sequence.as_ref().unwrap();
+        assert_eq!(seq.frames, [0, 3]);
+        assert_eq!(seq.calibration_frame, 1);
+        assert_eq!(seq.per_frame.len(), 3);
+        assert_eq!(r.scored, 6);
+        assert!(r.calibrated_count.is_some() && !r.calibration.is_empty());
+        let rel: Vec<f64> = seq.per_frame.iter().map(|p| p.metrics.rel_mse).collect();
+        assert!(rel.iter().all(|e| e.is_finite() && *e > 0.0), "{rel:?}");
+        // The run's relMSE is the mean over frames (each the mean over seeds).
+        let mean = rel.iter().sum::<f64>() / 3.0;
+        assert!((r.metrics.unwrap().rel_mse - mean).abs() < 1e-9 * mean);
+        let worst = seq
+            .per_frame
+            .iter()
+            .max_by(|a, b| a.metrics.rel_mse.total_cmp(&b.metrics.rel_mse))
+            .unwrap();
+        assert_eq!(seq.worst_frame, worst.frame);
+        assert_eq!(seq.worst_rel_mse, Some(worst.metrics.rel_mse));
+        assert!(seq.flicker.is_some_and(|f| f.is_finite() && f > 0.0));
+        assert!(seq.per_frame.iter().all(|p| p.gpu_ms > 0.0));
+        assert!(r.gpu_ms.is_some_and(|t| t > 0.0));
+    }
+    let rows = csv_rows(&out.join("results.csv"));
+    for (row, r) in rows.iter().zip(&results.runs) {
+        assert_eq!(row["frames"], "0..3");
+        assert_eq!(row["frame_ms"], r.frame_ms.unwrap().to_string());
+        let seq = r.sequence.as_ref().unwrap();
+        assert_eq!(row["worst_frame"], seq.worst_frame.to_string());
+        assert_eq!(row["sequence_flicker"], seq.flicker.unwrap().to_string());
+    }
+    let svg =
+        fs::read_to_string(out.join(suite::output::frames_chart_path("cornell-circling"))).unwrap();
+    let points = chart::read_frames_svg(&svg);
+    assert_eq!(points.len(), 6, "{points:?}");
+    for r in &results.runs {
+        let name = format!("{} {}", r.label, r.budget);
+        for p in &r.sequence.as_ref().unwrap().per_frame {
+            assert!(
+                points.contains(&(name.clone(), p.frame, p.metrics.rel_mse)),
+                "{name} frame {}",
+                p.frame
+            );
+        }
+    }
+    let time_chart =
+        fs::read_to_string(out.join(suite::output::chart_path("cornell-circling"))).unwrap();
+    assert!(time_chart.contains("GPU time per frame"));
+    let report = fs::read_to_string(out.join("report.md")).unwrap();
+    for needle in [
+        "charts/cornell-circling-frames.svg",
+        "| worst frame | worst relMSE | flicker |",
+        "Every frame's is a converged reference",
+        "No frame has a converged reference",
+    ] {
+        assert_eq!(
+            report.contains(needle),
+            needle != "Every frame's is a converged reference",
+            "{needle}: {report}"
+        );
+    }
+    let _ = fs::remove_dir_all(&dir);
+}
+
+/// Animated scenes take frame-time budgets only, and frame-time budgets animated scenes only:
+/// each wrong combination is refused at load, naming the field and the scene.
+#[test]
+fn animated_scenes_and_frame_budgets_refuse_bad_combinations_naming_the_field() {
+    let dir = temp_dir("frame-time-refusals");
+    copy_circling_scene(&dir);
+    copy_plane_scene(&dir.join("plane"));
+    let base = CIRCLING_SUITE.replace("NAME", "refusals");
+    let still = PLANE_SUITE.replace("NAME", "refusals");
+    let cases: Vec<(String, &str, &str)> = vec![
+        (
+            base.replace("{ frame_ms = 1 }", "{ time_ms = 1 }"),
+            "method[0].budgets[0].time_ms = 1",
+            "animated",
+        ),
+        (
+            base.replace("{ frame_ms = 1 }", "{ spp = 2 }"),
+            "method[0].budgets[0].spp = 2",
+            "animated",
+        ),
+        (
+            base.replace("{ frame_ms = 1 }", "{}"),
+            "method[0].budgets[0] = { defaults }",
+            "frame_ms",
+        ),
+        (
+            base.replace("label = \"pt\"", "label = \"pt\"\nparams = { spp = 2 }"),
+            "method[0].params.spp = 2",
+            "calibrates spp itself",
+        ),
+        (
+            base.replace("{ frame_ms = 1 }", "{ frame_ms = 1, time_ms = 2 }"),
+            "method[0].budgets[0].frame_ms = 1",
+            "not both",
+        ),
+        (
+            base.replace("{ frame_ms = 1 }", "{ frame_ms = -1 }"),
+            "method[0].budgets[0].frame_ms = -1",
+            "GPU milliseconds",
+        ),
+        (
+            base.replace("\"0..3\"", "\"2..2\""),
+            "scene[0].frames = \"2..2\"",
+            "24 frames",
+        ),
+        (
+            base.replace("\"0..3\"", "\"0..25\""),
+            "scene[0].frames = \"0..25\"",
+            "24 frames",
+        ),
+        (
+            still.replace("{ spp = 1 }", "{ frame_ms = 5 }"),
+            "method[0].budgets[0].frame_ms = 5",
+            "is not animated",
+        ),
+        (
+            still.replace(
+                "path = \"plane/scene.toml\"",
+                "path = \"plane/scene.toml\"\nframes = \"0..2\"",
+            ),
+            "scene[0].frames = \"0..2\"",
+            "not animated",
+        ),
+    ];
+    for (text, field, problem) in cases {
+        let e = Suite::parse("refusals.toml", &text, &dir)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains(field) && e.contains(problem), "{field}: {e}");
+    }
+    // A mixed suite is fine where each method is limited to its kind of scene.
+    let mixed = format!(
+        "{base}\n[[scene]]\npath = \"plane/scene.toml\"\nresolution = [8, 8]\n[[method]]\nmethod = \"reference\"\nlabel = \"still\"\nscenes = [\"plane\"]\nbudgets = [{{ spp = 1 }}]\n"
+    )
+    .replace("label = \"pt\"", "label = \"pt\"\nscenes = [\"cornell-circling\"]");
+    let suite = Suite::parse("refusals.toml", &mixed, &dir).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(suite.runs.len(), 3);
+    let _ = fs::remove_dir_all(&dir);
 }

@@ -113,8 +113,9 @@ pub enum Bench {
     /// Render or extend the converged references of a suite's scenes: rendered once, in
     /// chunks, to a net relMSE of at most 0.01 (judged by split halves), and stored in the
     /// repository beside each scene (<scene folder>/converged/), where the suite finds them
-    /// in place of its cached references when the scene and reference settings match.
-    /// Resumable: stop it any time (Ctrl-C, --minutes) and the same command goes on.
+    /// in place of its cached references when the scene and reference settings match. An
+    /// animated scene gets one per frame of the suite's `frames`; --shard I/N takes frames
+    /// f mod N = I. Resumable: stop it any time (Ctrl-C, --minutes) and the same command goes on.
     References(super::references::ReferencesArgs),
     /// Merge the output folders of a suite's shards into one set of results, charts and report.
     Merge {

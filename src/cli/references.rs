@@ -1,5 +1,7 @@
 //! `irad bench references`: renders or extends the converged references of a suite's scenes
-//! (irad::bench::suite::converged), with a progress bar per scene and Ctrl-C handling.
+//! (irad::bench::suite::converged), one per frame of an animated scene (the suite's `frames`),
+//! with a progress bar per reference and Ctrl-C handling; `--shard I/N` takes a share of the
+//! frames for a batch scheduler.
 
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -8,7 +10,7 @@ use std::time::{Duration, Instant};
 use anyhow::{bail, Context as _, Result};
 
 use irad::bench::suite::converged::{self, ExtendOptions, Progress, TARGET_REL_MSE};
-use irad::bench::suite::Suite;
+use irad::bench::suite::{Shard, Suite};
 use irad::gpu::{Context, ContextOptions};
 use irad::methods::Renderers;
 use irad::scene::gpu::GpuScene;
@@ -34,6 +36,11 @@ pub struct ReferencesArgs {
     /// interruption loses at most one.
     #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(1..=65536))]
     chunk_spp: u32,
+    /// Render part I (0-based) of N, for a batch scheduler: frame f of an animated scene
+    /// belongs to part f mod N, a still scene to part (its index in the suite) mod N. Parts
+    /// write different folders, so they may run at once; each resumes on its own.
+    #[arg(long, value_name = "I/N", default_value = "0/1")]
+    shard: Shard,
 }
 
 fn parse_target(s: &str) -> Result<f64, String> {
@@ -85,15 +92,41 @@ pub fn run(options: &ContextOptions, args: ReferencesArgs) -> Result<()> {
             known.join(", ")
         );
     }
-    let chosen: Vec<_> = suite
-        .scenes
-        .iter()
-        .filter(|s| args.scenes.is_empty() || args.scenes.contains(&s.scene.name))
-        .collect();
+    let shard = args.shard;
+    // (scene, frame) of every reference of this shard: a still scene's one, an animated
+    // scene's one per frame of the suite's `frames`.
+    let mut jobs = Vec::new();
+    for (i, s) in suite.scenes.iter().enumerate() {
+        if !(args.scenes.is_empty() || args.scenes.contains(&s.scene.name)) {
+            continue;
+        }
+        match &s.frames {
+            Some(frames) => jobs.extend(
+                frames
+                    .clone()
+                    .filter(|f| *f as usize % shard.count == shard.index)
+                    .map(|f| (s, Some(f))),
+            ),
+            None if i % shard.count == shard.index => jobs.push((s, None)),
+            None => {}
+        }
+    }
+    let part = if shard == Shard::WHOLE {
+        String::new()
+    } else {
+        format!(" (shard {shard})")
+    };
+    if jobs.is_empty() {
+        println!(
+            "{}{part}: no reference to render: this shard has no still scene and no frame of the chosen scenes",
+            args.suite.display()
+        );
+        return Ok(());
+    }
     let ctx = Context::new(options)?;
     println!(
-        "converged references of {} scene(s) of {} to a net relMSE of {}, chunks of {} spp, on {}",
-        chosen.len(),
+        "{} converged reference(s) of {}{part} to a net relMSE of {}, chunks of {} spp, on {}",
+        jobs.len(),
         args.suite.display(),
         figure(args.target),
         args.chunk_spp,
@@ -108,14 +141,16 @@ pub fn run(options: &ContextOptions, args: ReferencesArgs) -> Result<()> {
     })
     .context("installing the Ctrl-C handler")?;
     let renderers = Renderers::default();
-    for suite_scene in chosen {
+    for (suite_scene, frame) in jobs {
         if STOP.load(Ordering::SeqCst) {
             break;
         }
         let scene = &suite_scene.scene;
         let cam = &scene.camera;
-        let gpu_scene =
-            GpuScene::upload(&ctx, scene).with_context(|| format!("uploading {}", scene.name))?;
+        let name = match frame {
+            Some(f) => format!("{} frame {f}", scene.name),
+            None => scene.name.clone(),
+        };
         let extend = ExtendOptions {
             target_rel_mse: args.target,
             deadline: args
@@ -124,46 +159,61 @@ pub fn run(options: &ContextOptions, args: ReferencesArgs) -> Result<()> {
             chunk_spp: args.chunk_spp,
             stop: Some(&STOP),
         };
-        let bar = progress(1, &format!("{} {}x{}", scene.name, cam.width, cam.height));
+        let bar = progress(1, &format!("{name} {}x{}", cam.width, cam.height));
         let mut chunk_base = 0u64;
-        let result = converged::extend(
-            &ctx,
-            &renderers,
-            scene,
-            &gpu_scene,
-            &suite_scene.reference,
-            &extend,
-            |event| match event {
-                Progress::Rendering { done, .. } => bar.set_position(chunk_base + done as u64),
-                Progress::Saved { record, ms_per_spp } => {
-                    // Bar: samples so far against those the target needs (relMSE falls
-                    // as 1 / samples).
-                    let spp = record.total_spp();
-                    let needed = record
-                        .rel_mse
-                        .map_or(2 * spp, |e| (spp as f64 * e / args.target).ceil() as u64);
-                    bar.set_length(needed.max(spp + 1));
-                    bar.set_position(spp);
-                    chunk_base = spp;
-                    bar.set_message(format!(
-                        "spp, relMSE {}, {:.1} ms GPU/spp",
-                        record.rel_mse.map_or("-".into(), figure),
-                        ms_per_spp
-                    ));
-                }
-                Progress::StaleLock { dir, holder } => {
-                    bar.suspend(|| eprintln!("{}", took_over(dir, &holder)))
-                }
-            },
-        );
+        let on = |event: Progress| match event {
+            Progress::Rendering { done, .. } => bar.set_position(chunk_base + done as u64),
+            Progress::Saved { record, ms_per_spp } => {
+                // Bar: samples so far against those the target needs (relMSE falls
+                // as 1 / samples).
+                let spp = record.total_spp();
+                let needed = record
+                    .rel_mse
+                    .map_or(2 * spp, |e| (spp as f64 * e / args.target).ceil() as u64);
+                bar.set_length(needed.max(spp + 1));
+                bar.set_position(spp);
+                chunk_base = spp;
+                bar.set_message(format!(
+                    "spp, relMSE {}, {:.1} ms GPU/spp",
+                    record.rel_mse.map_or("-".into(), figure),
+                    ms_per_spp
+                ));
+            }
+            Progress::StaleLock { dir, holder } => {
+                bar.suspend(|| eprintln!("{}", took_over(dir, &holder)))
+            }
+        };
+        let result = match frame {
+            Some(f) => converged::extend_frame(
+                &ctx,
+                &renderers,
+                scene,
+                f,
+                &suite_scene.reference,
+                &extend,
+                on,
+            ),
+            None => GpuScene::upload(&ctx, scene)
+                .with_context(|| format!("uploading {}", scene.name))
+                .and_then(|gpu_scene| {
+                    converged::extend(
+                        &ctx,
+                        &renderers,
+                        scene,
+                        &gpu_scene,
+                        &suite_scene.reference,
+                        &extend,
+                        on,
+                    )
+                }),
+        };
         bar.finish_and_clear();
         super::logger::on_screen(None);
         let done = result?;
         let r = &done.record;
         let reached = r.rel_mse.is_some_and(|e| e <= args.target);
         println!(
-            "{}: {} spp, net relMSE {} (target {} {}), {:.0} s GPU in all; {}",
-            scene.name,
+            "{name}: {} spp, net relMSE {} (target {} {}), {:.0} s GPU in all; {}",
             r.total_spp(),
             r.rel_mse.map_or("-".into(), figure),
             figure(args.target),

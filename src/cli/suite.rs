@@ -154,8 +154,17 @@ fn print_list(suite: &Suite, path: &Path, shard: Shard) {
         } else {
             format!(", home of: {}", s.home.join(", "))
         };
+        let frames = match &s.frames {
+            Some(f) => format!(
+                ", animated: frames {}..{} (calibrated on {}), a reference per frame",
+                f.start,
+                f.end,
+                s.calibration_frame().unwrap_or(f.start)
+            ),
+            None => String::new(),
+        };
         println!(
-            "  scene {} {}x{}, reference {} spp{depth}{failing}{home}",
+            "  scene {} {}x{}{frames}, reference {} spp{depth}{failing}{home}",
             s.scene.name,
             cam.width,
             cam.height,

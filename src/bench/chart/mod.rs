@@ -6,14 +6,18 @@
 //! cannot sit on a log axis (zero, negative, NaN, infinite) is listed in a note under the chart
 //! rather than dropped silently.
 //!
+//! `frames` draws a suite's per-frame chart (a value over animation frames, linear x).
+//!
 //! One job per file: this one holds the chart's types; `layout` places things (the decades
 //! the axes span, the tick labels, the point labels, text widths); `svg` writes the chart
 //! (`Chart::to_svg`); `read` reads an SVG it wrote back (`read_svg`, for tests).
 
+mod frames;
 mod layout;
 mod read;
 mod svg;
 
+pub use frames::{read_frames_svg, FrameChart, FrameSeries};
 pub use read::read_svg;
 
 /// One measured run: `x` and `y` go on log axes; `label` is its budget as printed beside the

@@ -18,7 +18,7 @@ const PALETTE: [&str; 8] = [
 ];
 
 /// Series i's colour, and past the palette's length a dash pattern so no two series look alike.
-fn style(i: usize) -> (&'static str, &'static str) {
+pub(super) fn style(i: usize) -> (&'static str, &'static str) {
     const DASHES: [&str; 3] = [
         "",
         r#" stroke-dasharray="6 3""#,
@@ -31,7 +31,7 @@ fn style(i: usize) -> (&'static str, &'static str) {
 }
 
 /// `s` as XML text or a double-quoted attribute value.
-fn esc(s: &str) -> String {
+pub(super) fn esc(s: &str) -> String {
     let mut out = String::with_capacity(s.len());
     for c in s.chars() {
         match c {

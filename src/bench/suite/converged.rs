@@ -15,6 +15,13 @@
 //! anything but complete halves, and at most one chunk is lost. One process extends a
 //! reference at a time: the folder is locked (`crate::lock::HolderLock`) while it does.
 //!
+//! An animated scene has one converged reference per animation frame (`extend_frame`,
+//! `lookup_frame`): the frame's scene as `Scene::at_frame` gives it, in its own folder
+//! `<W>x<H>-frame<NNNN>-<key hash>/`, keyed by the file's content hash and the frame (the hash
+//! is the file's, the same for every frame), its chunks seeded apart from every other frame's
+//! (`chunk_seed`). Each frame is resumable on its own, so a batch scheduler can split the
+//! frames among jobs (`irad bench references --shard I/N`).
+//!
 //! The key is what changes the expected image: the scene (its content hash), the resolution
 //! and every reference parameter but the sample count, the seed and the light sampler. Unlike the cache's key, it
 //! leaves out the hashes of the kernels and of the Rust sources: a converged reference is an
@@ -50,6 +57,18 @@ pub const FOLDER: &str = "converged";
 /// `REFERENCE_SEED`, so no run or cached reference shares random numbers with a chunk.
 pub const SEED_BASE: u32 = 0x5851_f42d;
 
+/// Frame f's chunk i uses seed `SEED_BASE + f * FRAME_SEED_STRIDE + i`: each frame's
+/// reference has its own random numbers (a frame sharing its noise with the next would hide
+/// part of a run's flicker against them), and a still scene's (frame None) are as before.
+pub const FRAME_SEED_STRIDE: u32 = 1 << 20;
+
+/// The seed of chunk `chunk` of the reference of `frame` (None: a still scene).
+pub fn chunk_seed(frame: Option<u32>, chunk: u32) -> u32 {
+    SEED_BASE
+        .wrapping_add(frame.unwrap_or(0).wrapping_mul(FRAME_SEED_STRIDE))
+        .wrapping_add(chunk)
+}
+
 /// The net relMSE a converged reference is rendered to: low enough that a run's outliers and a
 /// relMSE of 0.1 are judged against the scene rather than the reference's noise.
 pub const TARGET_REL_MSE: f64 = 0.01;
@@ -62,6 +81,12 @@ pub struct ConvergedKey {
     pub resolution: [u32; 2],
     /// The reference method's parameters but its sample count and seed.
     pub parameters: BTreeMap<String, serde_json::Value>,
+    /// The animation frame, for a reference of one frame of an animated scene: its content
+    /// hash is the file's, the same for every frame (`Scene::at_frame` changes lights, camera
+    /// and emission, not the hash), so the frame is part of the key. Left out for a still
+    /// scene, so the keys (and folders) of still scenes' references are as before.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub frame: Option<u32>,
 }
 
 impl ConvergedKey {
@@ -76,6 +101,24 @@ impl ConvergedKey {
             scene_hash: format!("{:016x}", scene.content_hash),
             resolution: [scene.camera.width, scene.camera.height],
             parameters,
+            frame: None,
+        }
+    }
+
+    /// The key of frame `frame` of an animated scene (`scene` is the animated scene or its
+    /// frame: both have the file's hash).
+    pub fn of_frame(scene: &Scene, reference: &Method, frame: u32) -> ConvergedKey {
+        ConvergedKey {
+            frame: Some(frame),
+            ..ConvergedKey::new(scene, reference)
+        }
+    }
+
+    /// The key of `scene` (`frame` None: a still scene) or of one frame of it.
+    pub fn of(scene: &Scene, reference: &Method, frame: Option<u32>) -> ConvergedKey {
+        match frame {
+            Some(f) => ConvergedKey::of_frame(scene, reference, f),
+            None => ConvergedKey::new(scene, reference),
         }
     }
 
@@ -83,9 +126,12 @@ impl ConvergedKey {
     pub fn dir(&self, scene_folder: &Path) -> PathBuf {
         let text = serde_json::to_string(self).expect("a key serializes");
         let [w, h] = self.resolution;
-        scene_folder
-            .join(FOLDER)
-            .join(format!("{w}x{h}-{:08x}", fnv1a64(text.as_bytes()) >> 32))
+        let hash = fnv1a64(text.as_bytes()) >> 32;
+        let name = match self.frame {
+            Some(f) => format!("{w}x{h}-frame{f:04}-{hash:08x}"),
+            None => format!("{w}x{h}-{hash:08x}"),
+        };
+        scene_folder.join(FOLDER).join(name)
     }
 }
 
@@ -280,10 +326,20 @@ fn replay(spp: &mut [u128; 2], per_chunk: u128, mut chunks: u64) {
 /// The converged reference for `scene` and `reference` (a reference method) when one is stored
 /// beside the scene with a matching key and at least as many samples as `reference` asks for.
 pub fn lookup(scene: &Scene, reference: &Method) -> Result<Option<Converged>> {
+    lookup_frame(scene, reference, None)
+}
+
+/// `lookup` for frame `frame` of an animated scene (`scene` the animated scene or that frame's
+/// `Scene::at_frame`); `frame` None: a still scene.
+pub fn lookup_frame(
+    scene: &Scene,
+    reference: &Method,
+    frame: Option<u32>,
+) -> Result<Option<Converged>> {
     let Some(folder) = scene_folder(scene) else {
         return Ok(None);
     };
-    let key = ConvergedKey::new(scene, reference);
+    let key = ConvergedKey::of(scene, reference, frame);
     let Some(found) = load(&key.dir(folder))? else {
         return Ok(None);
     };
@@ -319,12 +375,76 @@ pub enum Progress<'a> {
     StaleLock { dir: &'a Path, holder: String },
 }
 
-/// Extends (or starts) the converged reference of `scene` with `reference`'s settings, chunk
-/// by chunk, until its net relMSE reaches the target, the deadline passes or `stop` is set.
+/// Extends (or starts) the converged reference of `scene` (a still scene) with `reference`'s
+/// settings, chunk by chunk, until its net relMSE reaches the target, the deadline passes or
+/// `stop` is set.
 pub fn extend(
     ctx: &Context,
     renderers: &Renderers,
     scene: &Scene,
+    gpu_scene: &GpuScene,
+    reference: &Method,
+    options: &ExtendOptions,
+    on: impl FnMut(Progress),
+) -> Result<Converged> {
+    if let Some(animation) = &scene.animation {
+        bail!(
+            "{} is animated ({} frames): its converged references are one per frame (`extend_frame`)",
+            scene.name,
+            animation.frames
+        );
+    }
+    extend_key(
+        ctx, renderers, scene, None, gpu_scene, reference, options, on,
+    )
+}
+
+/// `extend` for frame `frame` of the animated scene `animated`: the frame's scene
+/// (`Scene::at_frame`) is uploaded and rendered, keyed by the file's hash and the frame
+/// (`ConvergedKey::of_frame`), in the same chunks, halves, lock and record as a still scene's.
+pub fn extend_frame(
+    ctx: &Context,
+    renderers: &Renderers,
+    animated: &Scene,
+    frame: u32,
+    reference: &Method,
+    options: &ExtendOptions,
+    on: impl FnMut(Progress),
+) -> Result<Converged> {
+    let Some(animation) = &animated.animation else {
+        bail!(
+            "{} is not animated: its converged reference is one image (`extend`)",
+            animated.name
+        );
+    };
+    if frame >= animation.frames {
+        bail!(
+            "{}: frame {frame} is past the animation's {} frames",
+            animated.name,
+            animation.frames
+        );
+    }
+    let still = animated.at_frame(frame)?;
+    let gpu_scene = GpuScene::upload(ctx, &still)
+        .with_context(|| format!("uploading frame {frame} of {}", animated.name))?;
+    extend_key(
+        ctx,
+        renderers,
+        &still,
+        Some(frame),
+        &gpu_scene,
+        reference,
+        options,
+        on,
+    )
+}
+
+#[allow(clippy::too_many_arguments)]
+fn extend_key(
+    ctx: &Context,
+    renderers: &Renderers,
+    scene: &Scene,
+    frame: Option<u32>,
     gpu_scene: &GpuScene,
     reference: &Method,
     options: &ExtendOptions,
@@ -342,7 +462,7 @@ pub fn extend(
             scene.name
         );
     };
-    let key = ConvergedKey::new(scene, reference);
+    let key = ConvergedKey::of(scene, reference, frame);
     let dir = key.dir(folder);
     // One writer at a time: two writers would render the same chunks, and the last record
     // written would drop the other's session and leave its halves behind.
@@ -404,14 +524,20 @@ pub fn extend(
     while !converged(&current.record) && !stopped() && !past_deadline() {
         let record = &mut current.record;
         let half = usize::from(record.spp[1] < record.spp[0]);
-        let seed = SEED_BASE.wrapping_add(record.chunks);
+        let seed = chunk_seed(frame, record.chunks);
         let chunk = options.chunk_spp;
         let method = samples_of(scene, settings, chunk, seed);
         let out = renderers
             .run(ctx, &method, scene, gpu_scene, |done, total| {
                 on(Progress::Rendering { done, total })
             })
-            .with_context(|| format!("rendering chunk {} of {}", record.chunks, scene.name))?;
+            .with_context(|| match frame {
+                Some(f) => format!(
+                    "rendering chunk {} of {} frame {f}",
+                    record.chunks, scene.name
+                ),
+                None => format!("rendering chunk {} of {}", record.chunks, scene.name),
+            })?;
         // The half's mean over its old and new samples, kept as f32 in memory exactly as on
         // disk, so a resumed run adds to the same bits an uninterrupted one would.
         let n = record.spp[half] as f64;

@@ -5,6 +5,7 @@
 //! order `--shard` splits. Format in README ("Benchmark suites").
 
 use std::collections::BTreeSet;
+use std::ops::Range;
 use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
@@ -94,6 +95,9 @@ struct SceneEntry {
     /// Labels of the [[method]] entries this scene showcases (marked in the equal-time table).
     #[serde(default)]
     home: Vec<String>,
+    /// For an animated scene: the frames its runs render and score, "A..B" (A included, B
+    /// not); default every frame of its animation.
+    frames: Option<String>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -139,6 +143,18 @@ pub struct SuiteScene {
     pub reference: Method,
     /// Labels of the method entries whose home this scene is (the suite's `home`).
     pub home: Vec<String>,
+    /// For an animated scene (`scene.animation` is Some): the frames its runs render and
+    /// score (the suite's `frames`, or all); None for a still scene.
+    pub frames: Option<Range<u32>>,
+}
+
+impl SuiteScene {
+    /// The frame a frame-time budget is calibrated on: the middle of the scene's frames.
+    pub fn calibration_frame(&self) -> Option<u32> {
+        self.frames
+            .as_ref()
+            .map(|r| r.start + (r.end - r.start) / 2)
+    }
 }
 
 #[derive(Debug)]
@@ -162,6 +178,10 @@ pub struct RunSpec {
     /// frames, or the reference's spp) is calibrated to fill before it renders (calibrate.rs);
     /// `method` holds the default count until then.
     pub time_ms: Option<f64>,
+    /// A frame-time budget (`frame_ms`), on an animated scene: GPU milliseconds per frame the
+    /// count is calibrated to fill (on the scene's `calibration_frame`), then every frame of
+    /// the scene's `frames` is rendered with it.
+    pub frame_ms: Option<f64>,
     /// `<scene>/<label>/<budget>`, unique, stable across shards.
     pub id: String,
 }
@@ -245,7 +265,7 @@ impl Suite {
         check_reference_seeds(file, &scenes, &counts)?;
         let (entries, budgets) = parse_methods(file, &f.method, &scenes, counts.seed, registry)?;
         check_homes(file, &scenes, &entries)?;
-        let runs = expand_runs(&scenes, &f.method, &entries, &budgets);
+        let runs = expand_runs(file, &scenes, &f.method, &entries, &budgets)?;
         Ok(Suite {
             name: f.name,
             description: f.description,
@@ -299,9 +319,18 @@ struct Counts {
     flicker_frames: u32,
 }
 
-/// The method settings of one budget: the method (seed set to the suite's), the budget's
-/// label (`vpls=64 frames=4`, or `defaults`) and its time budget.
-type Budget = (Method, String, Option<f64>);
+/// The method settings of one budget of entry `entry`, number `index`.
+struct Budget {
+    /// The method (seed set to the suite's).
+    method: Method,
+    /// The budget's label (`vpls=64 frames=4`, or `defaults`).
+    text: String,
+    time_ms: Option<f64>,
+    frame_ms: Option<f64>,
+    /// The field a fixed count is set at (`params.spp`, `budgets[1].frames`), if one is.
+    count_field: Option<String>,
+    index: usize,
+}
 
 /// Checks the suite's name: it names files and folders.
 fn check_name(file: &str, name: &str) -> Result<(), SuiteError> {
@@ -433,14 +462,59 @@ fn parse_scenes(
             }
         }
         let reference = scene_reference(file, i, entry, reference_params, reference)?;
+        let frames = scene_frames(file, i, entry, &scene)?;
         scenes.push(SuiteScene {
             scene,
             path: entry.path.clone(),
             reference,
             home: entry.home.clone(),
+            frames,
         });
     }
     Ok(scenes)
+}
+
+/// The frames of scene `i`: its `frames = "A..B"` (an animated scene's, within its
+/// animation), or every frame of its animation; None for a still scene.
+fn scene_frames(
+    file: &str,
+    i: usize,
+    entry: &SceneEntry,
+    scene: &Scene,
+) -> Result<Option<Range<u32>>, SuiteError> {
+    let field = format!("scene[{i}].frames");
+    let Some(animation) = &scene.animation else {
+        return match &entry.frames {
+            None => Ok(None),
+            Some(text) => Err(field_error(
+                file,
+                &field,
+                format!("{text:?}"),
+                &format!(
+                    "{} is not animated: only an animated scene has frames",
+                    entry.path
+                ),
+            )),
+        };
+    };
+    let n = animation.frames;
+    let Some(text) = &entry.frames else {
+        return Ok(Some(0..n));
+    };
+    let parsed = text
+        .split_once("..")
+        .and_then(|(a, b)| Some((a.trim().parse::<u32>().ok()?, b.trim().parse::<u32>().ok()?)));
+    match parsed {
+        Some((a, b)) if a < b && b <= n => Ok(Some(a..b)),
+        _ => Err(field_error(
+            file,
+            &field,
+            format!("{text:?}"),
+            &format!(
+                "must be \"A..B\", frames A (included) to B (not), 0 <= A < B <= {n} (the animation's {n} frames)"
+            ),
+        )),
+    }
 }
 
 /// Loads scene `i` (a file relative to `base`, or the embedded Cornell box) at its own
@@ -469,18 +543,6 @@ fn load_scene(
             cause: Box::new(source),
         })?
     };
-    if let Some(animation) = &scene.animation {
-        return Err(field_error(
-            file,
-            &format!("scene[{i}].path"),
-            format!("{:?}", entry.path),
-            &format!(
-                "the scene is animated ({} frames): suites time still scenes, so render it with \
-                 `irad render --sequence` (frame-time budgets in suites are still to come)",
-                animation.frames
-            ),
-        ));
-    }
     let own = check_resolution(file, &format!("scene[{i}].resolution"), entry.resolution)?;
     if let Some((w, h)) = own {
         scene.camera.width = w;
@@ -556,7 +618,14 @@ fn check_reference_seeds(
     counts: &Counts,
 ) -> Result<(), SuiteError> {
     let seed = counts.seed;
-    let renders = counts.warmup as u64 + counts.repeats.max(counts.flicker_frames) as u64;
+    // A frame-time run's sequence r renders frame f with seed + r B + f, B the end of its
+    // scene's frames (suite/sequence.rs).
+    let frames = scenes
+        .iter()
+        .filter_map(|s| s.frames.as_ref().map(|r| u64::from(r.end)))
+        .max()
+        .unwrap_or(1);
+    let renders = counts.warmup as u64 + counts.repeats.max(counts.flicker_frames) as u64 * frames;
     let run_seed = |s: u32| (s.wrapping_sub(seed) as u64) < renders;
     for (i, s) in scenes.iter().enumerate() {
         // The reference is two halves, seeds r and r + 1 (references.rs).
@@ -567,7 +636,7 @@ fn check_reference_seeds(
                 "reference.seed",
                 r.to_string(),
                 &format!(
-                    "the reference of scene[{i}] would share random numbers with the runs, which use seeds {seed}..{} (seed + warm-up + repeats or flicker frames): pick a seed far from them",
+                    "the reference of scene[{i}] would share random numbers with the runs, which use seeds {seed}..{} (seed + warm-up + repeats or flicker frames, times an animated scene's frames): pick a seed far from them",
                     seed as u64 + renders
                 ),
             ));
@@ -671,20 +740,38 @@ fn parse_budgets(
                 "a time budget belongs in budgets, one per budget",
             ));
         }
-        let time_ms = match budget.get("time_ms") {
-            None => None,
+        if let Some(v) = m.params.get("frame_ms") {
+            return Err(field(
+                &format!("method[{i}].params.frame_ms"),
+                v.to_string(),
+                "a frame-time budget belongs in budgets, one per budget",
+            ));
+        }
+        let ms = |key: &str| match budget.get(key) {
+            None => Ok(None),
             Some(v) => match v.as_float().or(v.as_integer().map(|i| i as f64)) {
-                Some(t) if t > 0.0 && t <= MAX_TIME_MS => Some(t),
-                _ => {
-                    return Err(field(
-                        &format!("method[{i}].budgets[{b}].time_ms"),
-                        v.to_string(),
-                        &format!("must be GPU milliseconds, a number in (0, {MAX_TIME_MS}]"),
-                    ))
-                }
+                Some(t) if t > 0.0 && t <= MAX_TIME_MS => Ok(Some(t)),
+                _ => Err(field(
+                    &format!("method[{i}].budgets[{b}].{key}"),
+                    v.to_string(),
+                    &format!("must be GPU milliseconds, a number in (0, {MAX_TIME_MS}]"),
+                )),
             },
         };
-        for (k, v) in budget.iter().filter(|(k, _)| *k != "time_ms") {
+        let time_ms = ms("time_ms")?;
+        let frame_ms = ms("frame_ms")?;
+        if let (Some(_), Some(f)) = (time_ms, frame_ms) {
+            return Err(field(
+                &format!("method[{i}].budgets[{b}].frame_ms"),
+                f.to_string(),
+                "a budget is a time (time_ms, a still scene's render) or a frame time (frame_ms, \
+                 each frame of an animated scene), not both",
+            ));
+        }
+        for (k, v) in budget
+            .iter()
+            .filter(|(k, _)| *k != "time_ms" && *k != "frame_ms")
+        {
             if k == "seed" || params.contains_key(k) {
                 return Err(field(
                     &format!("method[{i}].budgets[{b}].{k}"),
@@ -698,19 +785,29 @@ fn parse_budgets(
         let method = registry
             .from_params(&m.method, &params)
             .map_err(|e| param_error(file, format!("method[{i}].budgets[{b}]"), e))?;
-        if let (Some(_), Some(v)) = (time_ms, params.get(method.count_key())) {
+        let count_field = params.get(method.count_key()).map(|_| {
             let place = match m.params.contains_key(method.count_key()) {
                 true => "params".to_string(),
                 false => format!("budgets[{b}]"),
             };
-            return Err(field(
-                &format!("method[{i}].{place}.{}", method.count_key()),
-                v.to_string(),
-                &format!(
-                    "a time_ms budget calibrates {} itself: leave it out",
-                    method.count_key()
-                ),
-            ));
+            format!("method[{i}].{place}.{}", method.count_key())
+        });
+        if let (Some(v), Some(at)) = (params.get(method.count_key()), &count_field) {
+            let kind = match (time_ms, frame_ms) {
+                (Some(_), _) => Some("time_ms"),
+                (_, Some(_)) => Some("frame_ms"),
+                _ => None,
+            };
+            if let Some(kind) = kind {
+                return Err(field(
+                    at,
+                    v.to_string(),
+                    &format!(
+                        "a {kind} budget calibrates {} itself: leave it out",
+                        method.count_key()
+                    ),
+                ));
+            }
         }
         let text = budget
             .iter()
@@ -722,17 +819,24 @@ fn parse_budgets(
         } else {
             text
         };
-        if let Some((_, same, _)) = methods
+        if let Some(same) = methods
             .iter()
-            .find(|(other, _, t)| *other == method && *t == time_ms)
+            .find(|o| o.method == method && o.time_ms == time_ms && o.frame_ms == frame_ms)
         {
             return Err(field(
                 &format!("method[{i}].budgets[{b}]"),
                 format!("{{ {text} }}"),
-                &format!("the same settings as budget {{ {same} }}"),
+                &format!("the same settings as budget {{ {} }}", same.text),
             ));
         }
-        methods.push((method, text, time_ms));
+        methods.push(Budget {
+            method,
+            text,
+            time_ms,
+            frame_ms,
+            count_field,
+            index: b,
+        });
     }
     Ok(methods)
 }
@@ -761,13 +865,15 @@ fn check_homes(
 }
 
 /// Expands the suite into its runs: per scene, per method entry that applies to it, per
-/// budget; `index` is the position in this list.
+/// budget; `index` is the position in this list. An animated scene takes only frame-time
+/// budgets and a still scene none (`check_budget_fits`).
 fn expand_runs(
+    file: &str,
     scenes: &[SuiteScene],
     methods: &[MethodEntry],
     entries: &[SuiteMethod],
     budgets: &[Vec<Budget>],
-) -> Vec<RunSpec> {
+) -> Result<Vec<RunSpec>, SuiteError> {
     let mut runs = Vec::new();
     for (s, suite_scene) in scenes.iter().enumerate() {
         for (e, m) in methods.iter().enumerate() {
@@ -778,21 +884,83 @@ fn expand_runs(
             if !applies {
                 continue;
             }
-            for (method, budget, time_ms) in &budgets[e] {
-                let id = format!("{}/{}/{}", suite_scene.scene.name, entries[e].label, budget);
+            for budget in &budgets[e] {
+                check_budget_fits(file, s, suite_scene, e, budget)?;
+                let id = format!(
+                    "{}/{}/{}",
+                    suite_scene.scene.name, entries[e].label, budget.text
+                );
                 runs.push(RunSpec {
                     index: runs.len(),
                     scene: s,
                     entry: e,
-                    method: method.clone(),
-                    budget: budget.clone(),
-                    time_ms: *time_ms,
+                    method: budget.method.clone(),
+                    budget: budget.text.clone(),
+                    time_ms: budget.time_ms,
+                    frame_ms: budget.frame_ms,
                     id,
                 });
             }
         }
     }
-    runs
+    Ok(runs)
+}
+
+/// Refuses budget `budget` of method entry `e` on scene `s` where they do not fit: an
+/// animated scene is timed per frame, so it takes only `frame_ms` budgets (a time_ms budget
+/// or a fixed count would time one still render of an animation); a still scene has no
+/// frames to time. Names the budget's field.
+fn check_budget_fits(
+    file: &str,
+    s: usize,
+    scene: &SuiteScene,
+    e: usize,
+    budget: &Budget,
+) -> Result<(), SuiteError> {
+    let b = budget.index;
+    let name = &scene.scene.name;
+    match (&scene.scene.animation, budget.frame_ms) {
+        (Some(animation), None) => {
+            let (field, value) = match (budget.time_ms, &budget.count_field) {
+                (Some(t), _) => (format!("method[{e}].budgets[{b}].time_ms"), t.to_string()),
+                (None, Some(at)) => (
+                    at.clone(),
+                    budget
+                        .method
+                        .parameters()
+                        .get(budget.method.count_key())
+                        .map_or("?".into(), |v| v.to_string()),
+                ),
+                (None, None) => (
+                    format!("method[{e}].budgets[{b}]"),
+                    format!("{{ {} }}", budget.text),
+                ),
+            };
+            Err(field_error(
+                file,
+                &field,
+                value,
+                &format!(
+                    "scene[{s}] ({name}) is animated ({} frames): its runs are timed per frame, so \
+                     each budget on it is a frame time, {{ frame_ms = X }}, which calibrates {} \
+                     (limit the method to other scenes with `scenes = [...]`)",
+                    animation.frames,
+                    budget.method.count_key()
+                ),
+            ))
+        }
+        (None, Some(f)) => Err(field_error(
+            file,
+            &format!("method[{e}].budgets[{b}].frame_ms"),
+            f.to_string(),
+            &format!(
+                "scene[{s}] ({name}) is not animated: a frame-time budget is for an animated \
+                 scene (time_ms times a still render; limit the method to animated scenes with \
+                 `scenes = [...]`)"
+            ),
+        )),
+        _ => Ok(()),
+    }
 }
 
 /// `--shard i/n`: part i (0-based) of n.

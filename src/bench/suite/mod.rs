@@ -18,6 +18,7 @@ pub mod references;
 pub mod report;
 pub mod results;
 pub mod resume;
+pub mod sequence;
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -226,8 +227,17 @@ pub fn run(
     Ok(results)
 }
 
-/// A scene uploaded with its reference image, or why not.
-type Prepared = std::result::Result<(GpuScene, Image, Option<f64>), String>;
+/// A scene uploaded with its reference image (for an animated scene: its calibration frame
+/// uploaded, and one reference per frame of its `frames`), or why not.
+type Prepared = std::result::Result<PreparedScene, String>;
+
+struct PreparedScene {
+    gpu: GpuScene,
+    reference: Image,
+    reference_rel_mse: Option<f64>,
+    /// An animated scene's frames, in order: (frame, its reference, the reference's relMSE).
+    frames: Vec<(u32, Image, Option<f64>)>,
+}
 
 fn prepare_scene(
     ctx: &Context,
@@ -240,9 +250,12 @@ fn prepare_scene(
 ) -> Prepared {
     let suite_scene = &suite.scenes[s];
     let scene = &suite_scene.scene;
+    if suite_scene.frames.is_some() {
+        return prepare_animated(ctx, renderers, suite, s, options, results, on);
+    }
     let gpu_scene =
         GpuScene::upload(ctx, scene).map_err(|e| format!("uploading the scene: {e}"))?;
-    let found = found_reference(ctx, renderers, suite_scene, &gpu_scene, options, on)?;
+    let found = found_reference(ctx, renderers, suite_scene, None, &gpu_scene, options, on)?;
     let image_name = format!("images/{}.reference.png", file::file_safe(&scene.name));
     let thumb = preview::downscale(
         &found.image,
@@ -263,9 +276,93 @@ fn prepare_scene(
             expected_to_fail: failure.map(|f| f.methods.clone()).unwrap_or_default(),
             why: failure.map(|f| f.why.clone()).unwrap_or_default(),
             source: failure.map(|f| f.source.clone()).unwrap_or_default(),
+            frames: Vec::new(),
         },
     );
-    Ok((gpu_scene, found.image, found.rel_mse))
+    Ok(PreparedScene {
+        gpu: gpu_scene,
+        reference: found.image,
+        reference_rel_mse: found.rel_mse,
+        frames: Vec::new(),
+    })
+}
+
+/// `prepare_scene` of an animated scene: one reference per frame of the suite's `frames`
+/// (each frame's converged reference when `irad bench references` stored one, else the
+/// cache's, rendered now when missing, as for a still scene), and the calibration frame
+/// uploaded. The summary's own fields describe the calibration frame's reference.
+fn prepare_animated(
+    ctx: &Context,
+    renderers: &Renderers,
+    suite: &Suite,
+    s: usize,
+    options: &SuiteOptions,
+    results: &mut SuiteResults,
+    on: &mut impl FnMut(Event),
+) -> Prepared {
+    let suite_scene = &suite.scenes[s];
+    let scene = &suite_scene.scene;
+    let frames = suite_scene.frames.clone().unwrap_or(0..0);
+    let middle = suite_scene.calibration_frame().unwrap_or(0);
+    let mut references = Vec::new();
+    let mut summaries = Vec::new();
+    let mut calibration = None;
+    for f in frames {
+        let still = scene.at_frame(f).map_err(|e| format!("frame {f}: {e}"))?;
+        let gpu = GpuScene::upload(ctx, &still).map_err(|e| format!("uploading frame {f}: {e}"))?;
+        let frame_scene = file::SuiteScene {
+            scene: still,
+            path: suite_scene.path.clone(),
+            reference: suite_scene.reference.clone(),
+            home: Vec::new(),
+            frames: None,
+        };
+        let found = found_reference(ctx, renderers, &frame_scene, Some(f), &gpu, options, on)
+            .map_err(|e| format!("the reference of frame {f}: {e}"))?;
+        summaries.push(results::FrameReference {
+            frame: f,
+            spp: found.spp,
+            rel_mse: found.rel_mse,
+            converged: found.converged,
+            path: found.path.display().to_string(),
+        });
+        references.push((f, found.image.clone(), found.rel_mse));
+        if f == middle {
+            calibration = Some((gpu, found));
+        }
+    }
+    let Some((gpu, found)) = calibration else {
+        return Err(format!("no frame {middle} among the suite's frames"));
+    };
+    let image_name = format!("images/{}.reference.png", file::file_safe(&scene.name));
+    let thumb = preview::downscale(
+        &found.image,
+        preview::factor_for(found.image.width, THUMBNAIL_WIDTH),
+    );
+    image::png::write(&options.out.join(&image_name), &thumb, 0.0).map_err(|e| format!("{e:#}"))?;
+    let failure = scene.failure.as_ref();
+    results.references.insert(
+        scene.name.clone(),
+        ReferenceSummary {
+            spp: found.spp,
+            image: image_name,
+            cache: found.path.display().to_string(),
+            seed: found.seed,
+            gpu_ms: found.gpu_ms,
+            rel_mse: found.rel_mse,
+            converged: summaries.iter().all(|r| r.converged),
+            expected_to_fail: failure.map(|f| f.methods.clone()).unwrap_or_default(),
+            why: failure.map(|f| f.why.clone()).unwrap_or_default(),
+            source: failure.map(|f| f.source.clone()).unwrap_or_default(),
+            frames: summaries,
+        },
+    );
+    Ok(PreparedScene {
+        gpu,
+        reference: found.image,
+        reference_rel_mse: found.rel_mse,
+        frames: references,
+    })
 }
 
 /// A scene's reference image as the suite found it.
@@ -288,15 +385,22 @@ fn found_reference(
     ctx: &Context,
     renderers: &Renderers,
     suite_scene: &file::SuiteScene,
+    frame: Option<u32>,
     gpu_scene: &GpuScene,
     options: &SuiteOptions,
     on: &mut impl FnMut(Event),
 ) -> std::result::Result<FoundReference, String> {
     let scene = &suite_scene.scene;
-    let stored = converged::lookup(scene, &suite_scene.reference).map_err(|e| format!("{e:#}"))?;
+    // Progress names the frame of an animated scene.
+    let label = match frame {
+        Some(f) => format!("{} frame {f}", scene.name),
+        None => scene.name.clone(),
+    };
+    let stored = converged::lookup_frame(scene, &suite_scene.reference, frame)
+        .map_err(|e| format!("{e:#}"))?;
     if let Some(c) = stored {
         on(Event::Reference {
-            scene: &scene.name,
+            scene: &label,
             done: 1,
             total: 1,
             cached: true,
@@ -305,7 +409,7 @@ fn found_reference(
         return Ok(FoundReference {
             image,
             spp: u32::try_from(c.record.total_spp()).unwrap_or(u32::MAX),
-            seed: converged::SEED_BASE,
+            seed: converged::chunk_seed(frame, 0),
             gpu_ms: Some(c.record.gpu_ms),
             rel_mse: Some(rel_mse),
             path: c.halves_path(),
@@ -313,16 +417,17 @@ fn found_reference(
         });
     }
     // Progress comes only while rendering; a cache hit is reported once it is known.
-    let reference = references::get_or_render(
+    let reference = references::get_or_render_frame(
         ctx,
         renderers,
         &options.cache,
         scene,
+        frame,
         gpu_scene,
         &suite_scene.reference,
         |done, total| {
             on(Event::Reference {
-                scene: &scene.name,
+                scene: &label,
                 done,
                 total,
                 cached: false,
@@ -332,7 +437,7 @@ fn found_reference(
     .map_err(|e| format!("{e:#}"))?;
     if reference.reused {
         on(Event::Reference {
-            scene: &scene.name,
+            scene: &label,
             done: 1,
             total: 1,
             cached: true,
@@ -340,7 +445,11 @@ fn found_reference(
     }
     Ok(FoundReference {
         spp: reference_spp(&suite_scene.reference),
-        seed: suite_scene.reference.seed(),
+        seed: suite_scene.reference.seed().wrapping_add(
+            frame
+                .unwrap_or(0)
+                .wrapping_mul(converged::FRAME_SEED_STRIDE),
+        ),
         gpu_ms: reference.record.gpu_ms,
         rel_mse: reference.record.rel_mse,
         path: reference.exr,
@@ -411,13 +520,20 @@ fn run_one(
         error_map: None,
         pareto: false,
         stats: BTreeMap::new(),
+        frame_ms: spec.frame_ms,
+        sequence: None,
     };
     if let Some(why) = spec.method.declines(scene) {
         record.status = Status::Declined;
         record.note = why;
         return Ok(record);
     }
-    let (gpu_scene, reference, reference_rel_mse) = match prepared {
+    let PreparedScene {
+        gpu: gpu_scene,
+        reference,
+        reference_rel_mse,
+        frames: frame_references,
+    } = match prepared {
         Ok(p) => p,
         Err(e) => {
             record.status = Status::Error;
@@ -439,12 +555,25 @@ fn run_one(
         Ok(record)
     };
     let mut method = spec.method.clone();
-    if let Some(time_ms) = spec.time_ms {
+    let calibration_scene;
+    let (calibrated_scene, budget_ms) = match (spec.time_ms, spec.frame_ms) {
+        (Some(t), _) => (scene, Some(t)),
+        (None, Some(f)) => {
+            let frame = suite_scene.calibration_frame().unwrap_or(0);
+            calibration_scene = match scene.at_frame(frame) {
+                Ok(s) => s,
+                Err(e) => return fail(record, MeasureError::Failed(format!("frame {frame}: {e}"))),
+            };
+            (&calibration_scene, Some(f))
+        }
+        (None, None) => (scene, None),
+    };
+    if let Some(time_ms) = budget_ms {
         let calibration = calibrate::calibrate(
             ctx,
             renderers,
             &method,
-            scene,
+            calibrated_scene,
             gpu_scene,
             time_ms,
             |render, done, total| progress(render, 0, done, total),
@@ -458,6 +587,45 @@ fn run_one(
             }
             Err(e) => return fail(record, e),
         }
+    }
+    if let Some(frame_ms) = spec.frame_ms {
+        let frames = suite_scene.frames.clone().unwrap_or(0..0);
+        let measured = sequence::measure_sequence(
+            ctx,
+            renderers,
+            &method,
+            scene,
+            calibrated_scene,
+            gpu_scene,
+            frames,
+            suite_scene.calibration_frame().unwrap_or(0),
+            frame_references,
+            suite.warmup,
+            suite.repeats,
+            &mut progress,
+        );
+        let m = match measured {
+            Ok(m) => m,
+            Err(e) => return fail(record, e),
+        };
+        let (image, reference) = (&m.image, &m.image_reference);
+        write_images(options, spec, &mut record, image, reference)?;
+        if let Some(count) = record.calibrated_count {
+            record.budget_missed =
+                calibrate::missed(frame_ms, count, m.gpu_ms.unwrap_or(m.wall_ms));
+        }
+        record.gpu_ms = m.gpu_ms;
+        record.pass_gpu_ms = m.pass_gpu_ms;
+        record.wall_ms = Some(m.wall_ms);
+        record.metrics = Some(m.metrics);
+        record.scored = m.scored;
+        record.reference_rel_mse = m.reference_rel_mse;
+        record.flicker_frames = 0;
+        (record.rel_mse_min, record.rel_mse_max) = m.rel_mse_range.unzip();
+        record.nonfinite_estimates = m.nonfinite_estimates;
+        record.stats = m.stats;
+        record.sequence = Some(m.sequence);
+        return Ok(record);
     }
     let measured = measure(
         ctx,
@@ -475,17 +643,7 @@ fn run_one(
         Ok(m) => m,
         Err(e) => return fail(record, e),
     };
-    let factor = preview::factor_for(m.image.width, THUMBNAIL_WIDTH);
-    let stem = spec.file_stem();
-    let image_name = format!("images/{stem}.png");
-    let error_name = format!("images/{stem}-error.png");
-    image::png::write(
-        &options.out.join(&image_name),
-        &preview::downscale(&m.image, factor),
-        0.0,
-    )?;
-    let (w, h, data) = preview::error_map_rgb8(&m.image, reference, factor);
-    image::png::write_rgb8(&options.out.join(&error_name), w, h, &data)?;
+    write_images(options, spec, &mut record, &m.image, reference)?;
     if let (Some(time_ms), Some(count)) = (spec.time_ms, record.calibrated_count) {
         record.budget_missed = calibrate::missed(time_ms, count, m.gpu_ms.unwrap_or(m.wall_ms));
     }
@@ -501,9 +659,31 @@ fn run_one(
     (record.rel_mse_min, record.rel_mse_max) = m.rel_mse_range.unzip();
     record.nonfinite_estimates = m.nonfinite_estimates;
     record.stats = m.stats;
+    Ok(record)
+}
+
+/// Writes a run's thumbnail and error map (against `reference`) and names them in `record`.
+fn write_images(
+    options: &SuiteOptions,
+    spec: &file::RunSpec,
+    record: &mut RunRecord,
+    image: &Image,
+    reference: &Image,
+) -> Result<()> {
+    let factor = preview::factor_for(image.width, THUMBNAIL_WIDTH);
+    let stem = spec.file_stem();
+    let image_name = format!("images/{stem}.png");
+    let error_name = format!("images/{stem}-error.png");
+    image::png::write(
+        &options.out.join(&image_name),
+        &preview::downscale(image, factor),
+        0.0,
+    )?;
+    let (w, h, data) = preview::error_map_rgb8(image, reference, factor);
+    image::png::write_rgb8(&options.out.join(&error_name), w, h, &data)?;
     record.image = Some(image_name);
     record.error_map = Some(error_name);
-    Ok(record)
+    Ok(())
 }
 
 /// The default output folder of a suite: `out/bench/<name>`, or `out/bench/<name>-shard-i-of-n`.

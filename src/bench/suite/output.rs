@@ -1,4 +1,5 @@
-//! The suite's output folder: results.json, results.csv, `charts/<scene>.svg`, report.md and
+//! The suite's output folder: results.json, results.csv, `charts/<scene>.svg` (and, for an
+//! animated scene, `charts/<scene>-frames.svg`: relMSE per frame), report.md and
 //! images/ (thumbnails and error maps, written by the runner), and its lock while a suite or a
 //! merge writes it. Every file is written under a temporary name and renamed, so a reader (or
 //! a Ctrl-C) never sees half a file.
@@ -8,7 +9,7 @@ use std::path::Path;
 
 use anyhow::{Context as _, Result};
 
-use crate::bench::chart::{Chart, Point, Series};
+use crate::bench::chart::{Chart, FrameChart, FrameSeries, Point, Series};
 use crate::lock::HolderLock;
 
 use super::file::file_safe;
@@ -56,6 +57,53 @@ pub fn chart_path(scene: &str) -> String {
     format!("charts/{}.svg", file_safe(scene))
 }
 
+/// The per-frame chart of an animated scene, relative to the output folder.
+pub fn frames_chart_path(scene: &str) -> String {
+    format!("charts/{}-frames.svg", file_safe(scene))
+}
+
+/// Whether `scene` has frame-time runs (an animated scene).
+pub fn animated(results: &SuiteResults, scene: &str) -> bool {
+    results
+        .runs
+        .iter()
+        .any(|r| r.scene == scene && r.frame_ms.is_some())
+}
+
+/// Per-frame relMSE over frame number for an animated scene: a line per ok frame-time run
+/// (method label and budget, and device when the results mix devices).
+pub fn frames_chart(results: &SuiteResults, scene: &str) -> FrameChart {
+    let mixed = results
+        .runs
+        .iter()
+        .any(|r| r.device != results.runs[0].device);
+    let series = results
+        .runs
+        .iter()
+        .filter(|r| r.scene == scene && r.status == Status::Ok)
+        .filter_map(|r| {
+            let seq = r.sequence.as_ref()?;
+            let name = match mixed {
+                true => format!("{} {} ({})", r.label, r.budget, r.device),
+                false => format!("{} {}", r.label, r.budget),
+            };
+            Some(FrameSeries {
+                name,
+                points: seq
+                    .per_frame
+                    .iter()
+                    .map(|p| (p.frame, p.metrics.rel_mse))
+                    .collect(),
+            })
+        })
+        .collect();
+    FrameChart {
+        title: format!("{scene}: relMSE per frame ({})", results.device),
+        y_label: "relMSE against the frame's reference (mean over seeds)".into(),
+        series,
+    }
+}
+
 /// relMSE against GPU time for one scene: a series per method label (and device, when the
 /// results mix devices), a point per ok run.
 pub fn chart(results: &SuiteResults, scene: &str) -> Chart {
@@ -89,6 +137,17 @@ pub fn chart(results: &SuiteResults, scene: &str) -> Chart {
             }),
         }
     }
+    if animated(results, scene) {
+        return Chart {
+            title: format!(
+                "{scene}: mean per-frame relMSE against frame time ({})",
+                results.device
+            ),
+            x_label: "GPU time per frame (ms, median over frames and seeds)".into(),
+            y_label: "relMSE, mean over frames and seeds".into(),
+            series,
+        };
+    }
     Chart {
         title: format!("{scene}: relMSE against GPU time ({})", results.device),
         x_label: "GPU time per image (ms, median of repeats)".into(),
@@ -117,6 +176,12 @@ pub fn write(out: &Path, results: &SuiteResults) -> Result<()> {
             &out.join(chart_path(&scene)),
             &chart(results, &scene).to_svg(),
         )?;
+        if animated(results, &scene) {
+            atomic_write(
+                &out.join(frames_chart_path(&scene)),
+                &frames_chart(results, &scene).to_svg(),
+            )?;
+        }
     }
     atomic_write(&out.join("report.md"), &report::markdown(results))
 }

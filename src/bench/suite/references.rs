@@ -44,6 +44,10 @@ pub struct ReferenceKey {
     pub seed: u32,
     pub kernel_hash: String,
     pub code_hash: String,
+    /// The animation frame, for one frame of an animated scene (whose content hash is the
+    /// file's, the same for every frame); left out for a still scene, whose keys are as before.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub frame: Option<u32>,
 }
 
 /// The record beside a cached reference.
@@ -69,6 +73,15 @@ impl ReferenceKey {
             seed: method.seed(),
             kernel_hash: format!("{:016x}", reference::kernel_hash()),
             code_hash: env!("IRAD_REFERENCE_CODE_HASH").into(),
+            frame: None,
+        }
+    }
+
+    /// The key of frame `frame` of an animated scene (None: a still scene).
+    pub fn of(scene: &Scene, method: &Method, frame: Option<u32>) -> ReferenceKey {
+        ReferenceKey {
+            frame,
+            ..ReferenceKey::new(scene, method)
         }
     }
 
@@ -120,9 +133,27 @@ pub fn get_or_render(
     scene: &Scene,
     gpu_scene: &GpuScene,
     method: &Method,
+    progress: impl FnMut(u32, u32),
+) -> Result<CachedReference> {
+    get_or_render_frame(
+        ctx, renderers, root, scene, None, gpu_scene, method, progress,
+    )
+}
+
+/// `get_or_render` for frame `frame` of an animated scene: `scene` is that frame's scene
+/// (`Scene::at_frame`), keyed with the frame (`ReferenceKey::of`); None: a still scene.
+#[allow(clippy::too_many_arguments)]
+pub fn get_or_render_frame(
+    ctx: &Context,
+    renderers: &Renderers,
+    root: &Path,
+    scene: &Scene,
+    frame: Option<u32>,
+    gpu_scene: &GpuScene,
+    method: &Method,
     mut progress: impl FnMut(u32, u32),
 ) -> Result<CachedReference> {
-    let key = ReferenceKey::new(scene, method);
+    let key = ReferenceKey::of(scene, method, frame);
     if let Some(found) = lookup(root, &key) {
         return Ok(found);
     }
@@ -137,8 +168,14 @@ pub fn get_or_render(
     let n_b = total - n_a;
     let context = || format!("rendering the reference of {}", scene.name);
     let half = |spp: u32, seed: u32| samples_of(scene, settings, spp, seed);
+    // Each frame's halves their own random numbers, as a converged reference's chunks.
+    let seed = settings.seed.wrapping_add(
+        frame
+            .unwrap_or(0)
+            .wrapping_mul(super::converged::FRAME_SEED_STRIDE),
+    );
     let a = renderers
-        .run(ctx, &half(n_a, settings.seed), scene, gpu_scene, |d, _| {
+        .run(ctx, &half(n_a, seed), scene, gpu_scene, |d, _| {
             progress(d, total)
         })
         .with_context(context)?;
@@ -149,7 +186,7 @@ pub fn get_or_render(
         let b = renderers
             .run(
                 ctx,
-                &half(n_b, settings.seed.wrapping_add(1)),
+                &half(n_b, seed.wrapping_add(1)),
                 scene,
                 gpu_scene,
                 |d, _| progress(n_a + d, total),

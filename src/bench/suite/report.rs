@@ -6,7 +6,7 @@ use std::fmt::Write as _;
 
 use crate::image::preview::{ERROR_MAP_MAX, ERROR_MAP_MIN};
 
-use super::output::chart_path;
+use super::output::{animated, chart_path, frames_chart_path};
 use super::results::{RunRecord, Status, SuiteResults};
 
 /// The mark of a Pareto-optimal run in the report's tables.
@@ -80,16 +80,24 @@ pub fn markdown(results: &SuiteResults) -> String {
                 Some(e) => format!(" Its own relMSE, estimated from its two halves: {e:.3e}."),
                 None => String::new(),
             };
-            let _ = writeln!(
-                md,
-                "Reference: {} samples per pixel (seeds {} and {}, half each), cached at `{}`.{noise}\n",
-                r.spp,
-                r.seed,
-                r.seed.wrapping_add(1),
-                r.cache
-            );
+            if r.frames.is_empty() {
+                let _ = writeln!(
+                    md,
+                    "Reference: {} samples per pixel (seeds {} and {}, half each), cached at `{}`.{noise}\n",
+                    r.spp,
+                    r.seed,
+                    r.seed.wrapping_add(1),
+                    r.cache
+                );
+            } else {
+                md += &frame_references(r);
+            }
         }
         let _ = writeln!(md, "![relMSE against GPU time]({})\n", chart_path(&scene));
+        if animated(results, &scene) {
+            let _ = writeln!(md, "![relMSE per frame]({})\n", frames_chart_path(&scene));
+            md += &sequence_table(&runs);
+        }
         md += "| | method | budget | GPU ms | wall ms | relMSE | RMSE | Lab error | bias | outliers | NaN/Inf | flicker | status |\n";
         md += "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|\n";
         for r in &runs {
@@ -158,6 +166,109 @@ pub fn markdown(results: &SuiteResults) -> String {
     md
 }
 
+/// An animated scene's references, one per frame: which are converged (stored beside the
+/// scene by `irad bench references`) and which the cache's, their samples and own relMSE.
+fn frame_references(r: &super::results::ReferenceSummary) -> String {
+    let list = |converged: bool| -> Vec<String> {
+        r.frames
+            .iter()
+            .filter(|f| f.converged == converged)
+            .map(|f| f.frame.to_string())
+            .collect()
+    };
+    let (stored, cached) = (list(true), list(false));
+    let spp_lo = r.frames.iter().map(|f| f.spp).min().unwrap_or(0);
+    let spp_hi = r.frames.iter().map(|f| f.spp).max().unwrap_or(0);
+    let worst = r
+        .frames
+        .iter()
+        .filter_map(|f| f.rel_mse)
+        .fold(None, |m: Option<f64>, e| Some(m.map_or(e, |m| m.max(e))));
+    let mut md = format!(
+        "References: one per animation frame ({} frames, {}..={}), {} to {} samples per pixel",
+        r.frames.len(),
+        r.frames.first().map_or(0, |f| f.frame),
+        r.frames.last().map_or(0, |f| f.frame),
+        spp_lo,
+        spp_hi
+    );
+    if let Some(e) = worst {
+        let _ = write!(md, ", own relMSE (from their halves) at most {e:.3e}");
+    }
+    md += ". ";
+    if cached.is_empty() {
+        md += "Every frame's is a converged reference stored beside the scene (`irad bench references`).";
+    } else if stored.is_empty() {
+        md += "No frame has a converged reference stored beside the scene: each is the cache's \
+               (rendered now when missing); `irad bench references <suite>` renders converged ones.";
+    } else {
+        let _ = write!(
+            md,
+            "Converged (stored beside the scene) for frames {}; no converged reference for frames \
+             {}, which use the cache's (rendered now when missing; `irad bench references \
+             <suite>` renders them).",
+            stored.join(", "),
+            cached.join(", ")
+        );
+    }
+    md += " The thumbnail below is the calibration frame's.\n\n";
+    md
+}
+
+/// The frame-time runs of an animated scene: frame time, mean and worst per-frame relMSE,
+/// flicker.
+fn sequence_table(runs: &[&RunRecord]) -> String {
+    let with: Vec<&&RunRecord> = runs.iter().filter(|r| r.frame_ms.is_some()).collect();
+    if with.is_empty() {
+        return String::new();
+    }
+    let mut md = String::from(
+        "Frame-time runs: each method's count calibrated to the frame budget on the calibration \
+         frame, then every frame rendered independently with its own seed (the sequence once per \
+         seed); frame ms: the median frame's GPU time; relMSE: the mean over frames and seeds of \
+         each frame against its own reference; worst frame: the frame with the highest relMSE \
+         (mean over seeds); flicker: the temporal change of the error from frame to frame \
+         relative to the reference's own change (docs/DESIGN.md \"Error metrics\"), mean over \
+         seeds.\n\n",
+    );
+    md += "| | method | frame budget ms | count | frame ms | relMSE | worst frame | worst relMSE | flicker | bias | outliers | status |\n";
+    md += "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|\n";
+    for r in with {
+        let m = r.metrics;
+        let seq = r.sequence.as_ref();
+        let status = match r.status {
+            Status::Ok => "ok".to_string(),
+            s => format!("{}: {}", s.as_str(), r.note),
+        };
+        let _ = writeln!(
+            md,
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
+            if r.pareto { PARETO_MARK } else { "" },
+            r.label,
+            fixed(r.frame_ms, 2),
+            r.calibrated_count
+                .map(|c| c.to_string())
+                .unwrap_or_else(|| "-".into()),
+            fixed(r.gpu_ms, 2) + missed_mark(r),
+            sci(m.map(|m| m.rel_mse))
+                + if limited_by_reference(r) {
+                    LIMITED_MARK
+                } else {
+                    ""
+                },
+            seq.map(|s| s.worst_frame.to_string())
+                .unwrap_or_else(|| "-".into()),
+            sci(seq.and_then(|s| s.worst_rel_mse)),
+            fixed(seq.and_then(|s| s.flicker), 3),
+            percent(m.map(|m| m.bias)),
+            percent(m.map(|m| m.outliers)),
+            escape(&status)
+        );
+    }
+    md += "\n";
+    md
+}
+
 /// The mark of a scene's home method (the suite's `home`) in the equal-time table.
 pub const HOME_MARK: &str = "⌂";
 
@@ -166,7 +277,11 @@ pub const HOME_MARK: &str = "⌂";
 /// relMSE x GPU time of the path tracer over the run's (docs/DESIGN.md "Speed at equal error"),
 /// so over 1 the run reaches lower error in the same time. Empty without time budgets.
 fn equal_time_table(runs: &[&RunRecord]) -> String {
-    let mut budgets: Vec<f64> = runs.iter().filter_map(|r| r.time_ms).collect();
+    // A frame-time budget (an animated scene's) is a time budget per frame.
+    let mut budgets: Vec<f64> = runs
+        .iter()
+        .filter_map(|r| r.time_ms.or(r.frame_ms))
+        .collect();
     budgets.sort_by(f64::total_cmp);
     budgets.dedup();
     if budgets.is_empty() {
@@ -182,7 +297,7 @@ fn equal_time_table(runs: &[&RunRecord]) -> String {
         let at: Vec<&RunRecord> = runs
             .iter()
             .copied()
-            .filter(|r| r.time_ms == Some(budget))
+            .filter(|r| r.time_ms.or(r.frame_ms) == Some(budget))
             .collect();
         let references: Vec<&RunRecord> = at
             .iter()
@@ -191,13 +306,18 @@ fn equal_time_table(runs: &[&RunRecord]) -> String {
             .collect();
         let _ = writeln!(
             md,
-            "Equal time, {budget} GPU ms ({HOME_MARK}: the scene's home method; image mean: the \
+            "Equal time, {budget} GPU ms{} ({HOME_MARK}: the scene's home method; image mean: the \
              mean over the run's images (successive seeds) of the image mean against the \
              reference's; spread: the standard deviation of those images' means, how far one \
              render's brightness moves from the next's; net relMSE: relMSE less the reference's own, estimated from its two \
              halves, so an estimate of the error against the converged image (- where the \
              reference's noise swamps it); speed: the path tracer's net relMSE x GPU time over \
-             the run's, both from this device):\n"
+             the run's, both from this device):\n",
+            if at.iter().any(|r| r.frame_ms.is_some()) {
+                " per frame (figures: means over the frames and seeds; the reference's own relMSE: the highest of the frames')"
+            } else {
+                ""
+            }
         );
         md +=
             "| | method | count | GPU ms | relMSE | net relMSE | image mean | spread | outliers |";
@@ -265,14 +385,19 @@ fn missed_footnotes(runs: &[&RunRecord]) -> String {
             .or(r.wall_ms.map(|t| (t, "wall")));
         let _ = writeln!(
             md,
-            "{} Time budget missed: {} {} took {} {} ms at a count of 1, over its budget of {} ms; \
+            "{} {} budget missed: {} {} took {} {} ms{} at a count of 1, over its budget of {} ms; \
              no count meets it on this device, so its figures are not at equal time.\n",
             MISSED_MARK.trim(),
+            if r.frame_ms.is_some() { "Frame-time" } else { "Time" },
             r.label,
             r.budget,
             fixed(took.map(|t| t.0), 3),
             took.map(|t| t.1).unwrap_or("GPU"),
-            r.time_ms.map(|t| t.to_string()).unwrap_or_else(|| "-".into()),
+            if r.frame_ms.is_some() { " a frame" } else { "" },
+            r.time_ms
+                .or(r.frame_ms)
+                .map(|t| t.to_string())
+                .unwrap_or_else(|| "-".into()),
         );
     }
     md

@@ -126,6 +126,60 @@ pub struct RunRecord {
     /// over the scored images.
     #[serde(default)]
     pub stats: BTreeMap<String, f64>,
+    /// A frame-time budget (`frame_ms`) on an animated scene: GPU milliseconds per frame the
+    /// count was calibrated to. `gpu_ms` and `wall_ms` are then the median frame's, and
+    /// `metrics` the mean over frames (and seeds) of each frame against its own reference.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub frame_ms: Option<f64>,
+    /// A frame-time run's figures per frame, worst frame and flicker.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sequence: Option<SequenceResult>,
+}
+
+/// What a frame-time run (`frame_ms`) measured over its animation frames: it rendered every
+/// frame of `frames` once per seed (its `repeats` seeds: sequence r uses the run's seed +
+/// r x `frames[1]`, frame f of it that + f, `sequence::frame_seed`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SequenceResult {
+    /// Frames A (included) to B (not).
+    pub frames: [u32; 2],
+    /// The frame the count was calibrated on.
+    pub calibration_frame: u32,
+    /// Per frame, in order: each figure the mean over the seeds, the GPU time their median.
+    pub per_frame: Vec<FrameResult>,
+    /// The frame with the highest relMSE (of `per_frame`), and that relMSE (None where it is
+    /// not finite).
+    pub worst_frame: u32,
+    pub worst_rel_mse: Option<f64>,
+    /// The flicker of the sequence (docs/DESIGN.md "Error metrics": the temporal change of
+    /// the error from frame to frame relative to the reference's own change), the mean over
+    /// the seeds; None for one frame (or where a frame has NaN/Inf).
+    pub flicker: Option<f64>,
+}
+
+/// One frame of a frame-time run.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FrameResult {
+    pub frame: u32,
+    /// Against the frame's own reference, averaged over the run's seeds.
+    pub metrics: Metrics,
+    /// GPU time of the frame (median over the seeds; wall time where the device has no
+    /// timestamps).
+    pub gpu_ms: f64,
+}
+
+/// One frame's reference of an animated scene.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FrameReference {
+    pub frame: u32,
+    pub spp: u32,
+    /// Its own relMSE, from its two halves.
+    pub rel_mse: Option<f64>,
+    /// Stored beside the scene by `irad bench references` (else the cache's, rendered now
+    /// when missing).
+    pub converged: bool,
+    /// Where it was read from (or written to).
+    pub path: String,
 }
 
 /// Everything a suite (or one shard of it) produced so far.
@@ -185,6 +239,10 @@ pub struct ReferenceSummary {
     pub expected_to_fail: Vec<String>,
     pub why: String,
     pub source: String,
+    /// For an animated scene: one reference per frame (the fields above describe the
+    /// calibration frame's, whose thumbnail is `image`).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub frames: Vec<FrameReference>,
 }
 
 impl SuiteResults {
@@ -353,6 +411,26 @@ const COLUMNS: &[Column] = &[
     ("driver", |r| r.driver.clone()),
     ("scene_hash", |r| r.scene_hash.clone()),
     ("note", |r| r.note.clone()),
+    // Frame-time runs (animated scenes); after the older columns, which keep their places.
+    ("frame_ms", |r| figure(r.frame_ms)),
+    ("frames", |r| {
+        r.sequence
+            .as_ref()
+            .map(|s| format!("{}..{}", s.frames[0], s.frames[1]))
+            .unwrap_or_default()
+    }),
+    ("worst_frame", |r| {
+        r.sequence
+            .as_ref()
+            .map(|s| s.worst_frame.to_string())
+            .unwrap_or_default()
+    }),
+    ("worst_frame_rel_mse", |r| {
+        figure(r.sequence.as_ref().and_then(|s| s.worst_rel_mse))
+    }),
+    ("sequence_flicker", |r| {
+        figure(r.sequence.as_ref().and_then(|s| s.flicker))
+    }),
 ];
 
 /// The CSV's first columns, in order (the names of `COLUMNS`).
@@ -479,6 +557,8 @@ mod tests {
             image_mean_offset: None,
             image_mean_spread: None,
             rel_mse_min: None,
+            frame_ms: None,
+            sequence: None,
             rel_mse_max: None,
             nonfinite_estimates: 0,
             reference_spp: 1,
@@ -609,7 +689,8 @@ mod tests {
              expected_failure,home,pareto,width,height,seed,warmup,repeats,flicker_frames,scored,\
              gpu_ms,wall_ms,rel_mse,rel_mse_min,rel_mse_max,rmse,lab_error,bias,outliers,nan_inf,flicker,\
              image_mean_offset,image_mean_spread,nonfinite_estimates,reference_spp,reference_seed,\
-             reference_rel_mse,device,driver,scene_hash,note,param:spp,param:strategy,\
+             reference_rel_mse,device,driver,scene_hash,note,frame_ms,frames,worst_frame,\
+             worst_frame_rel_mse,sequence_flicker,param:spp,param:strategy,\
              param:vpls,pass_ms:shade,pass_ms:trace,stat:kept"
         );
         assert!(header.starts_with(&FIXED_COLUMNS.join(",")));
@@ -631,9 +712,9 @@ mod tests {
             "3,cornell-box/12.5/0.031,cornell-box,embedded:cornell-box,reference,pt,time 20ms,\
              20,7,false,ok,false,true,true,1,1,0,0,1,0,1,12.5,,0.031,0.02,0.04,0,0,0,0,0,0.002,-0.01,0.05,0,1,9,\
              0.00001,\
-             \"gpu, \"\"fast\"\"\",,,\"two\nlines\",,bir,64,,3.25,0.75\n\
+             \"gpu, \"\"fast\"\"\",,,\"two\nlines\",,,,,,,bir,64,,3.25,0.75\n\
              4,veach/1/0.5,veach,,reference,pt,,,,false,declined,true,false,false,1,1,0,0,1,0,1,,,,,,,,,,\
-             ,,,,0,1,9,,cpu,,,,16,,,,,\n"
+             ,,,,0,1,9,,cpu,,,,,,,,,16,,,,,\n"
         );
     }
 }

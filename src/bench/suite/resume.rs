@@ -255,7 +255,9 @@ pub fn kept_runs(
 fn matches(r: &RunRecord, suite: &Suite, spec: &RunSpec, out: &Path) -> bool {
     let scene = &suite.scenes[spec.scene].scene;
     let method = match r.calibrated_count {
-        Some(count) if spec.time_ms.is_some() => spec.method.with_count(count),
+        Some(count) if spec.time_ms.is_some() || spec.frame_ms.is_some() => {
+            spec.method.with_count(count)
+        }
         _ => spec.method.clone(),
     };
     let images_there = [&r.image, &r.error_map]
@@ -265,6 +267,7 @@ fn matches(r: &RunRecord, suite: &Suite, spec: &RunSpec, out: &Path) -> bool {
         && r.scene_hash == format!("{:016x}", scene.content_hash)
         && r.seed == spec.method.seed()
         && r.time_ms == spec.time_ms
+        && r.frame_ms == spec.frame_ms
         && r.parameters == method.parameters()
         && match r.status {
             Status::Ok => images_there,

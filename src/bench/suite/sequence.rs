@@ -1,0 +1,195 @@
+//! One frame-time run of a suite (`budgets = [{ frame_ms = X }]` on an animated scene),
+//! measured: its count is calibrated on one frame (the caller, calibrate.rs), then `warmup`
+//! untimed renders of that frame, then the scene's frames rendered as a sequence
+//! (`crate::sequence::render_frames`: each frame its own scene and seed, independent of the
+//! others) once per seed, `repeats` seeds: sequence r uses the method's seed + r x B (B the
+//! end of the frames), so no two renders of the run share a seed. Each frame is scored against
+//! its own reference (`SequenceScore`: relMSE, bias, outliers per frame, and the flicker of
+//! the sequence). Reported: per frame its figures averaged over the seeds and its GPU time's
+//! median; for the run the median frame time, the figures' mean over every frame and seed,
+//! the worst frame and the flicker (mean over the seeds).
+
+use std::collections::BTreeMap;
+use std::ops::Range;
+
+use crate::bench::median;
+use crate::gpu::Context;
+use crate::image::{Image, Metrics, SequenceScore};
+use crate::methods::{Method, Renderers, RunError};
+use crate::scene::gpu::GpuScene;
+use crate::scene::Scene;
+
+use super::measure::MeasureError;
+use super::results::{FrameResult, SequenceResult};
+
+pub struct MeasuredSequence {
+    /// The calibration frame of the first sequence, and its reference (the run's thumbnail
+    /// and error map).
+    pub image: Image,
+    pub image_reference: Image,
+    /// Each figure's mean over every frame and seed (NaN/Inf counts summed).
+    pub metrics: Metrics,
+    /// Frames scored (frames x seeds).
+    pub scored: u32,
+    /// The lowest and highest of the sequences' mean relMSE (one per seed).
+    pub rel_mse_range: Option<(f64, f64)>,
+    /// Median over every frame and seed of the frame's GPU time (None where the device has no
+    /// timestamps), of each pass's, and of the frame's wall time.
+    pub gpu_ms: Option<f64>,
+    pub pass_gpu_ms: BTreeMap<String, Option<f64>>,
+    pub wall_ms: f64,
+    pub nonfinite_estimates: u64,
+    pub stats: BTreeMap<String, f64>,
+    /// The highest of the frame references' own relMSE.
+    pub reference_rel_mse: Option<f64>,
+    pub sequence: SequenceResult,
+}
+
+/// Renders `method` (its calibrated count) over `frames` of the animated `scene`, once per
+/// seed; `references[i]` is frame `frames.start + i`'s (frame, reference, its relMSE);
+/// `still` and `gpu` are the calibration frame's scene and upload, for the warm-up.
+/// `progress(render, renders, done, total)` counts frames.
+#[allow(clippy::too_many_arguments)]
+pub fn measure_sequence(
+    ctx: &Context,
+    renderers: &Renderers,
+    method: &Method,
+    scene: &Scene,
+    still: &Scene,
+    gpu: &GpuScene,
+    frames: Range<u32>,
+    calibration_frame: u32,
+    references: &[(u32, Image, Option<f64>)],
+    warmup: u32,
+    repeats: u32,
+    progress: &mut impl FnMut(u32, u32, u32, u32),
+) -> Result<MeasuredSequence, MeasureError> {
+    let n = frames.len() as u32;
+    if n == 0 || references.len() != frames.len() {
+        return Err(MeasureError::Failed(format!(
+            "{} frame references for frames {}..{}",
+            references.len(),
+            frames.start,
+            frames.end
+        )));
+    }
+    let repeats = repeats.max(1);
+    let renders = warmup + repeats * n;
+    let seed = method.seed();
+    let stride = frames.end;
+    for w in 0..warmup {
+        // After every scored seed, as measure.rs's warm-ups.
+        let m = method.with_seed(seed.wrapping_add(repeats * stride + w));
+        renderers.run(ctx, &m, still, gpu, |d, t| progress(w, renders, d, t))?;
+    }
+    let mut image = None;
+    let mut gpu_ms: Vec<Vec<Option<f64>>> = vec![Vec::new(); n as usize];
+    let mut wall = Vec::new();
+    let mut passes: BTreeMap<String, Vec<Option<f64>>> = BTreeMap::new();
+    let mut nonfinite = 0u64;
+    let mut stats: BTreeMap<String, f64> = BTreeMap::new();
+    let mut sequences = Vec::new();
+    for r in 0..repeats {
+        let m = method.with_seed(seed.wrapping_add(r * stride));
+        let mut score = SequenceScore::default();
+        let rendered =
+            crate::sequence::render_frames(ctx, scene, &m, frames.clone(), |f, _, out| {
+                let i = (f - frames.start) as usize;
+                let reference = &references[i].1;
+                if r == 0 && f == calibration_frame {
+                    image = Some(out.image.clone());
+                }
+                gpu_ms[i].push(out.passes.total_gpu_ms());
+                wall.push(out.wall_ms);
+                for (name, ms, _) in &out.passes.passes {
+                    passes.entry(name.clone()).or_default().push(*ms);
+                }
+                nonfinite += out.nonfinite_estimates as u64;
+                for (name, value) in &out.stats {
+                    *stats.entry(name.clone()).or_default() += value / f64::from(repeats * n);
+                }
+                score
+                    .push(out.image, reference.clone())
+                    .map_err(|e| anyhow::anyhow!("scoring frame {f} against its reference: {e}"))?;
+                progress(warmup + r * n + i as u32 + 1, renders, 1, 1);
+                Ok(())
+            });
+        if let Err(e) = rendered {
+            return Err(match e.downcast::<RunError>() {
+                Ok(run) => MeasureError::from(run),
+                Err(e) => MeasureError::Failed(format!("{e:#}")),
+            });
+        }
+        sequences.push(score.finish());
+    }
+    let median_of = |values: &[Option<f64>]| -> Option<f64> {
+        let mut v: Vec<f64> = values.iter().copied().collect::<Option<Vec<f64>>>()?;
+        Some(median(&mut v))
+    };
+    let per_frame: Vec<FrameResult> = frames
+        .clone()
+        .enumerate()
+        .map(|(i, f)| {
+            let over_seeds: Vec<Metrics> = sequences.iter().map(|(p, _)| p[i]).collect();
+            FrameResult {
+                frame: f,
+                metrics: Metrics::mean(&over_seeds),
+                gpu_ms: median_of(&gpu_ms[i]).unwrap_or(f64::NAN),
+            }
+        })
+        .collect();
+    let all: Vec<Metrics> = sequences.iter().flat_map(|(p, _)| p.clone()).collect();
+    let (worst_frame, worst_rel_mse) = per_frame.iter().map(|p| (p.frame, p.metrics.rel_mse)).fold(
+        (frames.start, f64::NAN),
+        |(wf, w), (f, e)| {
+            if w.is_nan() || e > w {
+                (f, e)
+            } else {
+                (wf, w)
+            }
+        },
+    );
+    let flickers: Vec<f64> = sequences.iter().map(|(_, s)| s.flicker).collect();
+    let flicker = flickers.iter().sum::<f64>() / flickers.len() as f64;
+    let means: Vec<f64> = sequences
+        .iter()
+        .map(|(_, s)| s.mean.rel_mse)
+        .filter(|e| e.is_finite())
+        .collect();
+    let all_gpu: Vec<Option<f64>> = gpu_ms.iter().flatten().copied().collect();
+    let calibration_index = (calibration_frame - frames.start) as usize;
+    Ok(MeasuredSequence {
+        image: image.ok_or_else(|| {
+            MeasureError::Failed(format!(
+                "calibration frame {calibration_frame} is not among frames {}..{}",
+                frames.start, frames.end
+            ))
+        })?,
+        image_reference: references[calibration_index].1.clone(),
+        metrics: Metrics::mean(&all),
+        scored: repeats * n,
+        rel_mse_range: means.iter().fold(None, |r: Option<(f64, f64)>, &e| {
+            Some(r.map_or((e, e), |(lo, hi)| (lo.min(e), hi.max(e))))
+        }),
+        gpu_ms: median_of(&all_gpu),
+        pass_gpu_ms: passes
+            .iter()
+            .map(|(k, v)| (k.clone(), median_of(v)))
+            .collect(),
+        wall_ms: median(&mut wall),
+        nonfinite_estimates: nonfinite,
+        stats,
+        reference_rel_mse: references
+            .iter()
+            .filter_map(|(_, _, e)| *e)
+            .fold(None, |m: Option<f64>, e| Some(m.map_or(e, |m| m.max(e)))),
+        sequence: SequenceResult {
+            frames: [frames.start, frames.end],
+            calibration_frame,
+            per_frame,
+            worst_frame,
+            worst_rel_mse: Some(worst_rel_mse).filter(|e| e.is_finite()),
+            flicker: Some(flicker).filter(|e| e.is_finite()),
+        },
+    })
+}
