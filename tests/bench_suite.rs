@@ -1664,6 +1664,18 @@ fn a_frame_time_suite_records_per_frame_figures_and_flicker() {
         assert_eq!(seq.worst_frame, worst.frame);
         assert_eq!(seq.worst_rel_mse, Some(worst.metrics.rel_mse));
         assert!(seq.flicker.is_some_and(|f| f.is_finite() && f > 0.0));
+        // HDR-FLIP per frame, and the run's the mean over frames.
+        assert!(seq.per_frame.iter().all(|p| p.metrics.flip.is_some()));
+        let flip = seq
+            .per_frame
+            .iter()
+            .map(|p| p.metrics.flip.unwrap())
+            .sum::<f64>()
+            / 3.0;
+        assert!(
+            (r.metrics.unwrap().flip.unwrap() - flip).abs() < 1e-9,
+            "{flip}"
+        );
         assert!(seq.per_frame.iter().all(|p| p.gpu_ms > 0.0));
         assert!(r.gpu_ms.is_some_and(|t| t > 0.0));
     }
@@ -1695,7 +1707,7 @@ fn a_frame_time_suite_records_per_frame_figures_and_flicker() {
     let report = fs::read_to_string(out.join("report.md")).unwrap();
     for needle in [
         "charts/cornell-circling-frames.svg",
-        "| worst frame | worst relMSE | flicker |",
+        "| worst frame | worst relMSE | flicker | FLIP |",
         "Every frame's is a converged reference",
         "No frame has a converged reference",
     ] {

@@ -229,10 +229,10 @@ fn sequence_table(runs: &[&RunRecord]) -> String {
          each frame against its own reference; worst frame: the frame with the highest relMSE \
          (mean over seeds); flicker: the temporal change of the error from frame to frame \
          relative to the reference's own change (docs/DESIGN.md \"Error metrics\"), mean over \
-         seeds.\n\n",
+         seeds; FLIP: HDR-FLIP's mean over frames and seeds.\n\n",
     );
-    md += "| | method | frame budget ms | count | frame ms | relMSE | worst frame | worst relMSE | flicker | bias | outliers | status |\n";
-    md += "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|\n";
+    md += "| | method | frame budget ms | count | frame ms | relMSE | worst frame | worst relMSE | flicker | FLIP | bias | outliers | status |\n";
+    md += "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|\n";
     for r in with {
         let m = r.metrics;
         let seq = r.sequence.as_ref();
@@ -242,7 +242,7 @@ fn sequence_table(runs: &[&RunRecord]) -> String {
         };
         let _ = writeln!(
             md,
-            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
             if r.pareto { PARETO_MARK } else { "" },
             r.label,
             fixed(r.frame_ms, 2),
@@ -260,6 +260,7 @@ fn sequence_table(runs: &[&RunRecord]) -> String {
                 .unwrap_or_else(|| "-".into()),
             sci(seq.and_then(|s| s.worst_rel_mse)),
             fixed(seq.and_then(|s| s.flicker), 3),
+            fixed(m.and_then(|m| m.flip), 3),
             percent(m.map(|m| m.bias)),
             percent(m.map(|m| m.outliers)),
             escape(&status)

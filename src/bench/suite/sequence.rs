@@ -91,7 +91,8 @@ pub fn measure_sequence(
     let mut sequences = Vec::new();
     for r in 0..repeats {
         let m = method.with_seed(seed.wrapping_add(r * stride));
-        let mut score = SequenceScore::default();
+        // HDR-FLIP per frame too (a few ms a frame at suite sizes in release).
+        let mut score = SequenceScore::with_flip(crate::image::flip::DEFAULT_PIXELS_PER_DEGREE);
         let rendered =
             crate::sequence::render_frames(ctx, scene, &m, frames.clone(), |f, _, out| {
                 let i = (f - frames.start) as usize;
