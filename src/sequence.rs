@@ -179,13 +179,25 @@ pub struct SequenceReport {
     pub warnings: Vec<String>,
 }
 
+/// Where a sequence stands, for a progress bar: frames, and the samples of the frame under way.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SequenceProgress {
+    pub frames_done: u32,
+    pub frames: u32,
+    /// The frame under way (the range's end once all are done).
+    pub frame: u32,
+    /// The method's count done of the frame under way, of `samples`.
+    pub samples_done: u32,
+    pub samples: u32,
+}
+
 /// Renders `job` into its folder, resuming from the frames an earlier run of the same
-/// sequence completed; `progress(frames done, frames in all, frame)` before each frame and
-/// `on_frame` after it (the frame's report: image and record).
+/// sequence completed; `progress` before each frame, as its samples complete and at the end,
+/// and `on_frame` after each frame (the frame's report: image and record).
 pub fn render_sequence(
     ctx: &Context,
     job: &SequenceJob,
-    mut progress: impl FnMut(u32, u32, u32),
+    mut progress: impl FnMut(SequenceProgress),
     mut on_frame: impl FnMut(u32, &RenderReport),
 ) -> Result<SequenceReport> {
     let Some(animation) = &job.scene.animation else {
@@ -258,7 +270,14 @@ pub fn render_sequence(
     let mut previous: Option<(u32, Scene)> = None;
     let carries = job.method.across_frames();
     for (done, f) in job.frames.clone().enumerate() {
-        progress(done as u32, total, f);
+        let at = |samples_done, samples| SequenceProgress {
+            frames_done: done as u32,
+            frames: total,
+            frame: f,
+            samples_done,
+            samples,
+        };
+        progress(at(0, job.method.samples().min(u32::MAX as u64) as u32));
         let method = frame_method(&job.method, f);
         let stem = frame_stem(&job.out, f);
         let reference = job
@@ -303,7 +322,7 @@ pub fn render_sequence(
             &frame_job,
             checked,
             &animation,
-            |_, _| {},
+            |d, t| progress(at(d, t)),
         )
         .with_context(|| format!("rendering animation frame {f}"))?;
         on_frame(f, &report);
@@ -312,7 +331,13 @@ pub fn render_sequence(
         write_json(&record_path, &record)?;
         previous = (!carries.carries_nothing()).then_some((f, still));
     }
-    progress(total, total, job.frames.end);
+    progress(SequenceProgress {
+        frames_done: total,
+        frames: total,
+        frame: job.frames.end,
+        samples_done: 0,
+        samples: 0,
+    });
     if let Some(dir) = &job.reference {
         // Frame by frame (two in memory), kept frames included: their records may predate the
         // reference.

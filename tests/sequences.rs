@@ -165,7 +165,7 @@ fn frames_are_stills_and_an_interrupted_sequence_resumes_to_the_same_files() {
                 flip: reference.is_some(),
                 reference,
             };
-            sequence::render_sequence(ctx, &job, |_, _, _| {}, |_, _| {})
+            sequence::render_sequence(ctx, &job, |_| {}, |_, _| {})
         };
         let run = |out: &Path, frames: std::ops::Range<u32>, method: &Method| {
             scored(out, frames, method, None)
@@ -433,9 +433,20 @@ fn the_driver_hands_each_frame_the_previous_frames_scene() {
             reference: None,
             flip: false,
         };
-        sequence::render_sequence(ctx, &job(0..2), |_, _, _| {}, |_, _| {}).unwrap();
+        let mut events = vec![];
+        sequence::render_sequence(ctx, &job(0..2), |p| events.push(p), |_, _| {}).unwrap();
+        // Per frame its start and its samples as they complete, then the end.
+        let brief: Vec<(u32, u32, u32)> = events
+            .iter()
+            .map(|p| (p.frames_done, p.frame, p.samples_done))
+            .collect();
+        assert_eq!(
+            brief,
+            [(0, 0, 0), (0, 0, 1), (1, 1, 0), (1, 1, 1), (2, 2, 0)],
+            "{events:?}"
+        );
         seen();
-        let report = sequence::render_sequence(ctx, &job(0..4), |_, _, _| {}, |_, _| {}).unwrap();
+        let report = sequence::render_sequence(ctx, &job(0..4), |_| {}, |_, _| {}).unwrap();
         assert_eq!(report.resumed, [0, 1]);
         let got = seen();
         assert_eq!(got[0], (2, None, None, vec![]));
@@ -455,7 +466,7 @@ fn the_driver_hands_each_frame_the_previous_frames_scene() {
             out: out.clone(),
             ..job(2..3)
         };
-        let report = sequence::render_sequence(ctx, &job, |_, _, _| {}, |_, _| {}).unwrap();
+        let report = sequence::render_sequence(ctx, &job, |_| {}, |_, _| {}).unwrap();
         assert!(
             report
                 .warnings

@@ -84,6 +84,7 @@ pub fn run(
         device_line(ctx.info())
     );
     let bar = progress(frames.len() as u64, "frames");
+    let count_key = method.count_key();
     let job = SequenceJob {
         scene,
         method,
@@ -96,9 +97,15 @@ pub fn run(
     let report = sequence::render_sequence(
         &ctx,
         &job,
-        |done, _, frame| {
-            bar.set_position(done as u64);
-            bar.set_message(format!("frame {frame}"));
+        |p| {
+            bar.set_position(p.frames_done as u64);
+            match p.frames_done < p.frames {
+                true => bar.set_message(format!(
+                    "frame {}: {}/{} {}",
+                    p.frame, p.samples_done, p.samples, count_key
+                )),
+                false => bar.set_message("previews"),
+            }
         },
         |_, _| {},
     );
