@@ -41,9 +41,20 @@ pub fn render_frames(
     scene: &Scene,
     method: &Method,
     frames: Range<u32>,
+    on_frame: impl FnMut(u32, &Scene, RenderOutput) -> Result<()>,
+) -> Result<()> {
+    render_frames_with(ctx, &Renderers::default(), scene, method, frames, on_frame)
+}
+
+/// `render_frames` with kernels already built (a suite's, warmed by earlier renders).
+pub fn render_frames_with(
+    ctx: &Context,
+    renderers: &Renderers,
+    scene: &Scene,
+    method: &Method,
+    frames: Range<u32>,
     mut on_frame: impl FnMut(u32, &Scene, RenderOutput) -> Result<()>,
 ) -> Result<()> {
-    let renderers = Renderers::default();
     // Only a method that carries state across frames gets the previous frame (a second scene
     // in memory and a comparison of the two each frame).
     let carries = !method.across_frames().carries_nothing();

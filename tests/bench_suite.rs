@@ -1650,6 +1650,12 @@ fn a_frame_time_suite_records_per_frame_figures_and_flicker() {
         assert_eq!(seq.calibration_frame, 1);
         assert_eq!(seq.per_frame.len(), 3);
         assert_eq!(r.scored, 6);
+        // The two seeds' sequences are different renders.
+        assert!(
+            r.rel_mse_min < r.rel_mse_max,
+            "{:?}",
+            (r.rel_mse_min, r.rel_mse_max)
+        );
         assert!(r.calibrated_count.is_some() && !r.calibration.is_empty());
         let rel: Vec<f64> = seq.per_frame.iter().map(|p| p.metrics.rel_mse).collect();
         assert!(rel.iter().all(|e| e.is_finite() && *e > 0.0), "{rel:?}");

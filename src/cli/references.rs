@@ -28,8 +28,9 @@ pub struct ReferencesArgs {
     /// Stop a scene once its net relMSE, estimated from its two halves, is at most this.
     #[arg(long, default_value_t = TARGET_REL_MSE, value_parser = parse_target)]
     target: f64,
-    /// Stop a scene after this many minutes of this run (the chunk under way finishes);
-    /// the same command later goes on where it stopped. Default: no limit.
+    /// Stop a scene after this many minutes of this run, an animated scene's frames all
+    /// together (the chunk under way finishes); the same command later goes on where it
+    /// stopped. Default: no limit.
     #[arg(long, value_parser = parse_minutes)]
     minutes: Option<f64>,
     /// Samples per pixel of one chunk: a chunk is saved as soon as it is rendered, so an
@@ -141,6 +142,8 @@ pub fn run(options: &ContextOptions, args: ReferencesArgs) -> Result<()> {
     })
     .context("installing the Ctrl-C handler")?;
     let renderers = Renderers::default();
+    // --minutes holds for a scene, all its frames together, from its first job.
+    let mut deadlines: std::collections::HashMap<String, Instant> = Default::default();
     for (suite_scene, frame) in jobs {
         if STOP.load(Ordering::SeqCst) {
             break;
@@ -153,9 +156,11 @@ pub fn run(options: &ContextOptions, args: ReferencesArgs) -> Result<()> {
         };
         let extend = ExtendOptions {
             target_rel_mse: args.target,
-            deadline: args
-                .minutes
-                .map(|m| Instant::now() + Duration::from_secs_f64(60.0 * m)),
+            deadline: args.minutes.map(|m| {
+                *deadlines
+                    .entry(scene.name.clone())
+                    .or_insert_with(|| Instant::now() + Duration::from_secs_f64(60.0 * m))
+            }),
             chunk_spp: args.chunk_spp,
             stop: Some(&STOP),
         };

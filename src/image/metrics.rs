@@ -536,7 +536,7 @@ pub(super) fn count_non_finite(image: &Image) -> u64 {
 }
 
 /// f64 that is written as `null` when not finite (JSON has no NaN) and read back as NaN.
-mod nullable_f64 {
+pub mod nullable_f64 {
     use serde::{Deserialize, Deserializer, Serializer};
 
     pub fn serialize<S: Serializer>(v: &f64, s: S) -> Result<S::Ok, S::Error> {

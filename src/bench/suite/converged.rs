@@ -60,6 +60,8 @@ pub const SEED_BASE: u32 = 0x5851_f42d;
 /// Frame f's chunk i uses seed `SEED_BASE + f * FRAME_SEED_STRIDE + i`: each frame's
 /// reference has its own random numbers (a frame sharing its noise with the next would hide
 /// part of a run's flicker against them), and a still scene's (frame None) are as before.
+/// Distinct for 4096 frames of up to 2^20 chunks each (u32 wraps there: frames f and f + 4096
+/// share seeds, which only a suite scoring both would see).
 pub const FRAME_SEED_STRIDE: u32 = 1 << 20;
 
 /// The seed of chunk `chunk` of the reference of `frame` (None: a still scene).
@@ -652,4 +654,23 @@ fn commit_of(folder: &Path) -> String {
         .and_then(|o| String::from_utf8(o.stdout).ok())
         .map(|s| s.trim().to_string())
         .unwrap_or_else(|| "unknown (not a git checkout)".into())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// No two (frame, chunk) pairs of 4096 frames share a seed, and a still scene's chunks are
+    /// frame 0's.
+    #[test]
+    fn chunk_seeds_differ_between_frames_and_chunks() {
+        let mut seen = std::collections::HashSet::new();
+        for f in (0..4096).step_by(7).chain([4094]) {
+            for c in [0, 1, 2, 255, FRAME_SEED_STRIDE - 1] {
+                assert!(seen.insert(chunk_seed(Some(f), c)), "frame {f} chunk {c}");
+            }
+        }
+        assert_eq!(chunk_seed(None, 3), chunk_seed(Some(0), 3));
+        assert_ne!(chunk_seed(Some(1), 0), chunk_seed(Some(0), 1));
+    }
 }

@@ -28,7 +28,7 @@ pub fn units(suite: &Suite, run: &RunSpec) -> f64 {
 impl Eta {
     /// `run` took `seconds` (its scene's reference included, when it came first).
     pub fn finished(&mut self, suite: &Suite, run: &RunSpec, seconds: f64) {
-        if run.time_ms.is_some() {
+        if run.time_ms.is_some() || run.frame_ms.is_some() {
             // Its time is its budget (time_left), not a rate over its default count.
             return;
         }
@@ -70,6 +70,16 @@ impl Eta {
 /// takes a quarter of it, each aimed at a third).
 fn time_left(suite: &Suite, run: &RunSpec) -> Option<f64> {
     let renders = (suite.warmup + suite.repeats.max(suite.flicker_frames)) as f64;
+    if let Some(ms) = run.frame_ms {
+        // A frame-time run: the warm-ups and every frame of each repeat at the frame budget
+        // (src/bench/suite/sequence.rs), and the calibration.
+        let frames = suite.scenes[run.scene]
+            .frames
+            .as_ref()
+            .map_or(1, |f| f.len()) as f64;
+        let renders = suite.warmup as f64 + suite.repeats.max(1) as f64 * frames;
+        return Some((renders + 0.75) * ms / 1e3);
+    }
     run.time_ms.map(|ms| (renders + 0.75) * ms / 1e3)
 }
 

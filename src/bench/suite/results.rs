@@ -163,8 +163,9 @@ pub struct FrameResult {
     pub frame: u32,
     /// Against the frame's own reference, averaged over the run's seeds.
     pub metrics: Metrics,
-    /// GPU time of the frame (median over the seeds; wall time where the device has no
-    /// timestamps).
+    /// GPU time of the frame (median over the seeds); NaN, `null` in JSON, where the device
+    /// has no timestamps.
+    #[serde(with = "crate::image::metrics::nullable_f64")]
     pub gpu_ms: f64,
 }
 
@@ -431,6 +432,8 @@ const COLUMNS: &[Column] = &[
     ("sequence_flicker", |r| {
         figure(r.sequence.as_ref().and_then(|s| s.flicker))
     }),
+    // HDR-FLIP, where the run scored it (frame-time runs: the mean over frames and seeds).
+    ("flip", |r| figure(r.metrics.and_then(|m| m.flip))),
 ];
 
 /// The CSV's first columns, in order (the names of `COLUMNS`).
@@ -690,7 +693,7 @@ mod tests {
              gpu_ms,wall_ms,rel_mse,rel_mse_min,rel_mse_max,rmse,lab_error,bias,outliers,nan_inf,flicker,\
              image_mean_offset,image_mean_spread,nonfinite_estimates,reference_spp,reference_seed,\
              reference_rel_mse,device,driver,scene_hash,note,frame_ms,frames,worst_frame,\
-             worst_frame_rel_mse,sequence_flicker,param:spp,param:strategy,\
+             worst_frame_rel_mse,sequence_flicker,flip,param:spp,param:strategy,\
              param:vpls,pass_ms:shade,pass_ms:trace,stat:kept"
         );
         assert!(header.starts_with(&FIXED_COLUMNS.join(",")));
@@ -712,9 +715,9 @@ mod tests {
             "3,cornell-box/12.5/0.031,cornell-box,embedded:cornell-box,reference,pt,time 20ms,\
              20,7,false,ok,false,true,true,1,1,0,0,1,0,1,12.5,,0.031,0.02,0.04,0,0,0,0,0,0.002,-0.01,0.05,0,1,9,\
              0.00001,\
-             \"gpu, \"\"fast\"\"\",,,\"two\nlines\",,,,,,,bir,64,,3.25,0.75\n\
+             \"gpu, \"\"fast\"\"\",,,\"two\nlines\",,,,,,,,bir,64,,3.25,0.75\n\
              4,veach/1/0.5,veach,,reference,pt,,,,false,declined,true,false,false,1,1,0,0,1,0,1,,,,,,,,,,\
-             ,,,,0,1,9,,cpu,,,,,,,,,16,,,,,\n"
+             ,,,,0,1,9,,cpu,,,,,,,,,,16,,,,,\n"
         );
     }
 }

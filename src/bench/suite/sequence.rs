@@ -93,8 +93,14 @@ pub fn measure_sequence(
         let m = method.with_seed(seed.wrapping_add(r * stride));
         // HDR-FLIP per frame too (a few ms a frame at suite sizes in release).
         let mut score = SequenceScore::with_flip(crate::image::flip::DEFAULT_PIXELS_PER_DEGREE);
-        let rendered =
-            crate::sequence::render_frames(ctx, scene, &m, frames.clone(), |f, _, out| {
+        // The suite's kernels, which the warm-ups above built and warmed.
+        let rendered = crate::sequence::render_frames_with(
+            ctx,
+            renderers,
+            scene,
+            &m,
+            frames.clone(),
+            |f, _, out| {
                 let i = (f - frames.start) as usize;
                 let reference = &references[i].1;
                 if r == 0 && f == calibration_frame {
@@ -114,7 +120,8 @@ pub fn measure_sequence(
                     .map_err(|e| anyhow::anyhow!("scoring frame {f} against its reference: {e}"))?;
                 progress(warmup + r * n + i as u32 + 1, renders, 1, 1);
                 Ok(())
-            });
+            },
+        );
         if let Err(e) = rendered {
             return Err(match e.downcast::<RunError>() {
                 Ok(run) => MeasureError::from(run),
@@ -140,16 +147,17 @@ pub fn measure_sequence(
         })
         .collect();
     let all: Vec<Metrics> = sequences.iter().flat_map(|(p, _)| p.clone()).collect();
-    let (worst_frame, worst_rel_mse) = per_frame.iter().map(|p| (p.frame, p.metrics.rel_mse)).fold(
-        (frames.start, f64::NAN),
-        |(wf, w), (f, e)| {
-            if w.is_nan() || e > w {
-                (f, e)
-            } else {
-                (wf, w)
-            }
-        },
-    );
+    // A frame whose relMSE is NaN (NaN/Inf pixels) is the worst: the first such frame, else
+    // the highest relMSE.
+    let worst_key = |e: f64| if e.is_nan() { f64::INFINITY } else { e };
+    let (worst_frame, worst_rel_mse) = per_frame
+        .iter()
+        .map(|p| (p.frame, p.metrics.rel_mse))
+        .reduce(|(wf, w), (f, e)| match worst_key(e) > worst_key(w) {
+            true => (f, e),
+            false => (wf, w),
+        })
+        .unwrap_or((frames.start, f64::NAN));
     let flickers: Vec<f64> = sequences.iter().map(|(_, s)| s.flicker).collect();
     let flicker = flickers.iter().sum::<f64>() / flickers.len() as f64;
     let means: Vec<f64> = sequences
@@ -180,10 +188,14 @@ pub fn measure_sequence(
         wall_ms: median(&mut wall),
         nonfinite_estimates: nonfinite,
         stats,
+        // The mean of the frames' own relMSEs, as the run's relMSE is the mean over frames
+        // (net relMSE subtracts it); None unless every frame's reference has one.
         reference_rel_mse: references
             .iter()
-            .filter_map(|(_, _, e)| *e)
-            .fold(None, |m: Option<f64>, e| Some(m.map_or(e, |m| m.max(e)))),
+            .map(|(_, _, e)| *e)
+            .collect::<Option<Vec<f64>>>()
+            .filter(|v| !v.is_empty())
+            .map(|v| v.iter().sum::<f64>() / v.len() as f64),
         sequence: SequenceResult {
             frames: [frames.start, frames.end],
             calibration_frame,
