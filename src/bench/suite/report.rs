@@ -315,7 +315,7 @@ fn equal_time_table(runs: &[&RunRecord]) -> String {
              reference's noise swamps it); speed: the path tracer's net relMSE x GPU time over \
              the run's, both from this device):\n",
             if at.iter().any(|r| r.frame_ms.is_some()) {
-                " per frame (figures: means over the frames and seeds; the reference's own relMSE: the highest of the frames')"
+                " per frame (figures: means over the frames and seeds; the reference's own relMSE: the mean of the frames')"
             } else {
                 ""
             }
