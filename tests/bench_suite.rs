@@ -1656,6 +1656,9 @@ fn a_frame_time_suite_records_per_frame_figures_and_flicker() {
             "{:?}",
             (r.rel_mse_min, r.rel_mse_max)
         );
+        // The image means against their frames' references, over frames and seeds.
+        assert!(r.image_mean_offset.is_some_and(|o| o.abs() < 0.5), "{r:?}");
+        assert!(r.image_mean_spread.is_some_and(|s| s > 0.0), "{r:?}");
         assert!(r.calibrated_count.is_some() && !r.calibration.is_empty());
         let rel: Vec<f64> = seq.per_frame.iter().map(|p| p.metrics.rel_mse).collect();
         assert!(rel.iter().all(|e| e.is_finite() && *e > 0.0), "{rel:?}");

@@ -620,6 +620,8 @@ fn run_one(
         record.metrics = Some(m.metrics);
         record.scored = m.scored;
         record.reference_rel_mse = m.reference_rel_mse;
+        record.image_mean_offset = Some(m.image_mean_offset).filter(|o| o.is_finite());
+        record.image_mean_spread = m.image_mean_spread;
         record.flicker_frames = 0;
         (record.rel_mse_min, record.rel_mse_max) = m.rel_mse_range.unzip();
         record.nonfinite_estimates = m.nonfinite_estimates;

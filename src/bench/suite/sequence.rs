@@ -40,8 +40,14 @@ pub struct MeasuredSequence {
     pub wall_ms: f64,
     pub nonfinite_estimates: u64,
     pub stats: BTreeMap<String, f64>,
-    /// The highest of the frame references' own relMSE.
+    /// The mean of the frame references' own relMSE.
     pub reference_rel_mse: Option<f64>,
+    /// Each image's mean over its frame's reference's, less one, averaged over every frame
+    /// and seed, and the standard deviation of those ratios: a method that estimates another
+    /// quantity than the reference (direct light against a full reference: env 0.962 of it on
+    /// moving-sun-sequence) shows here as an offset many spreads / sqrt(n) from zero.
+    pub image_mean_offset: f64,
+    pub image_mean_spread: Option<f64>,
     pub sequence: SequenceResult,
 }
 
@@ -87,6 +93,7 @@ pub fn measure_sequence(
     let mut wall = Vec::new();
     let mut passes: BTreeMap<String, Vec<Option<f64>>> = BTreeMap::new();
     let mut nonfinite = 0u64;
+    let mut relative: Vec<f64> = Vec::new();
     let mut stats: BTreeMap<String, f64> = BTreeMap::new();
     let mut sequences = Vec::new();
     for r in 0..repeats {
@@ -112,6 +119,8 @@ pub fn measure_sequence(
                     passes.entry(name.clone()).or_default().push(*ms);
                 }
                 nonfinite += out.nonfinite_estimates as u64;
+                let channel_mean = |im: &Image| im.mean().iter().sum::<f64>() / 3.0;
+                relative.push(channel_mean(&out.image) / channel_mean(reference));
                 for (name, value) in &out.stats {
                     *stats.entry(name.clone()).or_default() += value / f64::from(repeats * n);
                 }
@@ -196,6 +205,8 @@ pub fn measure_sequence(
             .collect::<Option<Vec<f64>>>()
             .filter(|v| !v.is_empty())
             .map(|v| v.iter().sum::<f64>() / v.len() as f64),
+        image_mean_offset: relative.iter().sum::<f64>() / relative.len().max(1) as f64 - 1.0,
+        image_mean_spread: super::measure::spread(&relative),
         sequence: SequenceResult {
             frames: [frames.start, frames.end],
             calibration_frame,
