@@ -1452,7 +1452,7 @@ fn frame_reference_dirs(base: &Path) -> Vec<String> {
     names
 }
 
-/// Issue 45 item 5: `irad bench references` renders one converged reference per animation
+/// Per-frame references (docs/DESIGN.md "Animation"): `irad bench references` renders one converged reference per animation
 /// frame (the suite's `frames`), keyed by the scene's hash and the frame (the frame's scene
 /// has the file's hash); a frame stopped after one chunk and resumed has the bits of one run
 /// straight through; `--shard I/N` takes frames f with f mod N = I, and a bad I/N is refused;
@@ -1599,7 +1599,7 @@ fn per_frame_references_resume_shard_and_are_used_by_suites() {
     let _ = fs::remove_dir_all(&dir);
 }
 
-/// Issue 45 item 7: a suite with frame-time budgets on an animated scene calibrates the count
+/// Frame-time budgets (README "Benchmark suites"): a suite with frame-time budgets on an animated scene calibrates the count
 /// per frame budget, renders the frames, and its results hold per-frame figures (one per frame
 /// of its `frames`), the worst frame and the flicker; the CSV has them, the report a
 /// frame-time table and a per-frame chart with a line per run and a point per frame, and the

@@ -256,29 +256,8 @@ fn prepare_scene(
     let gpu_scene =
         GpuScene::upload(ctx, scene).map_err(|e| format!("uploading the scene: {e}"))?;
     let found = found_reference(ctx, renderers, suite_scene, None, &gpu_scene, options, on)?;
-    let image_name = format!("images/{}.reference.png", file::file_safe(&scene.name));
-    let thumb = preview::downscale(
-        &found.image,
-        preview::factor_for(found.image.width, THUMBNAIL_WIDTH),
-    );
-    image::png::write(&options.out.join(&image_name), &thumb, 0.0).map_err(|e| format!("{e:#}"))?;
-    let failure = scene.failure.as_ref();
-    results.references.insert(
-        scene.name.clone(),
-        ReferenceSummary {
-            spp: found.spp,
-            image: image_name,
-            cache: found.path.display().to_string(),
-            seed: found.seed,
-            gpu_ms: found.gpu_ms,
-            rel_mse: found.rel_mse,
-            converged: found.converged,
-            expected_to_fail: failure.map(|f| f.methods.clone()).unwrap_or_default(),
-            why: failure.map(|f| f.why.clone()).unwrap_or_default(),
-            source: failure.map(|f| f.source.clone()).unwrap_or_default(),
-            frames: Vec::new(),
-        },
-    );
+    let converged = found.converged;
+    record_reference(options, results, scene, &found, converged, Vec::new())?;
     Ok(PreparedScene {
         gpu: gpu_scene,
         reference: found.image,
@@ -334,6 +313,26 @@ fn prepare_animated(
     let Some((gpu, found)) = calibration else {
         return Err(format!("no frame {middle} among the suite's frames"));
     };
+    let converged = summaries.iter().all(|r| r.converged);
+    record_reference(options, results, scene, &found, converged, summaries)?;
+    Ok(PreparedScene {
+        gpu,
+        reference: found.image,
+        reference_rel_mse: found.rel_mse,
+        frames: references,
+    })
+}
+
+/// Writes a scene's reference thumbnail (an animated scene's: its calibration frame's) and
+/// lists the reference in `results`, with `frames` the per-frame references of an animated one.
+fn record_reference(
+    options: &SuiteOptions,
+    results: &mut SuiteResults,
+    scene: &crate::scene::Scene,
+    found: &FoundReference,
+    converged: bool,
+    frames: Vec<results::FrameReference>,
+) -> Result<(), String> {
     let image_name = format!("images/{}.reference.png", file::file_safe(&scene.name));
     let thumb = preview::downscale(
         &found.image,
@@ -350,19 +349,14 @@ fn prepare_animated(
             seed: found.seed,
             gpu_ms: found.gpu_ms,
             rel_mse: found.rel_mse,
-            converged: summaries.iter().all(|r| r.converged),
+            converged,
             expected_to_fail: failure.map(|f| f.methods.clone()).unwrap_or_default(),
             why: failure.map(|f| f.why.clone()).unwrap_or_default(),
             source: failure.map(|f| f.source.clone()).unwrap_or_default(),
-            frames: summaries,
+            frames,
         },
     );
-    Ok(PreparedScene {
-        gpu,
-        reference: found.image,
-        reference_rel_mse: found.rel_mse,
-        frames: references,
-    })
+    Ok(())
 }
 
 /// A scene's reference image as the suite found it.
