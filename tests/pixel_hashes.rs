@@ -291,6 +291,27 @@ const CASES: &[(&str, &str, &str)] = &[
     ),
 ];
 
+/// (method, animated scene, frames, settings): sequences whose frames carry state (restir's
+/// reservoirs through a moving light and dimming emission, and through a walk where lights
+/// switch off), every frame's bits (tests/restir_motion.rs judges these configurations).
+const SEQUENCE_CASES: &[(&str, &str, std::ops::Range<u32>, &str)] = &[
+    (
+        "restir",
+        "cornell-circling",
+        0..3,
+        "frames = 1
+seed = 3",
+    ),
+    (
+        "restir",
+        "many-lights-walk",
+        23..26,
+        "frames = 1
+pixel_centres = true
+seed = 3",
+    ),
+];
+
 fn fnv1a(hash: &mut u64, bytes: &[u8]) {
     for &b in bytes {
         *hash ^= b as u64;
@@ -321,6 +342,28 @@ fn every_method_renders_the_recorded_bits() {
                 fnv1a(&mut hash, bytemuck::cast_slice(&map.pixels));
             }
             lines.push(format!("{name} {scene_name} {hash:016x}"));
+        }
+        for (name, scene_name, frames, settings) in SEQUENCE_CASES {
+            let scene = scene_file(scene_name, 24, 16);
+            let params: toml::Table = settings.parse().unwrap();
+            let method = Method::from_params(name, &params).unwrap_or_else(|e| panic!("{e}"));
+            let mut hash = 0xcbf29ce484222325u64;
+            irad::sequence::render_frames_with(
+                ctx,
+                &renderers,
+                &scene,
+                &method,
+                frames.clone(),
+                |_, _, out| {
+                    fnv1a(&mut hash, bytemuck::cast_slice(&out.image.pixels));
+                    Ok(())
+                },
+            )
+            .unwrap_or_else(|e| panic!("{name} on {scene_name}: {e:#}"));
+            lines.push(format!(
+                "{name} {scene_name} frames {}..{} {hash:016x}",
+                frames.start, frames.end
+            ));
         }
         let text = lines.join("\n") + "\n";
         let device = ctx.info().name.clone();

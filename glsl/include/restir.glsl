@@ -15,15 +15,20 @@
 //
 // Frames. Reuse in time evaluates the previous frame's reservoirs at the previous frame's
 // surfaces (RestirPoint.previous): their target there is the one they were resampled for, so it
-// takes the light as it was then. The lights and the light table stay put within a render; the
-// environment map does not (a sequence or the procedural sky shows map f mod n at frame f), so a
-// previous-frame point reads the previous frame's map (PreviousEnvTexels, defined by
-// RESTIR_PREVIOUS_FRAME: the temporal pass). With this frame's map there instead, the balance
-// heuristic's weights of the two domains no longer sum to one where the map changed: a sun that
-// moved into a direction got the previous domain's share there, which cannot produce it, and
-// 35% of a map sequence's light was lost (docs/DESIGN.md "State across frames").
+// takes the light as it was then. Within a render the lights and the light table stay put but the
+// environment map may not (a sequence or the procedural sky shows map f mod n at frame f); across
+// an animation's frames (the previous frame's reservoirs carried into this render, RTXDI's
+// temporal reuse) the camera, the analytic lights, the emission and the map all may. So a
+// previous-frame point reads the previous frame's materials' emission, lights and map
+// (PreviousMaterials, PreviousLights, PreviousEnvTexels, defined by RESTIR_PREVIOUS_FRAME: the
+// temporal pass), sees the previous camera, and a point or spot light sample is the light's
+// position in whichever frame evaluates it (the sample is the light, identified by its entry,
+// not a point in space). With this frame's map there instead, the balance heuristic's weights
+// of the two domains no longer sum to one where the map changed: a sun that moved into a
+// direction got the previous domain's share there, which cannot produce it, and 35% of a map
+// sequence's light was lost (docs/DESIGN.md "State across frames").
 //
-// Bindings 13-15 (16 with RESTIR_PREVIOUS_FRAME). Needs scene.glsl, sampling.glsl, bsdf.glsl,
+// Bindings 13-15 (16-19 with RESTIR_PREVIOUS_FRAME). Needs scene.glsl, sampling.glsl, bsdf.glsl,
 // lights.glsl, gbuffer.glsl, and bvh.glsl unless RESTIR_NO_TRACE is defined (restir_visible
 // left out).
 #ifndef RESTIR_GLSL
@@ -50,13 +55,22 @@ layout(set = 0, binding = 15, std430) buffer PreviousSurfaces { RestirSurface pr
 
 #ifdef RESTIR_PREVIOUS_FRAME
 // The environment's texels as the previous frame saw them: a sequence's frames, one after
-// another (GpuScene::environment_texels_of), or the live map when it is still.
+// another (GpuScene::environment_texels_of), the live map when it is still, or the previous
+// animation frame's map.
 layout(set = 0, binding = 16, std430) readonly buffer PreviousEnvTexels {
     vec4 previous_env_texels[];
 };
-// Where the previous frame's map starts in PreviousEnvTexels, set by the kernel from its push
-// constants before any reuse.
+// The materials (their emission) and the analytic lights as the previous frame had them: this
+// frame's own within a render, the previous animation frame's across frames.
+layout(set = 0, binding = 17, std430) readonly buffer PreviousMaterials {
+    Material previous_materials[];
+};
+layout(set = 0, binding = 18, std430) readonly buffer PreviousLights { Light previous_lights[]; };
+// Where the previous frame's map starts in PreviousEnvTexels, and the camera position the
+// previous frame's surfaces were seen from, set by the kernel from its push constants before
+// any reuse.
 uint restir_previous_env_base = 0u;
+vec3 restir_previous_camera = vec3(0.0);
 #endif
 
 const uint NO_LIGHT = 0xffffffffu;
@@ -84,8 +98,9 @@ RestirPoint restir_point_from_gbuffer(uint pixel) {
     return s;
 }
 
-// A surface stored by the previous frame's spatial pass (only the temporal pass reads them).
-RestirPoint restir_point_from_surface(RestirSurface r) {
+// A surface stored by the previous frame's spatial pass (only the temporal pass reads them),
+// seen from `camera` (the previous frame's camera position).
+RestirPoint restir_point_from_surface(RestirSurface r, vec3 camera) {
     RestirPoint s;
     s.p = r.position.xyz;
     s.n = r.normal.xyz;
@@ -95,7 +110,7 @@ RestirPoint restir_point_from_surface(RestirSurface r) {
     s.previous = true;
     s.m = materials[s.valid ? s.material : 0u];
     // Camera rays start at the camera's position (camera.glsl).
-    vec3 to_camera = scene.camera_position.xyz - s.p;
+    vec3 to_camera = camera - s.p;
     float len2 = dot(to_camera, to_camera);
     s.wo = len2 > 0.0 ? to_camera * inversesqrt(len2) : s.n;
     return s;
@@ -118,6 +133,28 @@ vec3 restir_env_radiance(RestirPoint s, vec3 y) {
     }
 #endif
     return env_radiance(y);
+}
+
+// Material `material`'s emitted radiance as s's frame saw it.
+vec3 restir_emission(RestirPoint s, uint material) {
+#ifdef RESTIR_PREVIOUS_FRAME
+    if (s.previous) return previous_materials[material].ke.rgb;
+#endif
+    return materials[material].ke.rgb;
+}
+
+// Analytic light `index` as s's frame had it (where it stood, how bright).
+Light restir_light(RestirPoint s, uint index) {
+    // Member by member: glslang stores a block's struct into a local one of another block's
+    // type (spirv-val rejects the OpStore).
+#ifdef RESTIR_PREVIOUS_FRAME
+    if (s.previous) {
+        return Light(previous_lights[index].position, previous_lights[index].intensity,
+                     previous_lights[index].direction, previous_lights[index].cone);
+    }
+#endif
+    return Light(lights[index].position, lights[index].intensity, lights[index].direction,
+                 lights[index].cone);
 }
 
 Reservoir empty_reservoir(float m) {
@@ -144,6 +181,12 @@ vec3 restir_contribution(RestirPoint s, uint entry, vec3 y, out vec3 wi, out flo
         dist = infinity();
         le_g = restir_env_radiance(s, y);
     } else {
+        // A point or spot light is where s's frame has it (y is the light, not a place).
+        Light l;
+        if (SCENE_HAS_DELTA_LIGHTS && e.kind != 0u) {
+            l = restir_light(s, e.index);
+            y = l.position.xyz;
+        }
         vec3 d = y - s.p;
         float dist2 = dot(d, d);
         if (!(dist2 > 0.0)) return vec3(0.0);
@@ -154,9 +197,8 @@ vec3 restir_contribution(RestirPoint s, uint entry, vec3 y, out vec3 wi, out flo
             float cos_light = -dot(wi, t.normal.xyz);
             if (cos_light <= 0.0) return vec3(0.0);
             to_area = cos_light / dist2;
-            le_g = materials[floatBitsToUint(t.normal.w)].ke.rgb * to_area;
+            le_g = restir_emission(s, floatBitsToUint(t.normal.w)) * to_area;
         } else if (SCENE_HAS_DELTA_LIGHTS) {
-            Light l = lights[e.index];
             float falloff = e.kind == 2u ? spot_falloff(l, -wi) : 1.0;
             le_g = l.intensity.rgb * (falloff / dist2);
         }
@@ -177,7 +219,11 @@ float restir_target(RestirPoint s, uint entry, vec3 y) {
 // direction y, a finite light's stopping just short of it).
 bool restir_visible(RestirPoint s, uint entry, vec3 y) {
     if (!s.valid || entry >= scene.size.z) return false;
-    bool distant = SCENE_HAS_ENVIRONMENT && light_entries[entry].kind == 3u;
+    LightEntry e = light_entries[entry];
+    bool distant = SCENE_HAS_ENVIRONMENT && e.kind == 3u;
+    if (SCENE_HAS_DELTA_LIGHTS && (e.kind == 1u || e.kind == 2u)) {
+        y = restir_light(s, e.index).position.xyz;
+    }
     vec3 origin = offset_origin(s.p, s.side);
     vec3 to_light = distant ? y : y - origin;
     return !trace_any(origin, to_light, distant ? infinity() : 0.9999);

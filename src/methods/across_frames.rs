@@ -5,8 +5,8 @@
 //!
 //! Each animation frame is a render of its own (src/sequence.rs): the driver starts a new
 //! accumulation every frame, so nothing but what a method keeps itself crosses frames. Every
-//! built-in method renders each frame from scratch today (`AcrossFrames::NOTHING`, the
-//! baseline every reuse is judged against). A method that keeps tables, VPLs or reservoirs
+//! built-in method but restir renders each frame from scratch (`AcrossFrames::NOTHING`, the
+//! baseline every reuse is judged against); restir keeps its final reservoirs. A method that keeps tables, VPLs or reservoirs
 //! declares them with the changes that invalidate them and keeps them in its kernels' object
 //! (one per `Renderers`, which a sequence keeps for all its frames; behind a `RefCell`), with
 //! the frame number they were made for. It reuses a piece only where `AnimationFrame::keeps`
@@ -154,7 +154,7 @@ impl AcrossFrames {
             .map(|c| {
                 let by: Vec<&str> = c.invalidated_by.iter().map(|x| x.name()).collect();
                 match by.is_empty() {
-                    true => format!("{} (never invalidated)", c.state),
+                    true => format!("{} (kept through every change)", c.state),
                     false => format!("{} (invalidated by a change of {})", c.state, by.join(", ")),
                 }
             })

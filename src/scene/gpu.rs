@@ -163,6 +163,12 @@ pub struct GpuScene {
     env_frames: Option<EnvironmentFrames>,
     pub constants: Buffer<SceneConstants>,
     pub light_table: LightTable,
+    /// Each light-table entry's identity across an animation's frames, whose tables differ
+    /// where a light switches on or off: `light_key` of its kind and its index in the scene
+    /// (the triangle's in `Scene::triangles`, the light's in `Scene::lights`).
+    pub light_keys: Vec<u64>,
+    /// SceneConstants' camera, as `camera_constants` gives it.
+    pub camera: [Vec4; 4],
     /// The environment map's texels across and down, when the scene has one.
     pub environment_size: Option<[u32; 2]>,
     pub width: u32,
@@ -260,6 +266,12 @@ fn light_power(light: &Light) -> f64 {
             2.0 * PI * luminance(*intensity) * (1.0 - 0.5 * (cos_start as f64 + cos_end as f64))
         }
     }
+}
+
+/// A light's identity across an animation's frames: its kind (LIGHT_*) and its index in the
+/// scene (`GpuScene::light_keys`).
+pub fn light_key(kind: u32, index: u32) -> u64 {
+    (u64::from(kind) << 32) | u64::from(index)
 }
 
 /// A light's entry before selection: (kind, index, power), kind one of LIGHT_*.
@@ -416,7 +428,7 @@ fn light_bvh(scene: &Scene, table: &LightTable, emitters: &[EmitterTriangle]) ->
 }
 
 /// The point and spot lights, and their powers, in the scene's order.
-fn analytic_lights(scene: &Scene) -> (Vec<GpuLight>, Vec<LightPower>) {
+pub(crate) fn analytic_lights(scene: &Scene) -> (Vec<GpuLight>, Vec<LightPower>) {
     let mut lights = Vec::new();
     let mut powers = Vec::new();
     for (i, light) in scene.lights.iter().enumerate() {
@@ -510,7 +522,7 @@ fn environment_buffers(ctx: &Context, scene: &Scene, radius: f32) -> GpuResult<E
 
 /// Each material as bsdf.glsl reads it: Kd with the Phong lobe's probability, Ks with Ns,
 /// Ke with 1 when emissive.
-fn gpu_materials(scene: &Scene) -> Vec<GpuMaterial> {
+pub fn gpu_materials(scene: &Scene) -> Vec<GpuMaterial> {
     scene
         .materials
         .iter()
@@ -520,6 +532,17 @@ fn gpu_materials(scene: &Scene) -> Vec<GpuMaterial> {
             ke: m.ke.extend(if m.is_emissive() { 1.0 } else { 0.0 }),
         })
         .collect()
+}
+
+/// SceneConstants' camera: position (w: tan(fov_y / 2)), forward (w: width / height), right, up.
+pub fn camera_constants(cam: &super::Camera) -> [Vec4; 4] {
+    let (forward, right, up) = cam.basis();
+    [
+        cam.position.extend((cam.fov_y.to_radians() * 0.5).tan()),
+        forward.extend(cam.width as f32 / cam.height as f32),
+        right.extend(0.0),
+        up.extend(0.0),
+    ]
 }
 
 /// SceneConstants: the camera, the frame size, the light table's and the triangles' counts,
@@ -532,12 +555,12 @@ fn scene_constants(
     (centre, radius): (Vec3, f32),
 ) -> SceneConstants {
     let cam = &scene.camera;
-    let (forward, right, up) = cam.basis();
+    let [camera_position, camera_forward, camera_right, camera_up] = camera_constants(cam);
     SceneConstants {
-        camera_position: cam.position.extend((cam.fov_y.to_radians() * 0.5).tan()),
-        camera_forward: forward.extend(cam.width as f32 / cam.height as f32),
-        camera_right: right.extend(0.0),
-        camera_up: up.extend(0.0),
+        camera_position,
+        camera_forward,
+        camera_right,
+        camera_up,
         size: [
             cam.width,
             cam.height,
@@ -571,6 +594,17 @@ impl GpuScene {
             .chain(env.power.map(|power| (LIGHT_ENVIRONMENT, 0, power)))
             .collect();
         let light_table = selection_table(powers);
+        let light_keys = light_table
+            .entries
+            .iter()
+            .map(|e| match e.kind {
+                LIGHT_TRIANGLE => {
+                    let gpu_index = triangles.emitter_gpu_index[e.index as usize];
+                    light_key(e.kind, bvh.triangle_order[gpu_index])
+                }
+                _ => light_key(e.kind, e.index),
+            })
+            .collect();
         let shading = with_emitter_probabilities(
             triangles.shading,
             &triangles.emitter_gpu_index,
@@ -619,6 +653,8 @@ impl GpuScene {
             env_frames: env.frames,
             constants: Buffer::from_slice(ctx, "SceneParams", &[constants])?,
             light_table,
+            light_keys,
+            camera: camera_constants(cam),
             environment_size: (env.size[2] != 0).then_some([env.size[0], env.size[1]]),
             width: cam.width,
             height: cam.height,

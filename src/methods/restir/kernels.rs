@@ -10,7 +10,7 @@ use crate::methods::accumulation::Accumulation;
 use crate::methods::gbuffer::GBuffer;
 use crate::methods::scene_kernel::SceneKernel;
 use crate::sampling::pcg;
-use crate::scene::gpu::GpuScene;
+use crate::scene::gpu::{GpuLight, GpuMaterial, GpuScene};
 
 use super::Combination;
 
@@ -49,11 +49,18 @@ struct CandidateParams {
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
 struct TemporalParams {
+    previous_camera_position: Vec4,
+    previous_camera_forward: Vec4,
+    previous_camera_right: Vec4,
+    previous_camera_up: Vec4,
     frame: u32,
     seed: u32,
     cap: f32,
     combination: u32,
     previous_env_base: u32,
+    history: u32,
+    normal_cos: f32,
+    depth_tolerance: f32,
 }
 
 #[repr(C)]
@@ -83,11 +90,18 @@ pub(crate) const GPU_LAYOUTS: &[crate::gpu::contracts::GpuLayout] = {
             bsdf_candidates,
         }),
         gpu_layout!(TemporalParams in ["reuse_restir_temporal"] {
+            previous_camera_position,
+            previous_camera_forward,
+            previous_camera_right,
+            previous_camera_up,
             frame,
             seed,
             cap,
             combination,
             previous_env_base,
+            history,
+            normal_cos,
+            depth_tolerance,
         }),
         gpu_layout!(SpatialParams in ["reuse_restir_spatial"] {
             frame,
@@ -107,12 +121,21 @@ pub const NORMAL_COS: f32 = 0.906;
 /// ...and whose camera distance is within 10% of it (Bitterli et al. 2020, Section 6).
 pub const DEPTH_TOLERANCE: f32 = 0.1;
 
+/// Temporal reuse takes a previous frame's surface whose shading normal is within 60 degrees
+/// of the pixel's...
+pub const TEMPORAL_NORMAL_COS: f32 = 0.5;
+/// ...and whose distance from the previous camera is within 10% of the pixel's point's (RTXDI's
+/// defaults, DI/TemporalResampling.hlsli).
+pub const TEMPORAL_DEPTH_TOLERANCE: f32 = 0.1;
+
 /// The render's reservoirs: this frame's (candidates, then after temporal reuse), the final
 /// ones (after spatial reuse; what the next frame reuses) and the surfaces they belong to.
 pub struct ReservoirBuffers {
     current: Buffer<Reservoir>,
     last: Buffer<Reservoir>,
     surfaces: Buffer<RestirSurface>,
+    /// EntryTranslation's placeholder where no translation is read.
+    no_translation: Buffer<u32>,
 }
 
 impl ReservoirBuffers {
@@ -127,6 +150,7 @@ impl ReservoirBuffers {
             current: Buffer::zeroed(ctx, "Reservoirs", pixels)?,
             last: Buffer::zeroed(ctx, "FinalReservoirs", pixels)?,
             surfaces: Buffer::from_slice(ctx, "PreviousSurfaces", &vec![invalid; pixels])?,
+            no_translation: Buffer::from_slice(ctx, "EntryTranslation", &[u32::MAX])?,
         })
     }
 
@@ -197,6 +221,40 @@ impl GenerateCandidates {
     }
 }
 
+/// The previous frame as the temporal pass sees it: which one (glsl's HISTORY_*), its camera,
+/// and the light it was lit by.
+pub enum History<'a> {
+    /// None: the render's first frame with nothing carried over.
+    None,
+    /// This render's previous frame (its camera, lights and table).
+    Render,
+    /// The previous animation frame, its lights and map uploaded by the method.
+    Animation(&'a PreviousLighting),
+}
+
+/// The previous animation frame's camera and light, for the temporal pass of a render's first
+/// frame: its materials (their emission), analytic lights and map as it had them, and each of
+/// its light-table entries' entry in this frame's table (u32::MAX where the light is gone).
+pub struct PreviousLighting {
+    pub camera: [Vec4; 4],
+    pub materials: Buffer<GpuMaterial>,
+    pub lights: Buffer<GpuLight>,
+    pub env_texels: Buffer<Vec4>,
+    pub translation: Buffer<u32>,
+}
+
+/// How the temporal pass finds and reuses the previous frame's reservoirs.
+#[derive(Clone, Copy)]
+pub struct TemporalOptions {
+    /// The previous reservoir's M at most this times the frame's.
+    pub cap: u32,
+    pub combination: Combination,
+    /// The surface test: shading normals' cosine at least this...
+    pub normal_cos: f32,
+    /// ...and distances from the previous camera within this fraction.
+    pub depth_tolerance: f32,
+}
+
 /// glsl/restir/reuse_restir_temporal.comp.
 pub struct ReuseTemporal(SceneKernel);
 
@@ -212,25 +270,53 @@ impl ReuseTemporal {
         &'a self,
         cmd: &mut Commands<'a>,
         inputs: &FrameInputs<'a>,
-        cap: u32,
-        combination: Combination,
+        history: History<'a>,
+        options: TemporalOptions,
         accumulation: &'a Accumulation,
     ) -> GpuResult<()> {
         let kernel = self.0.get(inputs.scene.features)?;
-        // The previous frame's reservoirs were resampled under its map (restir.glsl "Frames");
-        // frame 0 has none (M = 0), so which map it binds does not matter.
-        let (previous_env, previous_env_base) = inputs
-            .scene
-            .environment_texels_of(inputs.frame.saturating_sub(1));
+        let scene = inputs.scene;
+        let mut bindings = inputs.bindings(true);
+        let (code, camera, previous_env_base) = match history {
+            History::Animation(previous) => {
+                bindings.push(bind("PreviousEnvTexels", &previous.env_texels));
+                bindings.push(bind("PreviousMaterials", &previous.materials));
+                bindings.push(bind("PreviousLights", &previous.lights));
+                bindings.push(bind("EntryTranslation", &previous.translation));
+                (2, previous.camera, 0)
+            }
+            History::None | History::Render => {
+                // Within a render the previous frame's map is the sequence's frame before
+                // (restir.glsl "Frames"); frame 0 has none, so which map it binds does not
+                // matter. Its camera, emission and lights are this frame's; no translation.
+                let (previous_env, base) =
+                    scene.environment_texels_of(inputs.frame.saturating_sub(1));
+                bindings.push(bind("PreviousEnvTexels", previous_env));
+                bindings.push(bind("PreviousMaterials", &scene.materials));
+                bindings.push(bind("PreviousLights", &scene.lights));
+                bindings.push(bind("EntryTranslation", &inputs.reservoirs.no_translation));
+                let code = if matches!(history, History::None) {
+                    0
+                } else {
+                    1
+                };
+                (code, scene.camera, base)
+            }
+        };
         let params = TemporalParams {
+            previous_camera_position: camera[0],
+            previous_camera_forward: camera[1],
+            previous_camera_right: camera[2],
+            previous_camera_up: camera[3],
             frame: inputs.frame,
             seed: pass_seed(inputs.seed, 0x74656d70),
-            cap: cap as f32,
-            combination: combination.gpu_code(),
+            cap: options.cap as f32,
+            combination: options.combination.gpu_code(),
             previous_env_base,
+            history: code,
+            normal_cos: options.normal_cos,
+            depth_tolerance: options.depth_tolerance,
         };
-        let mut bindings = inputs.bindings(true);
-        bindings.push(bind("PreviousEnvTexels", previous_env));
         bindings.extend(accumulation.bindings());
         kernel.dispatch(cmd, &bindings, &params, inputs.scene.image_workgroups())
     }

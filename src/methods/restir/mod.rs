@@ -13,13 +13,19 @@
 
 pub mod kernels;
 
-use crate::gpu::{Commands, Context, GpuResult};
-use crate::scene::gpu::GpuScene;
+use std::cell::{Cell, RefCell};
+use std::collections::HashMap;
+
+use bytemuck::Zeroable;
+use glam::Vec4;
+
+use crate::gpu::{Buffer, Commands, Context, GpuResult};
+use crate::scene::gpu::{analytic_lights, camera_constants, gpu_materials, GpuLight, GpuScene};
 use crate::scene::Scene;
 
-use super::across_frames::{AcrossFrames, AnimationFrame};
+use super::across_frames::{AcrossFrames, AnimationFrame, Carried, Change};
 use super::direct::{DirectLightOptions, DirectLightPaths};
-use super::driver::{MethodFrames, Shared};
+use super::driver::{Extras, MethodFrames, Shared};
 use super::gbuffer::PixelSampling;
 use super::interface::{Lights, RenderMethod, SharedPasses, Support};
 use super::lights::NO_LUMINAIRES;
@@ -27,7 +33,9 @@ use super::paths::LightSampler;
 use super::settings::{common_settings, field_setting, named_choices, Kind, Need, Setting, Value};
 
 use kernels::{
-    FrameInputs, GenerateCandidates, ReservoirBuffers, ReuseSpatial, ReuseTemporal, ShadeRestir,
+    FrameInputs, GenerateCandidates, History as TemporalHistory, PreviousLighting,
+    ReservoirBuffers, ReuseSpatial, ReuseTemporal, ShadeRestir, TemporalOptions,
+    TEMPORAL_DEPTH_TOLERANCE, TEMPORAL_NORMAL_COS,
 };
 
 /// How reservoirs are combined in reuse.
@@ -78,6 +86,12 @@ pub struct RestirSettings {
     pub temporal: bool,
     /// The previous reservoir's M at most this times the frame's candidates.
     pub temporal_cap: u32,
+    /// The cap instead where the lights, emission or map changed since the previous frame.
+    pub relit_cap: u32,
+    /// Temporal reuse's surface test: the least cosine between shading normals...
+    pub temporal_normal: f32,
+    /// ...and the most relative difference of distances from the previous camera.
+    pub temporal_depth: f32,
     /// k, neighbours of spatial reuse (0: none).
     pub neighbours: u32,
     /// R, pixels.
@@ -96,6 +110,9 @@ impl Default for RestirSettings {
             light_sampler: LightSampler::Bvh,
             temporal: true,
             temporal_cap: 20,
+            relit_cap: 1,
+            temporal_normal: TEMPORAL_NORMAL_COS,
+            temporal_depth: TEMPORAL_DEPTH_TOLERANCE,
             neighbours: 5,
             radius: 30,
             combination: Combination::Mis,
@@ -146,7 +163,10 @@ pub const SETTINGS: &[Setting<RestirSettings>] = &[
         temporal,
         Kind::Switch,
         Switch,
-        "Reuse each pixel's final reservoir of the previous frame.",
+        "Reuse the previous frame's final reservoirs: the render's frame before, or for its \
+         first frame the previous animation frame's (a sequence), found by projecting each \
+         pixel's point through the previous camera and re-weighed under the lights as that \
+         frame had them.",
     ),
     field_setting!(
         "temporal_cap",
@@ -154,6 +174,37 @@ pub const SETTINGS: &[Setting<RestirSettings>] = &[
         Kind::Count { min: 1, max: 1000 },
         Count,
         "The previous reservoir's M at most this times the frame's candidates (the paper's 20).",
+        needs: &[Need::OneOf("temporal", &["true"])],
+    ),
+    field_setting!(
+        "relit_cap",
+        relit_cap,
+        Kind::Count { min: 1, max: 1000 },
+        Count,
+        "temporal_cap for a render whose lights, emission or map changed since the previous \
+         animation frame: the history was resampled for light that is no longer there, so the \
+         balance heuristic, which weighs it by its M and its target, gives it a share it fills \
+         poorly (a light switched off: relMSE 4x without reuse at 20, 2x at 1; docs/restir.md).",
+        needs: &[Need::OneOf("temporal", &["true"])],
+    ),
+    field_setting!(
+        "temporal_normal",
+        temporal_normal,
+        Kind::Number,
+        Number,
+        "Temporal reuse takes the previous frame's surface at this pixel's point seen from the \
+         previous camera only where their shading normals' cosine is at least this (RTXDI's \
+         0.5; 0 accepts any surface facing the same side)...",
+        needs: &[Need::OneOf("temporal", &["true"])],
+    ),
+    field_setting!(
+        "temporal_depth",
+        temporal_depth,
+        Kind::Number,
+        Number,
+        "...and their distances from the previous camera differ by at most this fraction of the \
+         larger (RTXDI's 0.1); else it searches the pixel's neighbours and reuses nothing where \
+         none is alike (a disocclusion).",
         needs: &[Need::OneOf("temporal", &["true"])],
     ),
     field_setting!(
@@ -197,11 +248,34 @@ pub const SETTINGS: &[Setting<RestirSettings>] = &[
     common_settings!(pixel_centres),
 ];
 
+/// What restir keeps from one animation frame to the next. Nothing invalidates it: every
+/// change is followed (the camera by projecting into the previous frame, the lights, emission
+/// and map by evaluating the previous domain under the previous frame's, a light gone by the
+/// table's translation), as RTXDI does.
+const CARRIED: Carried = Carried {
+    state: "each pixel's final reservoir and surface, found again through the previous camera \
+            and re-weighed under the previous frame's lights",
+    invalidated_by: &[],
+};
+
+/// A render's last final reservoirs, kept for the next animation frame's render.
+struct History {
+    /// The animation frame they were made for.
+    frame: u32,
+    size: (u32, u32),
+    reservoirs: ReservoirBuffers,
+    /// Its light table's entries' identities (`GpuScene::light_keys`).
+    light_keys: Vec<u64>,
+}
+
 pub struct Restir {
     candidates: GenerateCandidates,
     temporal: ReuseTemporal,
     spatial: ReuseSpatial,
     shade: ShadeRestir,
+    /// Left by the last render that completed (across_frames.rs: taken by the next render, and
+    /// reused where it renders that frame's successor).
+    history: RefCell<Option<History>>,
 }
 
 impl RenderMethod for Restir {
@@ -217,7 +291,9 @@ impl RenderMethod for Restir {
         point: Support::Renders,
         luminaires: Support::Declines(NO_LUMINAIRES),
     };
-    const ACROSS_FRAMES: AcrossFrames = AcrossFrames::NOTHING;
+    const ACROSS_FRAMES: AcrossFrames = AcrossFrames {
+        carries: &[CARRIED],
+    };
 
     fn new(ctx: &Context) -> GpuResult<Self> {
         Ok(Restir {
@@ -225,6 +301,7 @@ impl RenderMethod for Restir {
             temporal: ReuseTemporal::new(ctx)?,
             spatial: ReuseSpatial::new(ctx)?,
             shade: ShadeRestir::new(ctx)?,
+            history: RefCell::new(None),
         })
     }
 
@@ -250,20 +327,98 @@ impl RenderMethod for Restir {
         _scene: &Scene,
         gpu_scene: &GpuScene,
         settings: &'a RestirSettings,
-        _animation: &AnimationFrame<'_>,
+        animation: &AnimationFrame<'_>,
     ) -> GpuResult<Box<dyn MethodFrames + 'a>> {
+        let size = (gpu_scene.width, gpu_scene.height);
+        // Whatever the last render left is taken: reused only by its successor.
+        let history = self.history.borrow_mut().take();
+        let carried = match (history, animation.previous) {
+            (Some(h), Some(p))
+                if settings.temporal
+                    && animation.keeps(&CARRIED)
+                    && h.frame == p.frame
+                    && h.size == size =>
+            {
+                previous_lighting(ctx, p.scene, gpu_scene, &h.light_keys)?
+                    .map(|lighting| (h.reservoirs, lighting))
+            }
+            _ => None,
+        };
+        let (reservoirs, previous) = match carried {
+            Some((reservoirs, lighting)) => (reservoirs, Some(lighting)),
+            None => (ReservoirBuffers::new(ctx, gpu_scene.pixel_count())?, None),
+        };
         Ok(Box::new(RestirFrames {
             restir: self,
             settings,
-            reservoirs: ReservoirBuffers::new(ctx, gpu_scene.pixel_count())?,
+            reservoirs: Some(reservoirs),
+            previous,
+            frame: animation.frame,
+            lights_changed: animation.previous.is_some_and(|p| {
+                p.changed
+                    .any_of(&[Change::Lights, Change::Emission, Change::Environment])
+            }),
+            size,
+            light_keys: gpu_scene.light_keys.clone(),
+            finished: Cell::new(false),
         }))
     }
+}
+
+/// The previous animation frame's camera, emission, lights and map (from its scene) and its
+/// light table's entries in this frame's (by `light_keys`, u32::MAX for a light gone); None
+/// where its map cannot stand beside this frame's (another size, or a sequence's).
+fn previous_lighting(
+    ctx: &Context,
+    previous: &Scene,
+    gpu_scene: &GpuScene,
+    previous_keys: &[u64],
+) -> GpuResult<Option<PreviousLighting>> {
+    let env_texels: Vec<Vec4> = match (&previous.environment, gpu_scene.environment_size) {
+        (None, None) => vec![Vec4::ZERO],
+        (Some(env), Some([w, h]))
+            if env.width == w && env.height == h && previous.environment_sequence.is_empty() =>
+        {
+            env.texels.iter().map(|t| t.extend(0.0)).collect()
+        }
+        _ => return Ok(None),
+    };
+    let entries: HashMap<u64, u32> = gpu_scene
+        .light_keys
+        .iter()
+        .enumerate()
+        .map(|(i, &k)| (k, i as u32))
+        .collect();
+    let mut translation: Vec<u32> = previous_keys
+        .iter()
+        .map(|k| entries.get(k).copied().unwrap_or(u32::MAX))
+        .collect();
+    let mut lights = analytic_lights(previous).0;
+    // A binding cannot be an empty buffer.
+    translation.push(u32::MAX);
+    lights.push(GpuLight::zeroed());
+    Ok(Some(PreviousLighting {
+        camera: camera_constants(&previous.camera),
+        materials: Buffer::from_slice(ctx, "PreviousMaterials", &gpu_materials(previous))?,
+        lights: Buffer::from_slice(ctx, "PreviousLights", &lights)?,
+        env_texels: Buffer::from_slice(ctx, "PreviousEnvTexels", &env_texels)?,
+        translation: Buffer::from_slice(ctx, "EntryTranslation", &translation)?,
+    }))
 }
 
 struct RestirFrames<'a> {
     restir: &'a Restir,
     settings: &'a RestirSettings,
-    reservoirs: ReservoirBuffers,
+    /// Some until the frames are dropped (then kept as the history of a completed render).
+    reservoirs: Option<ReservoirBuffers>,
+    /// The previous animation frame's light, where its reservoirs were carried over.
+    previous: Option<PreviousLighting>,
+    /// The animation frame, its size and its light table's identities, for the history.
+    frame: u32,
+    size: (u32, u32),
+    light_keys: Vec<u64>,
+    lights_changed: bool,
+    finished: Cell<bool>,
 }
 
 impl MethodFrames for RestirFrames<'_> {
@@ -274,10 +429,11 @@ impl MethodFrames for RestirFrames<'_> {
         frame: u32,
     ) -> GpuResult<()> {
         let (restir, s) = (self.restir, self.settings);
+        let reservoirs = self.reservoirs.as_ref().expect("held until dropped");
         let inputs = FrameInputs {
             scene: shared.scene,
             gbuffer: shared.gbuffer,
-            reservoirs: &self.reservoirs,
+            reservoirs,
             frame,
             seed: s.seed,
         };
@@ -292,14 +448,24 @@ impl MethodFrames for RestirFrames<'_> {
             )
         })?;
         if s.temporal {
+            let history = match (frame, &self.previous) {
+                (0, Some(previous)) => TemporalHistory::Animation(previous),
+                (0, None) => TemporalHistory::None,
+                _ => TemporalHistory::Render,
+            };
+            let options = TemporalOptions {
+                cap: match (frame, self.lights_changed) {
+                    (0, true) => s.relit_cap,
+                    _ => s.temporal_cap,
+                },
+                combination: s.combination,
+                normal_cos: s.temporal_normal,
+                depth_tolerance: s.temporal_depth,
+            };
             cmd.pass("restir temporal", |cmd| {
-                restir.temporal.record(
-                    cmd,
-                    &inputs,
-                    s.temporal_cap,
-                    s.combination,
-                    shared.accumulation,
-                )
+                restir
+                    .temporal
+                    .record(cmd, &inputs, history, options, shared.accumulation)
             })?;
         }
         // With no neighbours it still stores the final reservoirs and surfaces.
@@ -316,5 +482,27 @@ impl MethodFrames for RestirFrames<'_> {
         cmd.pass("restir shade", |cmd| {
             restir.shade.record(cmd, &inputs, shared.accumulation)
         })
+    }
+
+    fn finish(&self, _shared: &Shared<'_>) -> GpuResult<Extras> {
+        self.finished.set(true);
+        Ok(Extras::default())
+    }
+}
+
+impl Drop for RestirFrames<'_> {
+    /// A completed render's final reservoirs become the history the next render may reuse.
+    fn drop(&mut self) {
+        if !self.finished.get() {
+            return;
+        }
+        if let Some(reservoirs) = self.reservoirs.take() {
+            *self.restir.history.borrow_mut() = Some(History {
+                frame: self.frame,
+                size: self.size,
+                reservoirs,
+                light_keys: std::mem::take(&mut self.light_keys),
+            });
+        }
     }
 }
