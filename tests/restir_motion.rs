@@ -298,7 +298,7 @@ fn a_moving_camera_and_moving_switching_lights_keep_every_frame_unbiased() {
             }
             // Not where light a has just left the table (frame 3) and the frame after: the
             // history resampled for it weighs in at the balance heuristic's share and delivers
-            // little (docs/restir.md).
+            // little (docs/DESIGN.md "State across frames").
             if [1, 2, 5].contains(&f) && e_with >= 0.8 * e_without {
                 failures.push(format!(
                     "frame {f}: the history does not pay (relMSE {e_with:.4} with it, {e_without:.4} without)"

@@ -144,6 +144,9 @@ fn plan(method: &str, key: &str) -> Option<Run> {
         ("restir", "neighbours") => max(),
         ("restir", "radius") => Skip("a radius places the neighbours; no loop grows with it"),
         ("restir", "temporal_cap") => Skip("a cap on a reservoir's M: a weight, no loop counts it"),
+        ("restir", "relit_cap") => {
+            Skip("temporal_cap on a relit frame: a weight, no loop counts it")
+        }
         ("lightfield", "spp") => max(),
         ("lightfield", "k_max") => At {
             value: "MAX",

@@ -28,7 +28,7 @@
 // direction got the previous domain's share there, which cannot produce it, and 35% of a map
 // sequence's light was lost (docs/DESIGN.md "State across frames").
 //
-// Bindings 13-15 (16-19 with RESTIR_PREVIOUS_FRAME). Needs scene.glsl, sampling.glsl, bsdf.glsl,
+// Bindings 13-15 (16-18 with RESTIR_PREVIOUS_FRAME; the temporal pass holds 19). Needs scene.glsl, sampling.glsl, bsdf.glsl,
 // lights.glsl, gbuffer.glsl, and bvh.glsl unless RESTIR_NO_TRACE is defined (restir_visible
 // left out).
 #ifndef RESTIR_GLSL

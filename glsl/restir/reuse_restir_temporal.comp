@@ -71,7 +71,7 @@ layout(set = 0, binding = 19, std430) readonly buffer EntryTranslation { uint en
 const uint TEMPORAL_DIMENSION = 1u;
 const uint SEARCH_DIMENSION = 2u;
 // The back-projected pixel, then up to this many tries at offsets int((u - 0.5) SEARCH_RADIUS)
-// (-1, 0 or 1 in each axis), RTXDI's.
+// (-1, 0 or 1 in each axis, -2 at u = 0), RTXDI's.
 const uint SEARCH_TRIES = 8u;
 const float SEARCH_RADIUS = 4.0;
 

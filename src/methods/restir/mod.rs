@@ -184,7 +184,8 @@ pub const SETTINGS: &[Setting<RestirSettings>] = &[
         "temporal_cap for a render whose lights, emission or map changed since the previous \
          animation frame: the history was resampled for light that is no longer there, so the \
          balance heuristic, which weighs it by its M and its target, gives it a share it fills \
-         poorly (a light switched off: relMSE 4x without reuse at 20, 2x at 1; docs/restir.md).",
+         poorly (a light switched off: relMSE 4x that without reuse at 20, 2x at 1; docs/DESIGN.md \
+         \"State across frames\").",
         needs: &[Need::OneOf("temporal", &["true"])],
     ),
     field_setting!(
@@ -248,10 +249,11 @@ pub const SETTINGS: &[Setting<RestirSettings>] = &[
     common_settings!(pixel_centres),
 ];
 
-/// What restir keeps from one animation frame to the next. Nothing invalidates it: every
-/// change is followed (the camera by projecting into the previous frame, the lights, emission
-/// and map by evaluating the previous domain under the previous frame's, a light gone by the
-/// table's translation), as RTXDI does.
+/// What restir keeps from one animation frame to the next. No change invalidates it: each is
+/// followed (the camera by projecting into the previous frame, the lights, emission and map by
+/// evaluating the previous domain under the previous frame's, a light gone by the table's
+/// translation), as RTXDI does. It is dropped only where the previous frame's map cannot be
+/// read beside this one's (another size, or a map sequence within the frame).
 const CARRIED: Carried = Carried {
     state: "each pixel's final reservoir and surface, found again through the previous camera \
             and re-weighed under the previous frame's lights",
@@ -260,8 +262,12 @@ const CARRIED: Carried = Carried {
 
 /// A render's last final reservoirs, kept for the next animation frame's render.
 struct History {
-    /// The animation frame they were made for.
+    /// The animation frame they were made for, its scene's content hash and its camera: the
+    /// previous frame handed to the next render must be this one (another render on the same
+    /// kernels in between leaves its own history instead).
     frame: u32,
+    content_hash: u64,
+    camera: [Vec4; 4],
     size: (u32, u32),
     reservoirs: ReservoirBuffers,
     /// Its light table's entries' identities (`GpuScene::light_keys`).
@@ -324,7 +330,7 @@ impl RenderMethod for Restir {
     fn set_up<'a>(
         &'a self,
         ctx: &Context,
-        _scene: &Scene,
+        scene: &Scene,
         gpu_scene: &GpuScene,
         settings: &'a RestirSettings,
         animation: &AnimationFrame<'_>,
@@ -337,6 +343,8 @@ impl RenderMethod for Restir {
                 if settings.temporal
                     && animation.keeps(&CARRIED)
                     && h.frame == p.frame
+                    && h.content_hash == p.scene.content_hash
+                    && h.camera == camera_constants(&p.scene.camera)
                     && h.size == size =>
             {
                 previous_lighting(ctx, p.scene, gpu_scene, &h.light_keys)?
@@ -354,6 +362,8 @@ impl RenderMethod for Restir {
             reservoirs: Some(reservoirs),
             previous,
             frame: animation.frame,
+            content_hash: scene.content_hash,
+            camera: gpu_scene.camera,
             lights_changed: animation.previous.is_some_and(|p| {
                 p.changed
                     .any_of(&[Change::Lights, Change::Emission, Change::Environment])
@@ -415,6 +425,8 @@ struct RestirFrames<'a> {
     previous: Option<PreviousLighting>,
     /// The animation frame, its size and its light table's identities, for the history.
     frame: u32,
+    content_hash: u64,
+    camera: [Vec4; 4],
     size: (u32, u32),
     light_keys: Vec<u64>,
     lights_changed: bool,
@@ -499,6 +511,8 @@ impl Drop for RestirFrames<'_> {
         if let Some(reservoirs) = self.reservoirs.take() {
             *self.restir.history.borrow_mut() = Some(History {
                 frame: self.frame,
+                content_hash: self.content_hash,
+                camera: self.camera,
                 size: self.size,
                 reservoirs,
                 light_keys: std::mem::take(&mut self.light_keys),
