@@ -1770,6 +1770,11 @@ fn animated_scenes_and_frame_budgets_refuse_bad_combinations_naming_the_field() 
             "GPU milliseconds",
         ),
         (
+            base.replace("flicker_frames = 0", "flicker_frames = 0\nlead_in = -1"),
+            "lead_in = -1",
+            "integer >= 0",
+        ),
+        (
             base.replace("\"0..3\"", "\"2..2\""),
             "scene[0].frames = \"2..2\"",
             "24 frames",

@@ -65,6 +65,8 @@ struct SuiteFile {
     repeats: i64,
     #[serde(default = "four")]
     flicker_frames: i64,
+    #[serde(default)]
+    lead_in: i64,
     reference: toml::Table,
     #[serde(default)]
     scene: Vec<SceneEntry>,
@@ -127,6 +129,10 @@ pub struct Suite {
     pub repeats: u32,
     /// Renders with successive seeds whose flicker is measured (0: none).
     pub flicker_frames: u32,
+    /// Frames a frame-time run of a method that carries state across frames renders, unscored,
+    /// before each sequence's scored frames (so they start with the history a running
+    /// application has), where the animation has them.
+    pub lead_in: u32,
     pub scenes: Vec<SuiteScene>,
     pub entries: Vec<SuiteMethod>,
     /// Every run in suite order; `index` is the position here.
@@ -276,6 +282,7 @@ impl Suite {
             warmup: counts.warmup,
             repeats: counts.repeats,
             flicker_frames: counts.flicker_frames,
+            lead_in: counts.lead_in,
             scenes,
             entries,
             runs,
@@ -317,6 +324,7 @@ struct Counts {
     warmup: u32,
     repeats: u32,
     flicker_frames: u32,
+    lead_in: u32,
 }
 
 /// The method settings of one budget of entry `entry`, number `index`.
@@ -363,6 +371,7 @@ fn parse_counts(file: &str, f: &SuiteFile) -> Result<Counts, SuiteError> {
     let warmup = count("warmup", f.warmup, 0)?;
     let repeats = count("repeats", f.repeats, 1)?;
     let flicker_frames = count("flicker_frames", f.flicker_frames, 0)?;
+    let lead_in = count("lead_in", f.lead_in, 0)?;
     if flicker_frames == 1 {
         return Err(field_error(
             file,
@@ -386,6 +395,7 @@ fn parse_counts(file: &str, f: &SuiteFile) -> Result<Counts, SuiteError> {
         warmup,
         repeats,
         flicker_frames,
+        lead_in,
     })
 }
 

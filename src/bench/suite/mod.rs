@@ -596,6 +596,7 @@ fn run_one(
             frame_references,
             suite.warmup,
             suite.repeats,
+            suite.lead_in,
             &mut progress,
         );
         let m = match measured {

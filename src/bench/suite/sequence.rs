@@ -3,7 +3,10 @@
 //! untimed renders of that frame, then the scene's frames rendered as a sequence
 //! (`crate::sequence::render_frames`: each frame its own scene and seed, independent of the
 //! others) once per seed, `repeats` seeds: sequence r uses the method's seed + r x B (B the
-//! end of the frames), so no two renders of the run share a seed. Each frame is scored against
+//! end of the frames), so no two renders of the run share a seed. A method that carries state
+//! across frames (restir's reservoirs) renders up to `lead_in` frames before the scored ones,
+//! unscored and untimed, so its first scored frame has the history a running application's
+//! would. Each frame is scored against
 //! its own reference (`SequenceScore`: relMSE, bias, outliers per frame, and the flicker of
 //! the sequence). Reported: per frame its figures averaged over the seeds and its GPU time's
 //! median; for the run the median frame time, the figures' mean over every frame and seed,
@@ -51,6 +54,17 @@ pub struct MeasuredSequence {
     pub sequence: SequenceResult,
 }
 
+/// The frames a sequence of a run renders: `frames`, after up to `lead_in` frames before them
+/// (as many as the animation has) for a method that carries state across frames.
+fn rendered_frames(frames: &Range<u32>, lead_in: u32, carries_nothing: bool) -> Range<u32> {
+    let lead_in = if carries_nothing {
+        0
+    } else {
+        lead_in.min(frames.start)
+    };
+    frames.start - lead_in..frames.end
+}
+
 /// Renders `method` (its calibrated count) over `frames` of the animated `scene`, once per
 /// seed; `references[i]` is frame `frames.start + i`'s (frame, reference, its relMSE);
 /// `still` and `gpu` are the calibration frame's scene and upload, for the warm-up.
@@ -68,6 +82,7 @@ pub fn measure_sequence(
     references: &[(u32, Image, Option<f64>)],
     warmup: u32,
     repeats: u32,
+    lead_in: u32,
     progress: &mut impl FnMut(u32, u32, u32, u32),
 ) -> Result<MeasuredSequence, MeasureError> {
     let n = frames.len() as u32;
@@ -106,8 +121,11 @@ pub fn measure_sequence(
             renderers,
             scene,
             &m,
-            frames.clone(),
+            rendered_frames(&frames, lead_in, method.across_frames().carries_nothing()),
             |f, _, out| {
+                if f < frames.start {
+                    return Ok(());
+                }
                 let i = (f - frames.start) as usize;
                 let reference = &references[i].1;
                 if r == 0 && f == calibration_frame {
@@ -216,4 +234,17 @@ pub fn measure_sequence(
             flicker: Some(flicker).filter(|e| e.is_finite()),
         },
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::rendered_frames;
+
+    #[test]
+    fn a_stateful_method_leads_in_as_far_as_the_animation_goes() {
+        assert_eq!(rendered_frames(&(22..27), 6, false), 16..27);
+        assert_eq!(rendered_frames(&(3..5), 6, false), 0..5);
+        assert_eq!(rendered_frames(&(22..27), 6, true), 22..27);
+        assert_eq!(rendered_frames(&(22..27), 0, false), 22..27);
+    }
 }
