@@ -121,7 +121,7 @@ pub struct EnvironmentFile {
     /// An equirectangular EXR, or a glob (`*`, `?` in the file name) naming a sequence: one
     /// map per frame, in file-name order.
     pub exr: Option<String>,
-    /// A built-in procedural sky instead of `exr`: "moving-sun" (src/scene/sky.rs).
+    /// A built-in procedural sky instead of `exr`: "moving-sun" or "rising-sun" (src/scene/sky.rs).
     pub sky: Option<String>,
     /// sky: texels across and down (signed so that bad sizes get the loader's message).
     #[serde(default, deserialize_with = "exact_opt")]

@@ -1,8 +1,11 @@
-//! The built-in procedural sky `[environment] sky = "moving-sun"`: one equirectangular map per
-//! frame, a fixed sky gradient over a dark ground and a sun disk at a fixed elevation whose
-//! azimuth turns once every `frames` frames (a dynamic map for Lu 14 ch. 3 and Fig. 5.6's
-//! moving sun). Each texel is the mean radiance over a grid of points uniform in its solid
-//! angle, finer near the sun so that a sun smaller than a texel keeps its power.
+//! The built-in procedural skies, one equirectangular map per frame: a sky gradient over a dark
+//! ground and a sun disk. `sky = "moving-sun"`: the sun at a fixed elevation, its azimuth
+//! turning once every `frames` frames (a dynamic map for Lu 14 ch. 3 and Fig. 5.6's moving
+//! sun). `sky = "rising-sun"`: the sun rising from just below the horizon to `sun_elevation`
+//! over the frames while turning a quarter of a turn (from azimuth u = 1/4 to 1/2), the sky brightening with it from a
+//! twentieth (a dawn: the light's distribution and its total both change). Each texel is the
+//! mean radiance over a grid of points uniform in its solid angle, finer near the sun so that
+//! a sun smaller than a texel keeps its power.
 
 use std::f32::consts::PI;
 
@@ -22,6 +25,8 @@ pub struct MovingSun {
     /// The disk's angular radius, degrees.
     pub sun_radius: f32,
     pub sun_radiance: Vec3,
+    /// "rising-sun": the sun rises over the frames (see the module's comment).
+    pub rising: bool,
 }
 
 impl Default for MovingSun {
@@ -33,6 +38,7 @@ impl Default for MovingSun {
             sun_elevation: 20.0,
             sun_radius: 2.0,
             sun_radiance: Vec3::new(2000.0, 1900.0, 1700.0),
+            rising: false,
         }
     }
 }
@@ -55,11 +61,11 @@ impl MovingSun {
             problem: problem.into(),
         };
         let name = env.sky.as_deref().unwrap_or_default();
-        if name != "moving-sun" {
+        if name != "moving-sun" && name != "rising-sun" {
             return Err(invalid(
                 "sky",
                 format!("{name:?}"),
-                "the built-in skies are: \"moving-sun\"",
+                "the built-in skies are: \"moving-sun\", \"rising-sun\"",
             ));
         }
         let d = MovingSun::default();
@@ -114,24 +120,51 @@ impl MovingSun {
             sun_elevation: elevation,
             sun_radius: radius,
             sun_radiance: radiance,
+            rising: name == "rising-sun",
         })
+    }
+
+    /// The sun's elevation at `frame`, degrees: fixed, or for a rising sun from one disk below
+    /// the horizon at frame 0 to `sun_elevation` at the last frame.
+    fn elevation(&self, frame: u32) -> f32 {
+        if !self.rising {
+            return self.sun_elevation;
+        }
+        let t = (frame % self.frames.max(1)) as f32 / (self.frames.max(2) - 1) as f32;
+        let start = -self.sun_radius;
+        start + (self.sun_elevation - start) * t
+    }
+
+    /// The sky's brightness at `frame` (1 for the moving sun; for a rising one from 1/20 with
+    /// the sun at the horizon to 1 at its highest).
+    fn sky_scale(&self, frame: u32) -> f32 {
+        if !self.rising {
+            return 1.0;
+        }
+        let e = self.elevation(frame).max(0.0);
+        (0.05 + 0.95 * e / self.sun_elevation.max(1e-3)).clamp(0.05, 1.0)
     }
 
     /// The sun's direction at `frame`: azimuth 2 pi (frame mod frames) / frames, measured as
     /// the map's u (docs/DESIGN.md "Conventions": u = atan2(x, -z) / 2 pi).
     pub fn sun_direction(&self, frame: u32) -> Vec3 {
-        let phi = 2.0 * PI * (frame % self.frames.max(1)) as f32 / self.frames.max(1) as f32;
-        let e = self.sun_elevation.to_radians();
+        // The rising sun comes up a quarter turn from the moving sun's start (u = 1/4, +x) and
+        // turns on toward u = 1/2.
+        let (turn, start) = if self.rising { (0.25, 0.5 * PI) } else { (1.0, 0.0) };
+        let phi = start
+            + 2.0 * PI * turn * (frame % self.frames.max(1)) as f32 / self.frames.max(1) as f32;
+        let e = self.elevation(frame).to_radians();
         Vec3::new(e.cos() * phi.sin(), e.sin(), -e.cos() * phi.cos())
     }
 
-    /// The radiance in direction `d` (unit) at `frame`.
-    pub fn radiance(&self, d: Vec3, sun: Vec3) -> Vec3 {
-        let sky = if d.y >= 0.0 {
-            HORIZON.lerp(ZENITH, d.y.sqrt())
-        } else {
-            GROUND
-        };
+    /// The radiance in direction `d` (unit), the sun toward `sun`, the sky at `sky_scale`.
+    pub fn radiance(&self, d: Vec3, sun: Vec3, sky_scale: f32) -> Vec3 {
+        let sky = sky_scale
+            * if d.y >= 0.0 {
+                HORIZON.lerp(ZENITH, d.y.sqrt())
+            } else {
+                GROUND
+            };
         let in_sun = d.dot(sun) >= self.sun_radius.to_radians().cos();
         sky + if in_sun {
             self.sun_radiance
@@ -144,6 +177,7 @@ impl MovingSun {
     pub fn map(&self, frame: u32, scale: f32) -> Environment {
         let (w, h) = (self.width, self.height);
         let sun = self.sun_direction(frame);
+        let sky_scale = self.sky_scale(frame);
         let radius = self.sun_radius.to_radians();
         // A texel's angular size along its diagonal, bounding how far its points lie from
         // its centre.
@@ -173,7 +207,7 @@ impl MovingSun {
                 for a in 0..n {
                     for b in 0..n {
                         let d = direction((a as f32 + 0.5) / n as f32, (b as f32 + 0.5) / n as f32);
-                        sum += self.radiance(d, sun);
+                        sum += self.radiance(d, sun, sky_scale);
                     }
                 }
                 texels.push(sum / (n * n) as f32 * scale);
@@ -183,7 +217,11 @@ impl MovingSun {
             width: w,
             height: h,
             texels,
-            source: format!("moving-sun sky, frame {frame}").into(),
+            source: format!(
+                "{} sky, frame {frame}",
+                if self.rising { "rising-sun" } else { "moving-sun" }
+            )
+            .into(),
         }
     }
 }
@@ -240,5 +278,29 @@ mod tests {
                 "sun power {p} against {expected}"
             );
         }
+    }
+
+    #[test]
+    fn the_rising_sun_climbs_to_its_elevation_and_the_sky_brightens() {
+        let sky = MovingSun {
+            width: 64,
+            height: 32,
+            frames: 9,
+            sun_elevation: 40.0,
+            rising: true,
+            ..Default::default()
+        };
+        let elevation = |f: u32| sky.sun_direction(f).y.asin().to_degrees();
+        assert!((elevation(0) + sky.sun_radius).abs() < 1e-3, "{}", elevation(0));
+        assert!((elevation(8) - 40.0).abs() < 1e-3, "{}", elevation(8));
+        assert!((1..9).all(|f| elevation(f) > elevation(f - 1)));
+        // A quarter turn in azimuth over the frames.
+        let (first, last) = (sky.sun_direction(0), sky.sun_direction(8));
+        let azimuth = |d: Vec3| d.x.atan2(-d.z).to_degrees();
+        assert!((azimuth(last) - azimuth(first) - 90.0 * 8.0 / 9.0).abs() < 1e-2);
+        // The sky (the zenith texel row, far from the sun) brightens from a twentieth to full.
+        let zenith = |f: u32| sky.map(f, 1.0).texels[0].z;
+        assert!((zenith(0) / zenith(8) - 0.05).abs() < 0.01, "{}", zenith(0) / zenith(8));
+        assert!((1..9).all(|f| zenith(f) > zenith(f - 1)));
     }
 }
