@@ -48,6 +48,25 @@ pub fn over(bytes: u64, limit: u64) -> String {
 pub fn check_scene(scene: &Scene, limit: u64) -> Result<(), String> {
     check_pixels(scene, PIXEL_BYTES, "", limit)?;
     let file = scene_file(scene);
+    // ShadingTriangles, the largest buffer with an element per triangle (BvhTriangles,
+    // EmitterTriangles and the light BVH's nodes hold less per triangle): found by scaling the
+    // many-light hall (docs/many-lights-scale.md), where 2^20 emissive quads made 2.2 million
+    // triangles, 142.7 MB of shading data against lavapipe's 128 MiB.
+    let triangle_bytes = size_of::<crate::scene::gpu::ShadingTriangle>() as u64;
+    let triangles = scene.triangles.len() as u64;
+    if triangles * triangle_bytes > limit {
+        let emissive = scene
+            .triangles
+            .iter()
+            .filter(|t| scene.materials[t.material as usize].is_emissive())
+            .count();
+        return Err(format!(
+            "{file}: {triangles} triangles ({emissive} of them emissive) {}; this device holds \
+             at most {} triangles a scene (64 bytes of shading data each)",
+            over(triangles * triangle_bytes, limit),
+            limit / triangle_bytes
+        ));
+    }
     if let Some(env) = &scene.environment {
         // EnvTexels (one Vec4 a texel), and for a sequence every map's texels in one buffer.
         let maps = scene.environment_sequence.len().max(1) as u64;
@@ -170,6 +189,29 @@ mod tests {
         );
         scene.environment.as_mut().unwrap().height = 1024;
         assert_eq!(check_scene(&scene, 134_217_728), Ok(()));
+    }
+
+    #[test]
+    fn a_scene_of_too_many_triangles_is_refused_in_triangles() {
+        let mut scene = crate::scene::default_scene();
+        // One pixel, so that the G-buffer fits whatever the limit.
+        (scene.camera.width, scene.camera.height) = (1, 1);
+        let limit = 64 * scene.triangles.len() as u64;
+        assert_eq!(check_scene(&scene, limit), Ok(()));
+        let t = scene.triangles[0].clone();
+        scene.triangles.push(t);
+        let e = check_scene(&scene, limit).unwrap_err();
+        assert!(
+            e.contains(&format!("{} triangles", scene.triangles.len()))
+                && e.contains(&format!("at most {} triangles", limit / 64)),
+            "{e}"
+        );
+        for bytes in [
+            size_of::<crate::bvh::BvhTriangle>(),
+            size_of::<crate::scene::gpu::EmitterTriangle>(),
+        ] {
+            assert!(bytes <= size_of::<crate::scene::gpu::ShadingTriangle>());
+        }
     }
 
     #[test]

@@ -145,6 +145,15 @@ impl SceneFeatures {
     }
 }
 
+/// CPU milliseconds of an upload's builds.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct BuildTimes {
+    /// The triangle BVH (obvhs).
+    pub triangle_bvh: f64,
+    /// The light BVH over the light table.
+    pub light_bvh: f64,
+}
+
 pub struct GpuScene {
     pub bvh: GpuBvh,
     pub shading_triangles: Buffer<ShadingTriangle>,
@@ -169,6 +178,8 @@ pub struct GpuScene {
     pub light_keys: Vec<u64>,
     /// SceneConstants' camera, as `camera_constants` gives it.
     pub camera: [Vec4; 4],
+    /// How long the upload's CPU builds took.
+    pub build_ms: BuildTimes,
     /// The environment map's texels across and down, when the scene has one.
     pub environment_size: Option<[u32; 2]>,
     pub width: u32,
@@ -580,7 +591,9 @@ impl GpuScene {
         crate::methods::device_fit::check_scene(scene, ctx.info().max_storage_buffer_range)
             .map_err(GpuError::DoesNotFit)?;
         let positions: Vec<[Vec3; 3]> = scene.triangles.iter().map(|t| t.positions).collect();
+        let start = std::time::Instant::now();
         let bvh = Bvh::build(&positions);
+        let triangle_bvh_ms = start.elapsed().as_secs_f64() * 1e3;
         let (centre, radius) = bounds(scene);
 
         let triangles = shading_triangles(scene, &bvh);
@@ -610,7 +623,9 @@ impl GpuScene {
             &triangles.emitter_gpu_index,
             &light_table,
         );
+        let start = std::time::Instant::now();
         let light_bvh = light_bvh(scene, &light_table, &triangles.emitters);
+        let light_bvh_ms = start.elapsed().as_secs_f64() * 1e3;
         let trails: Vec<[u32; 2]> = light_bvh
             .trails
             .iter()
@@ -654,6 +669,10 @@ impl GpuScene {
             constants: Buffer::from_slice(ctx, "SceneParams", &[constants])?,
             light_table,
             light_keys,
+            build_ms: BuildTimes {
+                triangle_bvh: triangle_bvh_ms,
+                light_bvh: light_bvh_ms,
+            },
             camera: camera_constants(cam),
             environment_size: (env.size[2] != 0).then_some([env.size[0], env.size[1]]),
             width: cam.width,
