@@ -22,7 +22,10 @@ fn method(name: &str, params: &str) -> Method {
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    assert!(args.len() >= 4, "usage: WIDTHxHEIGHT REF_SPP SEEDS HALL.toml ...");
+    assert!(
+        args.len() >= 4,
+        "usage: WIDTHxHEIGHT REF_SPP SEEDS HALL.toml ..."
+    );
     let (w, h) = args[0].split_once('x').expect("WIDTHxHEIGHT");
     let (width, height): (u32, u32) = (w.parse().unwrap(), h.parse().unwrap());
     let ref_spp: u32 = args[1].parse().unwrap();
@@ -42,7 +45,8 @@ fn main() {
     println!("|---:|---:|---:|---:|---:|---:|---:|---|---:|---:|---:|---:|---:|");
     for path in &args[3..] {
         let start = Instant::now();
-        let mut scene = irad::scene::load(std::path::Path::new(path)).unwrap_or_else(|e| panic!("{e}"));
+        let mut scene =
+            irad::scene::load(std::path::Path::new(path)).unwrap_or_else(|e| panic!("{e}"));
         let load_s = start.elapsed().as_secs_f64();
         scene.camera.width = width;
         scene.camera.height = height;
@@ -54,7 +58,8 @@ fn main() {
             + gpu.light_trails.byte_size();
         let render = |m: &Method| renderers.run(&ctx, m, &scene, &gpu, |_, _| {}).unwrap();
         let reference = |seed: u32| {
-            let params = format!("spp = {ref_spp}\nmax_depth = 1\nlight_sampler = \"bvh\"\nseed = {seed}");
+            let params =
+                format!("spp = {ref_spp}\nmax_depth = 1\nlight_sampler = \"bvh\"\nseed = {seed}");
             render(&method("reference", &params)).image
         };
         let (a, b) = (reference(77), reference(78));
@@ -72,14 +77,24 @@ fn main() {
             }
             let median = |v: &mut Vec<f64>| {
                 v.sort_by(f64::total_cmp);
-                if v.is_empty() { 0.0 } else { v[v.len() / 2] }
+                if v.is_empty() {
+                    0.0
+                } else {
+                    v[v.len() / 2]
+                }
             };
             (median(&mut ms), median(&mut pass_ms), err / seeds as f64)
         };
-        let (power_ms, _, power_e) =
-            measure("reference", "spp = 1\nmax_depth = 1\nlight_sampler = \"power\"", None);
-        let (bvh_ms, _, bvh_e) =
-            measure("reference", "spp = 1\nmax_depth = 1\nlight_sampler = \"bvh\"", None);
+        let (power_ms, _, power_e) = measure(
+            "reference",
+            "spp = 1\nmax_depth = 1\nlight_sampler = \"power\"",
+            None,
+        );
+        let (bvh_ms, _, bvh_e) = measure(
+            "reference",
+            "spp = 1\nmax_depth = 1\nlight_sampler = \"bvh\"",
+            None,
+        );
         let (restir_ms, cand_ms, restir_e) = measure(
             "restir",
             "frames = 1\ncandidates = 8\nneighbours = 2",

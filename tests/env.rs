@@ -966,6 +966,7 @@ fn dynamic_maps_change_every_frame() {
             sun_elevation: 35.0,
             sun_radius: 8.0,
             sun_radiance: Vec3::splat(20.0),
+            rising: false,
         };
         scene.environment_sequence = (0..4).map(|f| sky.map(f, 1.0)).collect();
         scene.environment = Some(scene.environment_sequence[0].clone());

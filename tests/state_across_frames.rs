@@ -56,6 +56,7 @@ fn map_sequence_scene() -> Scene {
         sun_elevation: 40.0,
         sun_radius: 8.0,
         sun_radiance: Vec3::new(30.0, 28.0, 25.0),
+        rising: false,
     }
     .map(0, 1.0);
     let sequence = vec![

@@ -36,6 +36,7 @@ fn sequence(still: &Scene) -> Scene {
         sun_elevation: 35.0,
         sun_radius: 8.0,
         sun_radiance: Vec3::splat(20.0),
+        rising: false,
     };
     let mut scene = still.clone();
     scene.environment_sequence = (0..FRAMES).map(|f| sky.map(f, 1.0)).collect();

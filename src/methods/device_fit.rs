@@ -44,27 +44,36 @@ pub fn over(bytes: u64, limit: u64) -> String {
     )
 }
 
-/// The scene's image size and environment maps against `limit` (maxStorageBufferRange).
+/// The scene's image size, triangles, lights and environment maps against `limit`
+/// (maxStorageBufferRange).
 pub fn check_scene(scene: &Scene, limit: u64) -> Result<(), String> {
     check_pixels(scene, PIXEL_BYTES, "", limit)?;
     let file = scene_file(scene);
-    // ShadingTriangles, the largest buffer with an element per triangle (BvhTriangles,
-    // EmitterTriangles and the light BVH's nodes hold less per triangle): found by scaling the
-    // many-light hall (docs/many-lights-scale.md), where 2^20 emissive quads made 2.2 million
-    // triangles, 142.7 MB of shading data against lavapipe's 128 MiB.
+    // ShadingTriangles, the largest buffer with an element per triangle (BvhTriangles 48 bytes,
+    // EmitterTriangles 64): found by scaling the many-light hall (docs/many-lights-scale.md),
+    // where 2^20 emissive quads made 2.2 million triangles, 136.1 MiB of shading data against
+    // lavapipe's 128 MiB. The light BVH's nodes (2L - 1 of 32 bytes for L lights) are checked
+    // after it.
     let triangle_bytes = size_of::<crate::scene::gpu::ShadingTriangle>() as u64;
     let triangles = scene.triangles.len() as u64;
     if triangles * triangle_bytes > limit {
-        let emissive = scene
-            .triangles
-            .iter()
-            .filter(|t| scene.materials[t.material as usize].is_emissive())
-            .count();
+        let emissive = emissive_triangles(scene);
         return Err(format!(
             "{file}: {triangles} triangles ({emissive} of them emissive) {}; this device holds \
              at most {} triangles a scene (64 bytes of shading data each)",
             over(triangles * triangle_bytes, limit),
             limit / triangle_bytes
+        ));
+    }
+    let lights = emissive_triangles(scene) + scene.lights.len() as u64;
+    let node_bytes = size_of::<crate::sampling::light_bvh::LightNode>() as u64;
+    let nodes = (2 * lights).saturating_sub(1);
+    if nodes * node_bytes > limit {
+        return Err(format!(
+            "{file}: {lights} lights (emissive triangles, point and spot lights): their light \
+             BVH {}; this device holds at most {} lights a scene",
+            over(nodes * node_bytes, limit),
+            (limit / node_bytes + 1) / 2
         ));
     }
     if let Some(env) = &scene.environment {
@@ -94,6 +103,14 @@ pub fn check_scene(scene: &Scene, limit: u64) -> Result<(), String> {
         }
     }
     Ok(())
+}
+
+fn emissive_triangles(scene: &Scene) -> u64 {
+    scene
+        .triangles
+        .iter()
+        .filter(|t| scene.materials[t.material as usize].is_emissive())
+        .count() as u64
 }
 
 /// The image's pixels at `pixel_bytes` each against `limit`.

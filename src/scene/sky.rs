@@ -113,6 +113,20 @@ impl MovingSun {
                 "must be finite and >= 0 in every channel",
             ));
         }
+        if name == "rising-sun" && frames < 2 {
+            return Err(invalid(
+                "frames",
+                frames.to_string(),
+                "a rising sun needs 2 or more frames",
+            ));
+        }
+        if name == "rising-sun" && elevation <= 0.0 {
+            return Err(invalid(
+                "sun_elevation",
+                elevation.to_string(),
+                "a rising sun rises to an elevation above the horizon: degrees in (0, 90]",
+            ));
+        }
         Ok(MovingSun {
             width: w as u32,
             height: h as u32,
@@ -149,8 +163,12 @@ impl MovingSun {
     /// the map's u (docs/DESIGN.md "Conventions": u = atan2(x, -z) / 2 pi).
     pub fn sun_direction(&self, frame: u32) -> Vec3 {
         // The rising sun comes up a quarter turn from the moving sun's start (u = 1/4, +x) and
-        // turns on toward u = 1/2.
-        let (turn, start) = if self.rising { (0.25, 0.5 * PI) } else { (1.0, 0.0) };
+        // turns on toward u = 1/2, reaching u = 1/4 + (F - 1) / 4F at the last of F frames.
+        let (turn, start) = if self.rising {
+            (0.25, 0.5 * PI)
+        } else {
+            (1.0, 0.0)
+        };
         let phi = start
             + 2.0 * PI * turn * (frame % self.frames.max(1)) as f32 / self.frames.max(1) as f32;
         let e = self.elevation(frame).to_radians();
@@ -165,7 +183,9 @@ impl MovingSun {
             } else {
                 GROUND
             };
-        let in_sun = d.dot(sun) >= self.sun_radius.to_radians().cos();
+        // A rising sun below the horizon is behind the ground.
+        let in_sun =
+            d.dot(sun) >= self.sun_radius.to_radians().cos() && (!self.rising || d.y >= 0.0);
         sky + if in_sun {
             self.sun_radiance
         } else {
@@ -219,7 +239,11 @@ impl MovingSun {
             texels,
             source: format!(
                 "{} sky, frame {frame}",
-                if self.rising { "rising-sun" } else { "moving-sun" }
+                if self.rising {
+                    "rising-sun"
+                } else {
+                    "moving-sun"
+                }
             )
             .into(),
         }
@@ -291,7 +315,11 @@ mod tests {
             ..Default::default()
         };
         let elevation = |f: u32| sky.sun_direction(f).y.asin().to_degrees();
-        assert!((elevation(0) + sky.sun_radius).abs() < 1e-3, "{}", elevation(0));
+        assert!(
+            (elevation(0) + sky.sun_radius).abs() < 1e-3,
+            "{}",
+            elevation(0)
+        );
         assert!((elevation(8) - 40.0).abs() < 1e-3, "{}", elevation(8));
         assert!((1..9).all(|f| elevation(f) > elevation(f - 1)));
         // A quarter turn in azimuth over the frames.
@@ -300,7 +328,11 @@ mod tests {
         assert!((azimuth(last) - azimuth(first) - 90.0 * 8.0 / 9.0).abs() < 1e-2);
         // The sky (the zenith texel row, far from the sun) brightens from a twentieth to full.
         let zenith = |f: u32| sky.map(f, 1.0).texels[0].z;
-        assert!((zenith(0) / zenith(8) - 0.05).abs() < 0.01, "{}", zenith(0) / zenith(8));
+        assert!(
+            (zenith(0) / zenith(8) - 0.05).abs() < 0.01,
+            "{}",
+            zenith(0) / zenith(8)
+        );
         assert!((1..9).all(|f| zenith(f) > zenith(f - 1)));
     }
 }

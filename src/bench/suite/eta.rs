@@ -73,10 +73,14 @@ fn time_left(suite: &Suite, run: &RunSpec) -> Option<f64> {
     if let Some(ms) = run.frame_ms {
         // A frame-time run: the warm-ups and every frame of each repeat at the frame budget
         // (src/bench/suite/sequence.rs), and the calibration.
-        let frames = suite.scenes[run.scene]
-            .frames
-            .as_ref()
-            .map_or(1, |f| f.len()) as f64;
+        // Plus the lead-in frames a method that carries state renders before each sequence's.
+        let frames = suite.scenes[run.scene].frames.as_ref().map_or(1, |f| {
+            let lead_in = match run.method.across_frames().carries_nothing() {
+                true => 0,
+                false => suite.lead_in.min(f.start),
+            };
+            f.len() + lead_in as usize
+        }) as f64;
         let renders = suite.warmup as f64 + suite.repeats.max(1) as f64 * frames;
         return Some((renders + 0.75) * ms / 1e3);
     }

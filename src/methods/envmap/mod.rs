@@ -170,10 +170,11 @@ pub const SETTINGS: &[Setting<EnvSettings>] = &[
          1.4x on glossy geometry under an open sky (glossy-env) and 1.5x on the dynamic \
          moving-sun. Per frame of a dynamic sky at equal frame time (scenes/suites/realtime.toml: \
          moving-sun-sequence and rising-sun-sequence, 64x48, 8 samples a frame, 13 and 52 ms \
-         a frame): latlong wins (relMSE x frame time 0.95 and 0.68 on the turning sun, 0.31 \
-         and 0.15 on the rising one), hierarchical within 1.15x of it (ahead at 13 ms on the \
-         rising sun; the order changes between runs), dynamic 20-47x behind on lavapipe: its \
-         cube map and tables, rebuilt from every frame's map, take about 110 ms a frame there.",
+         a frame): latlong wins (relMSE x frame time 0.166 and 0.070 on the rising sun, \
+         hierarchical 1.04-1.12x behind; on the turning sun the two tie, 1.03 and 0.665 \
+         against 1.04 and 0.651, and their order changes between runs), dynamic 17-90x \
+         behind on lavapipe: its cube map and tables, rebuilt from every frame's map, take \
+         about 100 ms a frame there.",
         |s| Some(Value::Name(s.strategy.name())),
         |s, v| {
             s.strategy = Strategy::from_name(v.name()).expect("a checked name");
