@@ -1695,6 +1695,8 @@ fn a_frame_time_suite_records_per_frame_figures_and_flicker() {
         let seq = r.sequence.as_ref().unwrap();
         assert_eq!(row["worst_frame"], seq.worst_frame.to_string());
         assert_eq!(row["sequence_flicker"], seq.flicker.unwrap().to_string());
+        // The path tracer keeps nothing across frames: no lead-in.
+        assert_eq!(row["lead_in"], "0");
     }
     let svg =
         fs::read_to_string(out.join(suite::output::frames_chart_path("cornell-circling"))).unwrap();

@@ -494,6 +494,7 @@ fn run_one(
         warmup: suite.warmup,
         repeats: suite.repeats,
         flicker_frames: suite.flicker_frames,
+        lead_in: 0,
         scored: 0,
         device: info.name.clone(),
         driver: info.driver.clone(),
@@ -618,6 +619,7 @@ fn run_one(
         record.image_mean_offset = Some(m.image_mean_offset).filter(|o| o.is_finite());
         record.image_mean_spread = m.image_mean_spread;
         record.flicker_frames = 0;
+        record.lead_in = m.lead_in;
         (record.rel_mse_min, record.rel_mse_max) = m.rel_mse_range.unzip();
         record.nonfinite_estimates = m.nonfinite_estimates;
         record.stats = m.stats;

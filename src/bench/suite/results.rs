@@ -80,6 +80,11 @@ pub struct RunRecord {
     pub repeats: u32,
     /// Frames (successive seeds) the flicker is measured over; 0 for none.
     pub flicker_frames: u32,
+    /// Frames a frame-time run rendered, unscored, before each sequence's scored frames (the
+    /// suite's `lead_in` for a method that carries state across frames, as many as the
+    /// animation had; 0 otherwise).
+    #[serde(default)]
+    pub lead_in: u32,
     /// Images whose figures are averaged in `metrics`: max(repeats, flicker_frames).
     pub scored: u32,
     pub device: String,
@@ -434,6 +439,7 @@ const COLUMNS: &[Column] = &[
     }),
     // HDR-FLIP, where the run scored it (frame-time runs: the mean over frames and seeds).
     ("flip", |r| figure(r.metrics.and_then(|m| m.flip))),
+    ("lead_in", |r| r.lead_in.to_string()),
 ];
 
 /// The CSV's first columns, in order (the names of `COLUMNS`).
@@ -541,6 +547,7 @@ mod tests {
             warmup: 0,
             repeats: 1,
             flicker_frames: 0,
+            lead_in: 0,
             scored: 1,
             device: device.into(),
             driver: String::new(),

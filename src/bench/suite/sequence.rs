@@ -52,6 +52,8 @@ pub struct MeasuredSequence {
     pub image_mean_offset: f64,
     pub image_mean_spread: Option<f64>,
     pub sequence: SequenceResult,
+    /// Frames rendered, unscored, before each sequence's scored frames.
+    pub lead_in: u32,
 }
 
 /// The frames a sequence of a run renders: `frames`, after up to `lead_in` frames before them
@@ -233,6 +235,8 @@ pub fn measure_sequence(
             worst_rel_mse: Some(worst_rel_mse).filter(|e| e.is_finite()),
             flicker: Some(flicker).filter(|e| e.is_finite()),
         },
+        lead_in: frames.start
+            - rendered_frames(&frames, lead_in, method.across_frames().carries_nothing()).start,
     })
 }
 
