@@ -700,7 +700,7 @@ mod tests {
              gpu_ms,wall_ms,rel_mse,rel_mse_min,rel_mse_max,rmse,lab_error,bias,outliers,nan_inf,flicker,\
              image_mean_offset,image_mean_spread,nonfinite_estimates,reference_spp,reference_seed,\
              reference_rel_mse,device,driver,scene_hash,note,frame_ms,frames,worst_frame,\
-             worst_frame_rel_mse,sequence_flicker,flip,param:spp,param:strategy,\
+             worst_frame_rel_mse,sequence_flicker,flip,lead_in,param:spp,param:strategy,\
              param:vpls,pass_ms:shade,pass_ms:trace,stat:kept"
         );
         assert!(header.starts_with(&FIXED_COLUMNS.join(",")));
@@ -722,9 +722,9 @@ mod tests {
             "3,cornell-box/12.5/0.031,cornell-box,embedded:cornell-box,reference,pt,time 20ms,\
              20,7,false,ok,false,true,true,1,1,0,0,1,0,1,12.5,,0.031,0.02,0.04,0,0,0,0,0,0.002,-0.01,0.05,0,1,9,\
              0.00001,\
-             \"gpu, \"\"fast\"\"\",,,\"two\nlines\",,,,,,,,bir,64,,3.25,0.75\n\
+             \"gpu, \"\"fast\"\"\",,,\"two\nlines\",,,,,,,0,,bir,64,,3.25,0.75\n\
              4,veach/1/0.5,veach,,reference,pt,,,,false,declined,true,false,false,1,1,0,0,1,0,1,,,,,,,,,,\
-             ,,,,0,1,9,,cpu,,,,,,,,,,16,,,,,\n"
+             ,,,,0,1,9,,cpu,,,,,,,,,,0,16,,,,,\n"
         );
     }
 }
