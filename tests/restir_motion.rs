@@ -22,7 +22,7 @@
 
 mod common;
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use glam::Vec3;
 use irad::gpu::Context;
@@ -34,26 +34,9 @@ use irad::scene::gpu::GpuScene;
 use irad::scene::{self, Scene};
 use irad::sequence;
 
-use common::{luminance_mean, mean_and_stderr, with_gpu};
+use common::{luminance_mean, mean_and_stderr, with_gpu, Scratch};
 
 /// A scratch folder, removed when dropped.
-struct Scratch(PathBuf);
-
-impl Scratch {
-    fn new(name: &str) -> Scratch {
-        let dir = std::env::temp_dir().join(format!("irad-motion-{}-{name}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        Scratch(dir)
-    }
-}
-
-impl Drop for Scratch {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
-
 /// An OBJ quad of corners `c` (a loop) in material `m`, wound so its geometric normal (the
 /// emitting side of an emitter) points along `facing`.
 fn quad(obj: &mut String, count: &mut u32, c: [Vec3; 4], facing: Vec3, m: &str) {
@@ -317,7 +300,7 @@ fn check_frames(
 #[test]
 #[ignore = "statistical tier: scripts/test.sh --statistical"]
 fn a_moving_camera_and_moving_switching_lights_keep_every_frame_unbiased() {
-    let scratch = Scratch::new("walk");
+    let scratch = Scratch::new("motion", "walk");
     let scene = walk(&scratch.0, 24, 16);
     with_gpu(|ctx| {
         // Not where light a has just left the table (frame 3) and the frame after: the history
@@ -435,7 +418,7 @@ fn masked_mean(image: &Image, mask: &[bool]) -> f64 {
 
 #[test]
 fn disoccluded_pixels_reject_the_previous_frames_reservoirs() {
-    let scratch = Scratch::new("panel");
+    let scratch = Scratch::new("motion", "panel");
     let scene = panel(&scratch.0, 32, 24);
     let seeds = 6;
     // Temporal reuse alone (no neighbours), at pixel centres so that the masks are exact.

@@ -15,26 +15,9 @@ use irad::render::{self, RenderJob};
 use irad::scene;
 use irad::sequence::{self, SequenceJob};
 
-use common::with_gpu;
+use common::{with_gpu, Scratch};
 
 /// A scratch folder, removed when dropped.
-struct Scratch(PathBuf);
-
-impl Scratch {
-    fn new(name: &str) -> Scratch {
-        let dir = std::env::temp_dir().join(format!("irad-seq-{}-{name}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        Scratch(dir)
-    }
-}
-
-impl Drop for Scratch {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
-
 const ALBEDO: f32 = 0.5;
 const INTENSITY: f32 = 2.0;
 const HEIGHT: f32 = 0.5;
@@ -79,7 +62,7 @@ fn path_tracer(spp: u32, seed: u32) -> Method {
 /// is exact and BSDF samples never meet the light, so the render has no noise.
 #[test]
 fn a_point_light_moving_over_a_plane_matches_its_closed_form_in_every_frame() {
-    let dir = Scratch::new("closed-form");
+    let dir = Scratch::new("seq", "closed-form");
     let scene = moving_light(&dir.0);
     with_gpu(|ctx| {
         let mut frames_seen = 0;
@@ -134,7 +117,7 @@ fn a_point_light_moving_over_a_plane_matches_its_closed_form_in_every_frame() {
 /// A resolution set on the loaded scene (a suite's width, a test's size) holds in every frame.
 #[test]
 fn frames_keep_the_resolution_the_scene_was_given() {
-    let dir = Scratch::new("resolution");
+    let dir = Scratch::new("seq", "resolution");
     let mut scene = moving_light(&dir.0);
     (scene.camera.width, scene.camera.height) = (8, 4);
     let still = scene.at_frame(2).unwrap();
@@ -146,7 +129,7 @@ fn frames_keep_the_resolution_the_scene_was_given() {
 /// the same images and records as one run through, and another sequence's folder is refused.
 #[test]
 fn frames_are_stills_and_an_interrupted_sequence_resumes_to_the_same_files() {
-    let dir = Scratch::new("resume");
+    let dir = Scratch::new("seq", "resume");
     let scene = moving_light(&dir.0);
     let method = path_tracer(2, 3).with_count(2);
     let jittered: toml::Table = toml::from_str("spp = 2\nseed = 3").unwrap();
@@ -388,7 +371,7 @@ mod probe {
 /// state is warned of it.
 #[test]
 fn the_driver_hands_each_frame_the_previous_frames_scene() {
-    let dir = Scratch::new("probe");
+    let dir = Scratch::new("seq", "probe");
     let scene = moving_light(&dir.0);
     let registry = irad::methods::Registry::builtin()
         .clone()

@@ -86,6 +86,11 @@ fn plan(method: &str, key: &str) -> Option<Run> {
                   dispatch",
         },
         ("ir", "interleave") => max(),
+        ("ir", "reuse") => Skip(
+            "a still render walks every path; in a sequence reweigh_vpls.comp loops over at \
+             most 16 classes (MAX_CLASSES, a shadow ray each) and the path's vertices, as the \
+             walk does",
+        ),
         ("bir", "vpls") => At {
             value: "4096",
             shared: "",

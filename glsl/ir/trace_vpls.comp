@@ -15,6 +15,10 @@
 // Russian roulette for animation, each vertex surviving with probability rho (pseudo-random,
 // as Keller says it must be), every path keeping a slot at every vertex. Where N_j reaches 0
 // the paths still alive go on by roulette (irad's tail, unbiased where Keller's walk stops).
+//
+// Reuse across animation frames (ir's --reuse K, src/methods/ir/reuse.rs): a frame may walk
+// only the paths i = path_phase (mod path_stride) and keep the others' slots; every walked
+// path clears its own slots first.
 
 #extension GL_GOOGLE_include_directive : require
 
@@ -39,6 +43,8 @@ layout(push_constant) uniform WalkParams {
     uint vertex_count;   // vertices per path, the light vertex included
     uint seed;           // scrambles the Halton digits and keys the roulette
     float survival;      // roulette: probability of going on at each vertex (mean albedo)
+    uint path_stride;    // walks paths path_phase, path_phase + stride, ... (1: all)
+    uint path_phase;
 } params;
 
 float walk_number(uint dimension, uint path) {
@@ -51,8 +57,19 @@ void write_vpl(uint vertex, uint path, Vpl v) {
 }
 
 void main() {
-    uint path = gl_GlobalInvocationID.x;
+    uint path = gl_GlobalInvocationID.x * params.path_stride + params.path_phase;
     if (path >= params.path_count) return;
+    // The path's slots start empty (a path that ends early leaves its later ones so).
+    Vpl empty;
+    empty.position = vec4(0.0);
+    empty.normal = vec4(0.0);
+    empty.power = vec4(0.0);
+    empty.incident = vec4(0.0);
+    for (uint vertex = 0u; vertex < params.vertex_count; ++vertex) {
+        // Path i has a slot at vertex j iff i < N_j (N under roulette, the paths still alive in
+        // fractional absorption's tail).
+        if (path < schedule[vertex].x) write_vpl(vertex, path, empty);
+    }
 
     // Composition method: the light by power, then the same number rescaled inside it.
     float u0 = walk_number(0u, path);

@@ -144,6 +144,7 @@ pub(crate) fn mirrors() -> Vec<&'static GpuLayout> {
         m::ir::filter::GPU_LAYOUTS,
         m::ir::gather::GPU_LAYOUTS,
         m::ir::walk::GPU_LAYOUTS,
+        m::ir::reuse::GPU_LAYOUTS,
         m::lightfield::GPU_LAYOUTS,
         m::lightfield::tables::GPU_LAYOUTS,
         m::paths::GPU_LAYOUTS,

@@ -53,6 +53,14 @@ pub trait RenderMethod: Sized + 'static {
     /// (across_frames.rs): `AcrossFrames::NOTHING` where each frame starts from scratch.
     const ACROSS_FRAMES: AcrossFrames;
 
+    /// What a render with `settings` keeps from one animation frame to the next:
+    /// `ACROSS_FRAMES`, or nothing where a setting turns the reuse off (ir's `reuse = 1`), so
+    /// that the driver hands such a render no previous frame.
+    fn across_frames(settings: &Self::Settings) -> AcrossFrames {
+        let _ = settings;
+        Self::ACROSS_FRAMES
+    }
+
     /// Builds the method's kernels (once per `Renderers`, however many renders follow).
     fn new(ctx: &Context) -> GpuResult<Self>;
 

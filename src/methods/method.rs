@@ -86,9 +86,10 @@ impl Method {
         self.entry.count_key()
     }
 
-    /// What the method keeps from one animation frame to the next (`RenderMethod::ACROSS_FRAMES`).
+    /// What the method keeps from one animation frame to the next with these settings
+    /// (`RenderMethod::across_frames`).
     pub fn across_frames(&self) -> AcrossFrames {
-        self.entry.across_frames()
+        self.entry.across_frames_with(self.settings_any())
     }
 
     /// The same method and settings with `count_key()` set to `count`.

@@ -123,6 +123,8 @@ pub trait MethodEntry: sealed::Sealed + Sync {
     fn lights(&self) -> Lights;
     /// `RenderMethod::ACROSS_FRAMES`.
     fn across_frames(&self) -> AcrossFrames;
+    /// `RenderMethod::across_frames` of these settings.
+    fn across_frames_with(&self, s: &dyn Any) -> AcrossFrames;
     /// `RenderMethod::COUNT`.
     fn count_key(&self) -> &'static str;
     fn docs(&self) -> Vec<SettingDoc>;
@@ -196,6 +198,10 @@ impl<M: RenderMethod> MethodEntry for Entry<M> {
 
     fn across_frames(&self) -> AcrossFrames {
         M::ACROSS_FRAMES
+    }
+
+    fn across_frames_with(&self, s: &dyn Any) -> AcrossFrames {
+        M::across_frames(settings_of::<M>(s))
     }
 
     fn count_key(&self) -> &'static str {

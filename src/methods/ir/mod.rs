@@ -5,9 +5,11 @@
 
 pub mod filter;
 pub mod gather;
+pub mod reuse;
 pub mod schedule;
 pub mod walk;
 
+use std::cell::{Cell, RefCell};
 use std::mem::size_of;
 
 use crate::gpu::{Buffer, Commands, Context, GpuResult};
@@ -24,12 +26,14 @@ use crate::methods::settings::{
 };
 use crate::sampling::pcg;
 use crate::scene::gpu::GpuScene;
+use crate::scene::gpu::{analytic_lights, GpuLight, LightEntry};
 use crate::scene::Scene;
 
 use filter::FilterInterleaved;
 use gather::AccumulateVpls;
+use reuse::{ClassBuffers, Classes, History, ReweighVpls};
 use schedule::{mean_albedo, Absorption, Schedule};
-use walk::{TraceVpls, Vpl, VplBuffers};
+use walk::{PathClass, TraceVpls, Vpl, VplBuffers};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum DirectLight {
@@ -62,6 +66,10 @@ pub struct IrSettings {
     /// expensive indirect estimate gets one position per frame (`--direct-spp`).
     pub direct_spp: u32,
     pub pixels: PixelSampling,
+    /// K: the animation frames a light path lives in a sequence; each frame walks 1/K of the
+    /// paths afresh and keeps the rest, re-weighed (src/methods/ir/reuse.rs). 1: every frame
+    /// walks them all.
+    pub reuse: u32,
 }
 
 impl Default for IrSettings {
@@ -82,6 +90,7 @@ impl Default for IrSettings {
             // footprint are 13% of the error (at 1: 55%).
             direct_spp: 8,
             pixels: PixelSampling::Jittered,
+            reuse: 1,
         }
     }
 }
@@ -135,13 +144,31 @@ pub const SETTINGS: &[Setting<IrSettings>] = &[
     ),
     common_settings!(direct_spp),
     common_settings!(pixel_centres),
+    field_setting!(
+        "reuse",
+        reuse,
+        Kind::Count {
+            min: 1,
+            max: reuse::MAX_CLASSES
+        },
+        Count,
+        "In a sequence, the frames a light path lives: each frame walks 1/K of the paths afresh \
+         and keeps the others from the frames before, re-weighed by multiple importance sampling \
+         over where the point and spot lights were when they were walked (Laine 07's \
+         incremental instant radiosity; unbiased per frame). A still render walks them all. \
+         1: every frame walks every path.",
+    ),
 ];
 
 pub struct InstantRadiosity {
     walk: TraceVpls,
+    reweigh: ReweighVpls,
     gather: AccumulateVpls,
     filter: FilterInterleaved,
     compensation: ClampCompensation,
+    /// Left by the last render that completed (reuse.rs): taken by the next render and reused
+    /// where it renders that frame's successor.
+    history: RefCell<Option<History>>,
 }
 
 impl InstantRadiosity {
@@ -166,14 +193,25 @@ impl RenderMethod for InstantRadiosity {
         point: Support::Renders,
         luminaires: Support::Declines(NO_LUMINAIRES),
     };
-    const ACROSS_FRAMES: AcrossFrames = AcrossFrames::NOTHING;
+    const ACROSS_FRAMES: AcrossFrames = AcrossFrames {
+        carries: &[reuse::CARRIED],
+    };
+
+    fn across_frames(settings: &IrSettings) -> AcrossFrames {
+        match settings.reuse > 1 {
+            true => Self::ACROSS_FRAMES,
+            false => AcrossFrames::NOTHING,
+        }
+    }
 
     fn new(ctx: &Context) -> GpuResult<Self> {
         Ok(InstantRadiosity {
             walk: TraceVpls::new(ctx)?,
+            reweigh: ReweighVpls::new(ctx)?,
             gather: AccumulateVpls::new(ctx)?,
             filter: FilterInterleaved::new(ctx)?,
             compensation: ClampCompensation::new(ctx)?,
+            history: RefCell::new(None),
         })
     }
 
@@ -220,9 +258,54 @@ impl RenderMethod for InstantRadiosity {
         scene: &Scene,
         gpu_scene: &GpuScene,
         settings: &'a IrSettings,
-        _animation: &AnimationFrame<'_>,
+        animation: &AnimationFrame<'_>,
     ) -> GpuResult<Box<dyn MethodFrames + 'a>> {
-        let vpls = VplBuffers::new(ctx, Self::schedule(scene, settings))?;
+        let layout = Self::schedule(scene, settings);
+        let class_count = settings.reuse.clamp(1, reuse::MAX_CLASSES);
+        let lights = analytic_lights(scene).0;
+        // Whatever the last render left is taken: reused only by its successor.
+        let history = self.history.borrow_mut().take();
+        let kept = match (history, animation.previous) {
+            (Some(h), Some(p))
+                if class_count > 1
+                    && animation.keeps(&reuse::CARRIED)
+                    && reuse::lights_moved_only(p.scene, scene)
+                    && h.frame == p.frame
+                    && h.content_hash == p.scene.content_hash
+                    && h.base.layout == layout
+                    && h.classes.seeds.len() == class_count as usize
+                    && bytemuck::cast_slice::<LightEntry, u8>(&h.entries)
+                        == bytemuck::cast_slice::<LightEntry, u8>(
+                            &gpu_scene.light_table.entries,
+                        ) =>
+            {
+                Some(h)
+            }
+            _ => None,
+        };
+        // The first frame's walk: one class afresh where paths are kept, else all of them.
+        let first_seed = walk_seed(settings, 0);
+        let (vpls, classes, fresh) = match kept {
+            Some(h) => {
+                let fresh = animation.frame % class_count;
+                let mut classes = h.classes;
+                classes.seeds[fresh as usize] = first_seed;
+                classes.lights[fresh as usize] = lights.clone();
+                (h.base, classes, Some(fresh))
+            }
+            None => (
+                VplBuffers::new(ctx, layout)?,
+                Classes::all(class_count, first_seed, &lights),
+                None,
+            ),
+        };
+        let reweighed = match fresh {
+            Some(_) => Some((
+                Buffer::zeroed(ctx, "Vpls", vpls.layout.slot_count.max(1) as usize)?,
+                ClassBuffers::new(ctx, &classes)?,
+            )),
+            None => None,
+        };
         let interleave = settings.interleave.max(1);
         let vpl_radiance = Buffer::zeroed(
             ctx,
@@ -247,7 +330,16 @@ impl RenderMethod for InstantRadiosity {
         Ok(Box::new(IrFrames {
             ir: self,
             settings,
-            vpls,
+            vpls: Some(vpls),
+            reweighed,
+            class_count,
+            fresh,
+            classes: RefCell::new(classes),
+            lights,
+            animation_frame: animation.frame,
+            content_hash: scene.content_hash,
+            entries: gpu_scene.light_table.entries.clone(),
+            finished: Cell::new(false),
             vpl_radiance,
             interleave,
             surface,
@@ -257,11 +349,29 @@ impl RenderMethod for InstantRadiosity {
     }
 }
 
+/// The seed of frame `frame`'s walk.
+fn walk_seed(settings: &IrSettings, frame: u32) -> u32 {
+    pcg::hash(&[settings.seed, frame, 0x76706c73])
+}
+
 /// One ir render's buffers, recording each frame's VPL walk and gather.
 struct IrFrames<'a> {
     ir: &'a InstantRadiosity,
     settings: &'a IrSettings,
-    vpls: VplBuffers,
+    /// The walk's slots (None once handed to the history).
+    vpls: Option<VplBuffers>,
+    /// Where paths were kept from the frame before: the first frame's VPLs re-weighed from
+    /// them, and the class data the pass reads.
+    reweighed: Option<(Buffer<Vpl>, ClassBuffers)>,
+    class_count: u32,
+    /// The class the first frame walks where paths were kept.
+    fresh: Option<u32>,
+    classes: RefCell<Classes>,
+    lights: Vec<GpuLight>,
+    animation_frame: u32,
+    content_hash: u64,
+    entries: Vec<LightEntry>,
+    finished: Cell<bool>,
     vpl_radiance: Buffer<glam::Vec4>,
     interleave: u32,
     surface: std::ops::Range<u32>,
@@ -277,10 +387,50 @@ impl MethodFrames for IrFrames<'_> {
         frame: u32,
     ) -> GpuResult<()> {
         let (ir, settings, gpu_scene) = (self.ir, self.settings, shared.scene);
-        let walk_seed = pcg::hash(&[settings.seed, frame, 0x76706c73]);
-        cmd.pass("vpl walk", |cmd| {
-            ir.walk.record(cmd, gpu_scene, &self.vpls, walk_seed, None)
+        let walk_vpls = self.vpls.as_ref().expect("kept until the render ends");
+        let seed = walk_seed(settings, frame);
+        // The first frame after kept paths walks one class and re-weighs the rest; any other
+        // walks every path (so later frames of a render are independent of the first).
+        let reweigh = match (frame, self.fresh, &self.reweighed) {
+            (0, Some(fresh), Some(buffers)) => Some((fresh, buffers)),
+            _ => None,
+        };
+        cmd.pass("vpl walk", |cmd| match reweigh {
+            Some((fresh, _)) => ir.walk.record_paths(
+                cmd,
+                gpu_scene,
+                walk_vpls,
+                seed,
+                None,
+                PathClass {
+                    stride: self.class_count,
+                    phase: fresh,
+                },
+            ),
+            None => ir.walk.record(cmd, gpu_scene, walk_vpls, seed, None),
         })?;
+        let vpls = match reweigh {
+            Some((fresh, (frame_vpls, class_buffers))) => {
+                cmd.pass("vpl reweighing", |cmd| {
+                    ir.reweigh.record(
+                        cmd,
+                        gpu_scene,
+                        walk_vpls,
+                        frame_vpls,
+                        class_buffers,
+                        self.class_count,
+                        fresh,
+                    )
+                })?;
+                frame_vpls
+            }
+            None => {
+                if frame > 0 {
+                    *self.classes.borrow_mut() = Classes::all(self.class_count, seed, &self.lights);
+                }
+                &walk_vpls.vpls
+            }
+        };
         cmd.pass("vpl accumulation", |cmd| {
             if self.interleave > 1 {
                 cmd.fill_zero(&self.vpl_radiance);
@@ -296,7 +446,7 @@ impl MethodFrames for IrFrames<'_> {
                     cmd,
                     gpu_scene,
                     shared.gbuffer,
-                    &self.vpls.vpls,
+                    vpls,
                     shared.accumulation,
                     &self.vpl_radiance,
                     slots,
@@ -314,7 +464,7 @@ impl MethodFrames for IrFrames<'_> {
             shared.gbuffer,
             shared.accumulation,
             &[VplSource {
-                vpls: &self.vpls.vpls,
+                vpls,
                 slots: self.surface.clone(),
                 weight: 1.0,
             }],
@@ -338,9 +488,37 @@ impl MethodFrames for IrFrames<'_> {
     }
 
     fn finish(&self, shared: &Shared<'_>) -> GpuResult<Extras> {
+        self.finished.set(true);
+        let mut stats = self.clamp.stats(shared.scene)?;
+        if self.class_count > 1 {
+            // The share of the first frame's light paths kept from earlier frames.
+            let kept = match self.fresh {
+                Some(_) => (self.class_count - 1) as f64 / self.class_count as f64,
+                None => 0.0,
+            };
+            stats.push(("reuse_kept_paths".into(), kept));
+        }
         Ok(Extras {
-            stats: self.clamp.stats(shared.scene)?,
+            stats,
             maps: vec![],
         })
+    }
+}
+
+impl Drop for IrFrames<'_> {
+    /// A completed render's paths become the history the next animation frame may keep.
+    fn drop(&mut self) {
+        if !self.finished.get() || self.class_count <= 1 {
+            return;
+        }
+        if let Some(base) = self.vpls.take() {
+            *self.ir.history.borrow_mut() = Some(History {
+                frame: self.animation_frame,
+                content_hash: self.content_hash,
+                base,
+                classes: self.classes.borrow().clone(),
+                entries: std::mem::take(&mut self.entries),
+            });
+        }
     }
 }

@@ -37,6 +37,8 @@ struct WalkParams {
     vertex_count: u32,
     seed: u32,
     survival: f32,
+    path_stride: u32,
+    path_phase: u32,
 }
 
 /// The GLSL layouts the structs above mirror (src/gpu/contracts.rs checks them).
@@ -45,7 +47,9 @@ pub(crate) const GPU_LAYOUTS: &[crate::gpu::contracts::GpuLayout] = {
     use crate::gpu::contracts::gpu_layout;
     &[
         gpu_layout!(Vpl as "Vpl" { position, normal, power, incident }),
-        gpu_layout!(WalkParams in ["trace_vpls"] { path_count, vertex_count, seed, survival }),
+        gpu_layout!(WalkParams in ["trace_vpls"] {
+            path_count, vertex_count, seed, survival, path_stride, path_phase
+        }),
     ]
 };
 
@@ -66,6 +70,20 @@ impl VplBuffers {
     }
 }
 
+/// Which of a frame's paths a walk traces: i = phase (mod stride).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PathClass {
+    pub stride: u32,
+    pub phase: u32,
+}
+
+impl PathClass {
+    pub const ALL: PathClass = PathClass {
+        stride: 1,
+        phase: 0,
+    };
+}
+
 pub struct TraceVpls(SceneKernel);
 
 impl TraceVpls {
@@ -73,9 +91,9 @@ impl TraceVpls {
         Ok(TraceVpls(SceneKernel::new(ctx, "trace_vpls")?))
     }
 
-    /// Clears the slots (a path that ends early leaves its later slots empty) and walks,
-    /// choosing lights by `entries` when given (bir's camera-driven table) instead of the
-    /// scene's power-based one.
+    /// Walks every path (each clears its slots first: a path that ends early leaves its later
+    /// slots empty), choosing lights by `entries` when given (bir's camera-driven table)
+    /// instead of the scene's power-based one.
     pub fn record<'a>(
         &'a self,
         cmd: &mut Commands<'a>,
@@ -84,7 +102,20 @@ impl TraceVpls {
         seed: u32,
         entries: Option<&'a Buffer<LightEntry>>,
     ) -> GpuResult<()> {
-        cmd.fill_zero(&buffers.vpls);
+        self.record_paths(cmd, scene, buffers, seed, entries, PathClass::ALL)
+    }
+
+    /// Walks only the paths of `class` (i = class.phase mod class.stride) and leaves the
+    /// other paths' slots as they are (ir's reuse across frames, src/methods/ir/reuse.rs).
+    pub fn record_paths<'a>(
+        &'a self,
+        cmd: &mut Commands<'a>,
+        scene: &'a GpuScene,
+        buffers: &'a VplBuffers,
+        seed: u32,
+        entries: Option<&'a Buffer<LightEntry>>,
+        class: PathClass,
+    ) -> GpuResult<()> {
         let mut bindings = scene.bindings();
         if let Some(entries) = entries {
             for b in bindings.iter_mut() {
@@ -100,12 +131,19 @@ impl TraceVpls {
             vertex_count: buffers.layout.levels.len() as u32,
             seed,
             survival: buffers.layout.mean_albedo as f32,
+            path_stride: class.stride.max(1),
+            path_phase: class.phase,
         };
+        let walked = buffers
+            .layout
+            .path_count
+            .saturating_sub(class.phase)
+            .div_ceil(class.stride.max(1));
         self.0.get(scene.features)?.dispatch(
             cmd,
             &bindings,
             &params,
-            [buffers.layout.path_count.div_ceil(64), 1, 1],
+            [walked.div_ceil(64).max(1), 1, 1],
         )
     }
 }
