@@ -1,5 +1,5 @@
 //! The binary's `log` backend: irad's warnings printed on stderr as `warning: ...` (errors
-//! as `error: ...`), the Vulkan validation layer's lines as they are; other crates' records
+//! as `error: ...`, notes of a long step under way, `log::info!`, as `note: ...`), the Vulkan validation layer's lines as they are; other crates' records
 //! (naga's notes on SPIR-V decorations it skips, obvhs) are left out, as before the facade. A
 //! progress bar on screen is cleared for the line and drawn again after it.
 
@@ -27,7 +27,10 @@ struct Stderr;
 impl Log for Stderr {
     fn enabled(&self, metadata: &Metadata) -> bool {
         let target = metadata.target();
-        metadata.level() <= Level::Warn && (target.starts_with("irad") || target == "vulkan")
+        match target {
+            "vulkan" => metadata.level() <= Level::Warn,
+            t => t.starts_with("irad") && metadata.level() <= Level::Info,
+        }
     }
 
     fn log(&self, record: &Record) {
@@ -37,6 +40,7 @@ impl Log for Stderr {
         let line = match (record.target(), record.level()) {
             ("vulkan", _) => format!("{}", record.args()),
             (_, Level::Error) => format!("error: {}", record.args()),
+            (_, Level::Info) => format!("note: {}", record.args()),
             _ => format!("warning: {}", record.args()),
         };
         // Writes never panic: a closed stderr (or a validation message from a driver thread)
@@ -57,6 +61,6 @@ impl Log for Stderr {
 /// Installs the logger (once; a second call changes nothing).
 pub fn install() {
     if log::set_logger(&Stderr).is_ok() {
-        log::set_max_level(LevelFilter::Warn);
+        log::set_max_level(LevelFilter::Info);
     }
 }

@@ -373,6 +373,19 @@ fn report_end(results: &SuiteResults, out: &Path, stop: &AtomicBool) -> Result<(
         "wrote {} (results.csv, results.json, charts/, images/)",
         out.join("report.md").display()
     );
+    let refused: std::collections::BTreeSet<&str> = results
+        .runs
+        .iter()
+        .filter(|r| r.status == Status::Refused)
+        .map(|r| r.scene.as_str())
+        .collect();
+    if !refused.is_empty() {
+        println!(
+            "this device cannot hold {} scene(s), whose runs are recorded as refused: {}",
+            refused.len(),
+            refused.into_iter().collect::<Vec<_>>().join(", ")
+        );
+    }
     if stop.load(Ordering::SeqCst) {
         eprintln!(
             "interrupted: {} of {} runs recorded; the outputs hold them, marked incomplete (the same command resumes)",

@@ -686,6 +686,36 @@ impl GpuScene {
         })
     }
 
+    /// Device bytes of the light data: the light table, the emissive triangles, the light
+    /// BVH's nodes and its trails.
+    pub fn light_bytes(&self) -> u64 {
+        self.light_entries.byte_size()
+            + self.emitter_triangles.byte_size()
+            + self.light_nodes.byte_size()
+            + self.light_trails.byte_size()
+    }
+
+    /// Device bytes of everything the scene uploads: the BVH, the shading data, materials,
+    /// lights, the light data, the environment's tables (every map of a sequence) and the
+    /// constants.
+    pub fn device_bytes(&self) -> u64 {
+        let frames = self
+            .env_frames
+            .as_ref()
+            .map_or(0, |f| f.texels.byte_size() + f.cdf.byte_size());
+        self.bvh.nodes.byte_size()
+            + self.bvh.triangles.byte_size()
+            + self.bvh.loop_cuts.byte_size()
+            + self.shading_triangles.byte_size()
+            + self.materials.byte_size()
+            + self.lights.byte_size()
+            + self.light_bytes()
+            + self.env_texels.byte_size()
+            + self.env_cdf.byte_size()
+            + frames
+            + self.constants.byte_size()
+    }
+
     /// The number of maps in the scene's environment sequence (1 for a still map or none).
     pub fn environment_frames(&self) -> u32 {
         self.env_frames.as_ref().map_or(1, |f| f.count)

@@ -47,6 +47,9 @@ pub struct Chart {
     pub x_label: String,
     pub y_label: String,
     pub series: Vec<Series>,
+    /// Lines printed under the chart after its own notes (on points it could not chart):
+    /// what the chart leaves out and why.
+    pub notes: Vec<String>,
 }
 
 /// A point as drawn, read back from an SVG written by `to_svg`.
@@ -116,6 +119,7 @@ mod fixtures {
             x_label: "GPU time (ms)".into(),
             y_label: "relMSE".into(),
             series,
+            notes: Vec::new(),
         }
     }
 

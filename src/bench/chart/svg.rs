@@ -157,6 +157,7 @@ impl Chart {
                  each point's tooltip holds its label"
             ));
         }
+        notes.extend(self.notes.iter().cloned());
 
         let notes_y = BOTTOM + 62.0;
         let height = HEIGHT

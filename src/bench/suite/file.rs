@@ -12,6 +12,8 @@ use serde::Deserialize;
 use thiserror::Error;
 
 use crate::methods::{Method, ParamError, Registry};
+
+use super::generated::{self, Generated};
 use crate::scene::hash::Fnv1a64;
 use crate::scene::toml_arrays::exact_opt;
 use crate::scene::MAX_RESOLUTION;
@@ -100,6 +102,9 @@ struct SceneEntry {
     /// For an animated scene: the frames its runs render and score, "A..B" (A included, B
     /// not); default every frame of its animation.
     frames: Option<String>,
+    /// For a generated scene (`path = "generated:NAME"`): its light count, or a list of counts,
+    /// one scene each (generated.rs).
+    lights: Option<toml::Value>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -152,6 +157,14 @@ pub struct SuiteScene {
     /// For an animated scene (`scene.animation` is Some): the frames its runs render and
     /// score (the suite's `frames`, or all); None for a still scene.
     pub frames: Option<Range<u32>>,
+    /// The `[[scene]]` of the suite file it comes from (a generated family's members share
+    /// one), for messages: `scene[2].home`.
+    pub entry: usize,
+    /// A member of a generated family (`path = "generated:NAME"`, `lights`): its generator and
+    /// light count; None for a scene file.
+    pub generated: Option<Generated>,
+    /// Wall milliseconds loading the scene took (its files read, parsed and checked).
+    pub load_ms: f64,
 }
 
 impl SuiteScene {
@@ -221,17 +234,29 @@ impl Suite {
     }
 
     /// `load` with the methods of `registry` (irad's and one of yours: `Registry::with`).
+    /// Generated scenes (`path = "generated:NAME"`) are generated into, or found in,
+    /// `generated::default_folder()` (out/generated).
     pub fn load_with(path: &Path, registry: &Registry) -> Result<Suite, SuiteError> {
+        Suite::load_generating(path, registry, &generated::default_folder())
+    }
+
+    /// `load_with`, its generated scenes in the folder `generated`.
+    pub fn load_generating(
+        path: &Path,
+        registry: &Registry,
+        generated: &Path,
+    ) -> Result<Suite, SuiteError> {
         let file = path.display().to_string();
         let text = std::fs::read_to_string(path).map_err(|e| SuiteError::File {
             file: file.clone(),
             message: format!("cannot read it: {e}"),
         })?;
-        Suite::parse_with(
+        Suite::parse_generating(
             &file,
             &text,
             path.parent().unwrap_or(Path::new("")),
             registry,
+            generated,
         )
     }
 
@@ -241,12 +266,24 @@ impl Suite {
         Suite::parse_with(file, text, base, Registry::builtin())
     }
 
-    /// `parse` with the methods of `registry`.
+    /// `parse` with the methods of `registry`; generated scenes in `generated::default_folder()`.
     pub fn parse_with(
         file: &str,
         text: &str,
         base: &Path,
         registry: &Registry,
+    ) -> Result<Suite, SuiteError> {
+        Suite::parse_generating(file, text, base, registry, &generated::default_folder())
+    }
+
+    /// `parse_with`, its generated scenes (`path = "generated:NAME"`) generated into, or
+    /// found in, the folder `generated`.
+    pub fn parse_generating(
+        file: &str,
+        text: &str,
+        base: &Path,
+        registry: &Registry,
+        generated: &Path,
     ) -> Result<Suite, SuiteError> {
         let f: SuiteFile = toml::from_str(text).map_err(|e| SuiteError::File {
             file: file.into(),
@@ -267,7 +304,14 @@ impl Suite {
                 message: "no [[method]]: a suite needs at least one".into(),
             });
         }
-        let scenes = parse_scenes(file, &f, base, &reference_params, &reference, registry)?;
+        let scenes = parse_scenes(
+            file,
+            &f,
+            (base, generated),
+            &reference_params,
+            &reference,
+            registry,
+        )?;
         check_reference_seeds(file, &scenes, &counts)?;
         let (entries, budgets) = parse_methods(file, &f.method, &scenes, counts.seed, registry)?;
         check_homes(file, &scenes, &entries)?;
@@ -433,19 +477,37 @@ fn parse_reference(file: &str, table: &toml::Table) -> Result<(toml::Table, Meth
     Ok((reference_params, reference))
 }
 
-/// Loads and checks every `[[scene]]` in order: its file, resolution, name (unique), failure
-/// note and reference.
+/// Loads and checks every `[[scene]]` in order (a generated family's members in the order of
+/// its `lights`): its file, resolution, name (unique), failure note and reference. Scene paths
+/// are relative to `base`; generated scenes go in (or are found in) `generated_dir`.
 fn parse_scenes(
     file: &str,
     f: &SuiteFile,
-    base: &Path,
+    (base, generated_dir): (&Path, &Path),
     reference_params: &toml::Table,
     reference: &Method,
     registry: &Registry,
 ) -> Result<Vec<SuiteScene>, SuiteError> {
     let mut scenes: Vec<SuiteScene> = Vec::new();
-    for (i, entry) in f.scene.iter().enumerate() {
-        let scene = load_scene(file, i, entry, base, f.width)?;
+    let members = f
+        .scene
+        .iter()
+        .enumerate()
+        .map(|(i, entry)| {
+            Ok(family(file, i, entry)?
+                .into_iter()
+                .map(move |m| (i, entry, m)))
+        })
+        .collect::<Result<Vec<_>, SuiteError>>()?;
+    for (i, entry, member) in members.into_iter().flatten() {
+        let (scene, load_ms) = load_scene(
+            file,
+            i,
+            entry,
+            member.as_ref(),
+            (base, generated_dir),
+            f.width,
+        )?;
         let key = |name: &str| file_safe(name).to_lowercase();
         if let Some(prev) = scenes
             .iter()
@@ -475,13 +537,68 @@ fn parse_scenes(
         let frames = scene_frames(file, i, entry, &scene)?;
         scenes.push(SuiteScene {
             scene,
-            path: entry.path.clone(),
+            path: member
+                .as_ref()
+                .map_or_else(|| entry.path.clone(), Generated::path),
             reference,
             home: entry.home.clone(),
             frames,
+            entry: i,
+            generated: member,
+            load_ms,
         });
     }
     Ok(scenes)
+}
+
+/// The scenes `[[scene]]` `i` stands for: itself (None), or a generated family's members, one
+/// per count of its `lights`, each generated before the next is loaded. The generator and the
+/// counts are checked here, before anything is generated.
+fn family(file: &str, i: usize, entry: &SceneEntry) -> Result<Vec<Option<Generated>>, SuiteError> {
+    let name = entry.path.strip_prefix(generated::PREFIX);
+    let Some(name) = name else {
+        return match &entry.lights {
+            None => Ok(vec![None]),
+            Some(v) => Err(field_error(
+                file,
+                &format!("scene[{i}].lights"),
+                v.to_string(),
+                &format!(
+                    "only a generated scene takes a light count ({:?} is a scene file; a                      generated one is path = \"{}{}\")",
+                    entry.path,
+                    generated::PREFIX,
+                    generated::GENERATORS[0].name
+                ),
+            )),
+        };
+    };
+    let path_error = |problem: &str| {
+        field_error(
+            file,
+            &format!("scene[{i}].path"),
+            format!("{:?}", entry.path),
+            problem,
+        )
+    };
+    let g = generated::generator(name).map_err(|e| path_error(&e))?;
+    let Some(lights) = &entry.lights else {
+        return Err(path_error(&format!(
+            "a generated scene needs `lights`: a light count or a list of them, 1 to {}",
+            g.max_lights
+        )));
+    };
+    let counts = generated::counts(lights, g.max_lights).map_err(|(at, value, problem)| {
+        field_error(file, &format!("scene[{i}].lights{at}"), value, &problem)
+    })?;
+    Ok(counts
+        .into_iter()
+        .map(|lights| {
+            Some(Generated {
+                generator: g.name.into(),
+                lights,
+            })
+        })
+        .collect())
 }
 
 /// The frames of scene `i`: its `frames = "A..B"` (an animated scene's, within its
@@ -527,16 +644,45 @@ fn scene_frames(
     }
 }
 
-/// Loads scene `i` (a file relative to `base`, or the embedded Cornell box) at its own
-/// resolution, or at the suite's `width` and the scene's aspect ratio.
+/// Loads scene `i` (a file relative to `base`, the embedded Cornell box, or `member` of a
+/// generated family, generated into `generated_dir` first when it is not there) at its own
+/// resolution, or at the suite's `width` and the scene's aspect ratio; with the wall
+/// milliseconds the load took (a generator's run left out).
 fn load_scene(
     file: &str,
     i: usize,
     entry: &SceneEntry,
-    base: &Path,
+    member: Option<&Generated>,
+    (base, generated_dir): (&Path, &Path),
     width: Option<i64>,
-) -> Result<Scene, SuiteError> {
-    let mut scene = if let Some(name) = entry.path.strip_prefix("embedded:") {
+) -> Result<(Scene, f64), SuiteError> {
+    let mut start = std::time::Instant::now();
+    let mut scene = if let Some(m) = member {
+        let g = generated::generator(&m.generator).map_err(|e| {
+            field_error(
+                file,
+                &format!("scene[{i}].path"),
+                format!("{:?}", entry.path),
+                &e,
+            )
+        })?;
+        let path = generated::scene_file(g, m.lights, generated_dir).map_err(|e| {
+            field_error(
+                file,
+                &format!("scene[{i}].lights"),
+                m.lights.to_string(),
+                &format!("generating {}: {e}", entry.path),
+            )
+        })?;
+        start = std::time::Instant::now();
+        let mut scene = scene::load(&path).map_err(|source| SuiteError::Scene {
+            file: file.into(),
+            field: format!("scene[{i}].path = {:?}, lights = {}", entry.path, m.lights),
+            cause: Box::new(source),
+        })?;
+        scene.name = m.scene_name();
+        scene
+    } else if let Some(name) = entry.path.strip_prefix("embedded:") {
         if name != "cornell-box" {
             return Err(field_error(
                 file,
@@ -553,6 +699,7 @@ fn load_scene(
             cause: Box::new(source),
         })?
     };
+    let load_ms = start.elapsed().as_secs_f64() * 1e3;
     let own = check_resolution(file, &format!("scene[{i}].resolution"), entry.resolution)?;
     if let Some((w, h)) = own {
         scene.camera.width = w;
@@ -577,7 +724,7 @@ fn load_scene(
         cam.width = w as u32;
         cam.height = h as u32;
     }
-    Ok(scene)
+    Ok((scene, load_ms))
 }
 
 /// The reference of scene `i`: the suite's, with the scene's `reference_spp` and
@@ -637,8 +784,9 @@ fn check_reference_seeds(
         .unwrap_or(1);
     let renders = counts.warmup as u64 + counts.repeats.max(counts.flicker_frames) as u64 * frames;
     let run_seed = |s: u32| (s.wrapping_sub(seed) as u64) < renders;
-    for (i, s) in scenes.iter().enumerate() {
+    for s in scenes {
         // The reference is two halves, seeds r and r + 1 (references.rs).
+        let i = s.entry;
         let r = s.reference.seed();
         if run_seed(r) || run_seed(r.wrapping_add(1)) {
             return Err(field_error(
@@ -857,7 +1005,8 @@ fn check_homes(
     scenes: &[SuiteScene],
     entries: &[SuiteMethod],
 ) -> Result<(), SuiteError> {
-    for (i, s) in scenes.iter().enumerate() {
+    for s in scenes {
+        let i = s.entry;
         if let Some(unknown) = s
             .home
             .iter()
@@ -895,7 +1044,7 @@ fn expand_runs(
                 continue;
             }
             for budget in &budgets[e] {
-                check_budget_fits(file, s, suite_scene, e, budget)?;
+                check_budget_fits(file, suite_scene, e, budget)?;
                 let id = format!(
                     "{}/{}/{}",
                     suite_scene.scene.name, entries[e].label, budget.text
@@ -916,18 +1065,19 @@ fn expand_runs(
     Ok(runs)
 }
 
-/// Refuses budget `budget` of method entry `e` on scene `s` where they do not fit: an
+/// Refuses budget `budget` of method entry `e` on `scene` where they do not fit: an
 /// animated scene is timed per frame, so it takes only `frame_ms` budgets (a time_ms budget
 /// or a fixed count would time one still render of an animation); a still scene has no
 /// frames to time. Names the budget's field.
 fn check_budget_fits(
     file: &str,
-    s: usize,
     scene: &SuiteScene,
     e: usize,
     budget: &Budget,
 ) -> Result<(), SuiteError> {
     let b = budget.index;
+    // The suite file's [[scene]] (a generated family's members share one).
+    let s = scene.entry;
     let name = &scene.scene.name;
     match (&scene.scene.animation, budget.frame_ms) {
         (Some(animation), None) => {
@@ -1016,4 +1166,149 @@ fn plain(v: &toml::Value) -> String {
 /// built from, since it names scenes on disk.
 pub fn quick_suite_path() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/suites/quick.toml")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A suite of `scenes` (TOML `[[scene]]` tables) with one path-tracer method.
+    fn suite(scenes: &str) -> String {
+        format!(
+            "name = \"t\"\n[reference]\nspp = 4\n{scenes}\n[[method]]\nmethod = \"reference\"\nbudgets = [{{ spp = 1 }}]\n"
+        )
+    }
+
+    fn error(scenes: &str) -> String {
+        let dir = std::env::temp_dir().join("irad-suite-file-tests-unused");
+        Suite::parse_generating(
+            "s.toml",
+            &suite(scenes),
+            Path::new("."),
+            Registry::builtin(),
+            &dir,
+        )
+        .map(|_| ())
+        .unwrap_err()
+        .to_string()
+    }
+
+    /// A generated scene's `path` and `lights` are checked before anything is generated, each
+    /// error naming the file, the field (the `[[scene]]`'s index in the file) and the value.
+    #[test]
+    fn generated_scenes_refuse_bad_paths_and_counts() {
+        let cornell = "[[scene]]\npath = \"embedded:cornell-box\"\n";
+        for (scenes, expected) in [
+            (
+                format!("{cornell}lights = 16\n"),
+                "s.toml: scene[0].lights = 16: only a generated scene takes a light count",
+            ),
+            (
+                format!("{cornell}[[scene]]\npath = \"generated:hall\"\nlights = 16\n"),
+                "s.toml: scene[1].path = \"generated:hall\": no such generator: the generators \
+                 are generated:many-lights",
+            ),
+            (
+                "[[scene]]\npath = \"generated:many-lights\"\n".to_string(),
+                "s.toml: scene[0].path = \"generated:many-lights\": a generated scene needs \
+                 `lights`",
+            ),
+            (
+                "[[scene]]\npath = \"generated:many-lights\"\nlights = [16, 0]\n".to_string(),
+                "s.toml: scene[0].lights[1] = 0: a light count is an integer from 1 to 1048576",
+            ),
+            (
+                "[[scene]]\npath = \"generated:many-lights\"\nlights = 1048577\n".to_string(),
+                "s.toml: scene[0].lights = 1048577: a light count is an integer from 1 to",
+            ),
+            (
+                "[[scene]]\npath = \"generated:many-lights\"\nlights = []\n".to_string(),
+                "s.toml: scene[0].lights = []: names no count",
+            ),
+            (
+                "[[scene]]\npath = \"generated:many-lights\"\nlights = [16, 32, 16]\n".to_string(),
+                "s.toml: scene[0].lights[2] = 16: listed twice",
+            ),
+            (
+                "[[scene]]\npath = \"generated:many-lights\"\nlights = \"16\"\n".to_string(),
+                "s.toml: scene[0].lights = \"16\": a light count is an integer",
+            ),
+        ] {
+            let e = error(&scenes);
+            assert!(e.starts_with(expected), "{e}\nwanted: {expected}");
+        }
+    }
+
+    /// `lights = [4, 16]` is two scenes, generated into the folder given and loaded from
+    /// there, each named by its count and carrying it; a second load finds them there. Errors
+    /// about a later `[[scene]]` name its index in the file, not in the expanded list. Skipped
+    /// without python3 (outside CI).
+    #[test]
+    fn a_generated_family_is_one_scene_per_count() {
+        if std::process::Command::new("python3")
+            .arg("--version")
+            .output()
+            .is_err()
+        {
+            let ci = std::env::var("CI").is_ok_and(|v| !v.is_empty() && v != "false" && v != "0");
+            assert!(!ci, "python3 is needed under CI");
+            eprintln!("note: no python3; skipping");
+            return;
+        }
+        let dir = std::env::temp_dir().join(format!("irad-suite-family-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        let text = suite(
+            "[[scene]]\npath = \"generated:many-lights\"\nlights = [4, 16]\nreference_max_depth = 1\n\
+             [[scene]]\npath = \"embedded:cornell-box\"\n",
+        );
+        let parse = |text: &str| {
+            Suite::parse_generating("s.toml", text, Path::new("."), Registry::builtin(), &dir)
+        };
+        let s = parse(&text).unwrap_or_else(|e| panic!("{e}"));
+        let names: Vec<&str> = s.scenes.iter().map(|s| s.scene.name.as_str()).collect();
+        assert_eq!(names, ["many-lights-4", "many-lights-16", "cornell-box"]);
+        assert_eq!(s.runs.len(), 3);
+        assert_eq!(s.runs[1].id, "many-lights-16/reference/spp=1");
+        for (scene, lights) in s.scenes[..2].iter().zip([4, 16]) {
+            let g = scene.generated.as_ref().unwrap();
+            assert_eq!((g.generator.as_str(), g.lights), ("many-lights", lights));
+            assert_eq!(scene.path, format!("generated:many-lights lights={lights}"));
+            assert_eq!(scene.entry, 0);
+            assert_eq!(scene.reference.parameters()["max_depth"], 1);
+            let emissive = scene
+                .scene
+                .triangles
+                .iter()
+                .filter(|t| scene.scene.materials[t.material as usize].is_emissive())
+                .count();
+            assert_eq!(emissive, 2 * lights as usize);
+            assert!(scene.scene.source.as_ref().unwrap().starts_with(&dir));
+        }
+        assert_eq!(
+            (s.scenes[2].entry, s.scenes[2].generated.as_ref()),
+            (1, None)
+        );
+        // Found again, not generated again: the same folders, the same contents.
+        let folders = || {
+            let mut v: Vec<_> = std::fs::read_dir(&dir)
+                .unwrap()
+                .map(|e| e.unwrap().file_name())
+                .collect();
+            v.sort();
+            v
+        };
+        let before = folders();
+        assert_eq!(before.len(), 2, "{before:?}");
+        let again = parse(&text).unwrap();
+        assert_eq!(again.hash, s.hash);
+        assert_eq!(folders(), before);
+        let e = parse(&text.replace(
+            "path = \"embedded:cornell-box\"\n",
+            "path = \"embedded:cornell-box\"\nhome = [\"ir\"]\n",
+        ))
+        .unwrap_err()
+        .to_string();
+        assert!(e.starts_with("s.toml: scene[1].home = \"ir\""), "{e}");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
 }

@@ -83,6 +83,7 @@ pub fn merge(parts: &[PathBuf], out: &Path, allow_mixed_devices: bool) -> Result
             Some(m) => {
                 m.runs.extend(results.runs.iter().cloned());
                 m.references.extend(results.references.clone());
+                m.uploads.extend(results.uploads.clone());
                 m.complete &= results.complete;
             }
         }

@@ -11,6 +11,7 @@ pub mod calibrate;
 pub mod converged;
 pub mod eta;
 pub mod file;
+pub mod generated;
 pub mod measure;
 pub mod merge;
 pub mod output;
@@ -18,6 +19,7 @@ pub mod references;
 pub mod report;
 pub mod results;
 pub mod resume;
+pub mod scale;
 pub mod sequence;
 
 use std::collections::BTreeMap;
@@ -26,7 +28,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 use anyhow::Result;
 
-use crate::gpu::Context;
+use crate::gpu::{Context, GpuError};
 use crate::image::{self, preview, sidecar::IRAD_VERSION, Image};
 use crate::methods::reference::Reference;
 use crate::methods::{Method, Renderers};
@@ -34,7 +36,7 @@ use crate::scene::gpu::GpuScene;
 
 pub use file::{Shard, Suite};
 use measure::{measure, MeasureError};
-pub use results::{ReferenceSummary, RunRecord, SceneFile, Status, SuiteResults};
+pub use results::{ReferenceSummary, RunRecord, SceneFile, SceneUpload, Status, SuiteResults};
 
 /// Thumbnails in the report are at most this wide (block averages of the render).
 pub const THUMBNAIL_WIDTH: u32 = 256;
@@ -125,8 +127,10 @@ pub fn run(
                 name: s.scene.name.clone(),
                 path: s.path.clone(),
                 content_hash: format!("{:016x}", s.scene.content_hash),
+                generated: s.generated.clone(),
             })
             .collect(),
+        uploads: BTreeMap::new(),
     };
     match &previous {
         resume::Previous::Resume(_) if options.references_only => anyhow::bail!(
@@ -136,6 +140,7 @@ pub fn run(
         resume::Previous::Resume(old) => {
             results.runs = resume::kept_runs(old, suite, &planned, &options.out);
             results.references = old.references.clone();
+            results.uploads = old.uploads.clone();
             results.mark_pareto();
             on(Event::Resumed {
                 kept: results.runs.iter().map(|r| r.index).collect(),
@@ -156,10 +161,11 @@ pub fn run(
         // whose shards share one cache.
         for (s, _) in suite.scenes.iter().enumerate() {
             if s % options.shard.count == options.shard.index && !stopped() {
-                if let Err(e) =
-                    prepare_scene(ctx, &renderers, suite, s, options, &mut results, &mut on)
-                {
-                    anyhow::bail!("{}: {e}", suite.scenes[s].scene.name);
+                match prepare_scene(ctx, &renderers, suite, s, options, &mut results, &mut on) {
+                    // The device cannot hold it: there is no reference to render, and
+                    // results.json's uploads say why.
+                    Ok(_) | Err(Unprepared::Refused(_)) => {}
+                    Err(e) => anyhow::bail!("{}: {e}", suite.scenes[s].scene.name),
                 }
             }
         }
@@ -184,7 +190,9 @@ pub fn run(
         let prepared = if needs_reference {
             prepare_scene(ctx, &renderers, suite, s, options, &mut results, &mut on)
         } else {
-            Err("every method declines this scene".to_string())
+            Err(Unprepared::Failed(
+                "every method declines this scene".to_string(),
+            ))
         };
         for spec in runs {
             if stopped() {
@@ -229,7 +237,74 @@ pub fn run(
 
 /// A scene uploaded with its reference image (for an animated scene: its calibration frame
 /// uploaded, and one reference per frame of its `frames`), or why not.
-type Prepared = std::result::Result<PreparedScene, String>;
+type Prepared = std::result::Result<PreparedScene, Unprepared>;
+
+/// Why a scene has no upload and reference for its runs.
+enum Unprepared {
+    /// The device cannot hold it (methods/device_fit.rs's message): its runs are refused.
+    Refused(String),
+    /// Uploading it or rendering its reference failed: its runs fail.
+    Failed(String),
+}
+
+impl From<String> for Unprepared {
+    fn from(e: String) -> Unprepared {
+        Unprepared::Failed(e)
+    }
+}
+
+impl std::fmt::Display for Unprepared {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Unprepared::Refused(e) | Unprepared::Failed(e) => f.write_str(e),
+        }
+    }
+}
+
+/// Uploads `scene` (`what`: "the scene", "frame 3"), recording in `results` what the upload
+/// took or the device's refusal.
+fn upload(
+    ctx: &Context,
+    suite_scene: &file::SuiteScene,
+    scene: &crate::scene::Scene,
+    what: &str,
+    results: &mut SuiteResults,
+) -> std::result::Result<GpuScene, Unprepared> {
+    let uploaded = GpuScene::upload(ctx, scene);
+    let emissive = scene
+        .triangles
+        .iter()
+        .filter(|t| scene.materials[t.material as usize].is_emissive())
+        .count();
+    let mut summary = SceneUpload {
+        triangles: scene.triangles.len() as u64,
+        lights: (emissive + scene.lights.len()) as u64,
+        load_ms: suite_scene.load_ms,
+        triangle_bvh_ms: None,
+        light_bvh_ms: None,
+        light_bytes: None,
+        device_bytes: None,
+        refused: None,
+    };
+    let outcome = match uploaded {
+        Ok(gpu) => {
+            summary.triangle_bvh_ms = Some(gpu.build_ms.triangle_bvh);
+            summary.light_bvh_ms = Some(gpu.build_ms.light_bvh);
+            summary.light_bytes = Some(gpu.light_bytes());
+            summary.device_bytes = Some(gpu.device_bytes());
+            Ok(gpu)
+        }
+        Err(GpuError::DoesNotFit(why)) => {
+            summary.refused = Some(why.clone());
+            Err(Unprepared::Refused(why))
+        }
+        Err(e) => return Err(Unprepared::Failed(format!("uploading {what}: {e}"))),
+    };
+    results
+        .uploads
+        .insert(suite_scene.scene.name.clone(), summary);
+    outcome
+}
 
 struct PreparedScene {
     gpu: GpuScene,
@@ -253,8 +328,7 @@ fn prepare_scene(
     if suite_scene.frames.is_some() {
         return prepare_animated(ctx, renderers, suite, s, options, results, on);
     }
-    let gpu_scene =
-        GpuScene::upload(ctx, scene).map_err(|e| format!("uploading the scene: {e}"))?;
+    let gpu_scene = upload(ctx, suite_scene, scene, "the scene", results)?;
     let found = found_reference(ctx, renderers, suite_scene, None, &gpu_scene, options, on)?;
     let converged = found.converged;
     record_reference(options, results, scene, &found, converged, Vec::new())?;
@@ -288,13 +362,23 @@ fn prepare_animated(
     let mut calibration = None;
     for f in frames {
         let still = scene.at_frame(f).map_err(|e| format!("frame {f}: {e}"))?;
-        let gpu = GpuScene::upload(ctx, &still).map_err(|e| format!("uploading frame {f}: {e}"))?;
+        let gpu = if f == middle {
+            upload(ctx, suite_scene, &still, &format!("frame {f}"), results)?
+        } else {
+            GpuScene::upload(ctx, &still).map_err(|e| match e {
+                GpuError::DoesNotFit(why) => Unprepared::Refused(why),
+                e => Unprepared::Failed(format!("uploading frame {f}: {e}")),
+            })?
+        };
         let frame_scene = file::SuiteScene {
             scene: still,
             path: suite_scene.path.clone(),
             reference: suite_scene.reference.clone(),
             home: Vec::new(),
             frames: None,
+            entry: suite_scene.entry,
+            generated: suite_scene.generated.clone(),
+            load_ms: suite_scene.load_ms,
         };
         let found = found_reference(ctx, renderers, &frame_scene, Some(f), &gpu, options, on)
             .map_err(|e| format!("the reference of frame {f}: {e}"))?;
@@ -311,7 +395,7 @@ fn prepare_animated(
         }
     }
     let Some((gpu, found)) = calibration else {
-        return Err(format!("no frame {middle} among the suite's frames"));
+        return Err(format!("no frame {middle} among the suite's frames").into());
     };
     let converged = summaries.iter().all(|r| r.converged);
     record_reference(options, results, scene, &found, converged, summaries)?;
@@ -530,7 +614,12 @@ fn run_one(
         frames: frame_references,
     } = match prepared {
         Ok(p) => p,
-        Err(e) => {
+        Err(Unprepared::Refused(why)) => {
+            record.status = Status::Refused;
+            record.note = why.clone();
+            return Ok(record);
+        }
+        Err(Unprepared::Failed(e)) => {
             record.status = Status::Error;
             record.note = format!("no reference: {e}");
             return Ok(record);

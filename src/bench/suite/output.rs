@@ -13,8 +13,8 @@ use crate::bench::chart::{Chart, FrameChart, FrameSeries, Point, Series};
 use crate::lock::HolderLock;
 
 use super::file::file_safe;
-use super::report;
 use super::results::{Status, SuiteResults};
+use super::{report, scale};
 
 /// Creates `out` and takes its lock (`crate::lock::HolderLock`), held until the guard drops:
 /// a second suite or merge writing the folder is refused, naming the holder. A lock left by a
@@ -146,6 +146,7 @@ pub fn chart(results: &SuiteResults, scene: &str) -> Chart {
             x_label: "GPU time per frame (ms, median over frames and seeds)".into(),
             y_label: "relMSE, mean over frames and seeds".into(),
             series,
+            notes: Vec::new(),
         };
     }
     Chart {
@@ -153,6 +154,7 @@ pub fn chart(results: &SuiteResults, scene: &str) -> Chart {
         x_label: "GPU time per image (ms, median of repeats)".into(),
         y_label: "relMSE".into(),
         series,
+        notes: Vec::new(),
     }
 }
 
@@ -166,7 +168,8 @@ pub fn exit_after_writing(code: i32) -> ! {
     std::process::exit(code)
 }
 
-/// Writes results.json, results.csv, one chart per scene and report.md.
+/// Writes results.json, results.csv, one chart per scene, a generated family's charts against
+/// its light count (scale.rs) and report.md.
 pub fn write(out: &Path, results: &SuiteResults) -> Result<()> {
     let _writing = WRITING.lock().unwrap_or_else(|e| e.into_inner());
     atomic_write(&out.join("results.json"), &results.json())?;
@@ -181,6 +184,15 @@ pub fn write(out: &Path, results: &SuiteResults) -> Result<()> {
                 &out.join(frames_chart_path(&scene)),
                 &frames_chart(results, &scene).to_svg(),
             )?;
+        }
+    }
+    for family in scale::families(results) {
+        for (path, chart) in scale::charts(results, &family) {
+            let path = out.join(path);
+            if let Some(dir) = path.parent() {
+                fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+            }
+            atomic_write(&path, &chart.to_svg())?;
         }
     }
     atomic_write(&out.join("report.md"), &report::markdown(results))

@@ -61,6 +61,7 @@ pub fn markdown(results: &SuiteResults) -> String {
            unbounded for fireflies: a method that misses light altogether can chart below one \
            that finds it noisily. Read relMSE with the bias and outliers columns.\n\n";
     md += "Data: [results.csv](results.csv), [results.json](results.json).\n\n";
+    md += &super::scale::markdown(results);
 
     for scene in results.scenes() {
         let runs: Vec<&RunRecord> = results.runs.iter().filter(|r| r.scene == scene).collect();

@@ -25,6 +25,9 @@ pub enum Status {
     Declined,
     /// Rendering failed (recorded with the error); the suite went on.
     Error,
+    /// The device cannot hold the scene (methods/device_fit.rs; the note says why, in the
+    /// scene's words): every run of the scene is refused before anything is built.
+    Refused,
 }
 
 impl Status {
@@ -33,6 +36,7 @@ impl Status {
             Status::Ok => "ok",
             Status::Declined => "declined",
             Status::Error => "error",
+            Status::Refused => "refused",
         }
     }
 }
@@ -216,6 +220,32 @@ pub struct SuiteResults {
     /// the scene whose contents changed; empty in results written before it was recorded.
     #[serde(default)]
     pub scene_files: Vec<SceneFile>,
+    /// Per scene the suite uploaded (or the device refused): its size, the upload's CPU
+    /// builds and its device memory.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub uploads: BTreeMap<String, SceneUpload>,
+}
+
+/// A scene as the suite uploaded it once for its runs (an animated scene: its calibration
+/// frame): what the samplers choose among, what its CPU builds took and what its data takes on
+/// the device; or the device's refusal.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SceneUpload {
+    pub triangles: u64,
+    /// Emissive triangles, point and spot lights (the light BVH's leaves).
+    pub lights: u64,
+    /// Wall milliseconds loading the scene took when the suite was loaded.
+    pub load_ms: f64,
+    /// The upload's CPU builds (`GpuScene::build_ms`): the triangle BVH and the light BVH.
+    pub triangle_bvh_ms: Option<f64>,
+    pub light_bvh_ms: Option<f64>,
+    /// Device bytes of the light data (light table, emitters, light BVH nodes and trails) and
+    /// of everything the scene uploads (`GpuScene::light_bytes`, `device_bytes`).
+    pub light_bytes: Option<u64>,
+    pub device_bytes: Option<u64>,
+    /// The device's refusal (methods/device_fit.rs), where it cannot hold the scene.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub refused: Option<String>,
 }
 
 /// A scene of a suite as it was run.
@@ -226,6 +256,10 @@ pub struct SceneFile {
     pub path: String,
     /// `Scene::content_hash`, 16 hex digits.
     pub content_hash: String,
+    /// A member of a generated family (`path = "generated:NAME"`): its generator and light
+    /// count, which the report charts against.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub generated: Option<super::generated::Generated>,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -520,10 +554,15 @@ pub fn parse_csv(text: &str) -> Result<Vec<Vec<String>>> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
 
-    fn run(scene: &str, device: &str, gpu_ms: f64, rel_mse: f64) -> RunRecord {
+    pub(in crate::bench::suite) fn run(
+        scene: &str,
+        device: &str,
+        gpu_ms: f64,
+        rel_mse: f64,
+    ) -> RunRecord {
         RunRecord {
             index: 0,
             id: format!("{scene}/{gpu_ms}/{rel_mse}"),
@@ -615,6 +654,7 @@ mod tests {
             runs,
             suite_text: String::new(),
             scene_files: Vec::new(),
+            uploads: BTreeMap::new(),
         };
         results.mark_pareto();
         let marks: Vec<bool> = results.runs.iter().map(|r| r.pareto).collect();
@@ -682,6 +722,7 @@ mod tests {
             runs: vec![a, b],
             suite_text: String::new(),
             scene_files: Vec::new(),
+            uploads: BTreeMap::new(),
         };
         results.runs[1].index = 4;
         results

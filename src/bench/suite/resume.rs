@@ -271,7 +271,8 @@ fn matches(r: &RunRecord, suite: &Suite, spec: &RunSpec, out: &Path) -> bool {
         && r.parameters == method.parameters()
         && match r.status {
             Status::Ok => images_there,
-            Status::Declined => true,
+            // A resumed run is on the same device, which still cannot hold the scene.
+            Status::Declined | Status::Refused => true,
             Status::Error => false,
         }
 }
