@@ -124,7 +124,8 @@ pub struct SequenceRecord {
     /// The method's settings but the seed (each frame's is `seed` + its frame).
     pub parameters: BTreeMap<String, serde_json::Value>,
     pub seed: u32,
-    /// What the method keeps from one frame to the next (`RenderMethod::ACROSS_FRAMES`).
+    /// What the method keeps from one frame to the next with its settings
+    /// (`RenderMethod::across_frames`).
     #[serde(default)]
     pub across_frames: String,
     /// The animation's frame count and rate; `frames` the range rendered.

@@ -36,7 +36,6 @@ use irad::sequence;
 
 use common::{luminance_mean, mean_and_stderr, with_gpu, Scratch};
 
-/// A scratch folder, removed when dropped.
 /// An OBJ quad of corners `c` (a loop) in material `m`, wound so its geometric normal (the
 /// emitting side of an emitter) points along `facing`.
 fn quad(obj: &mut String, count: &mut u32, c: [Vec3; 4], facing: Vec3, m: &str) {
@@ -222,8 +221,8 @@ fn rel_mse(a: &Image, r: &Image) -> f64 {
 fn mean_image(images: &[&Image]) -> Image {
     let mut mean = images[0].clone();
     for (i, p) in mean.pixels.iter_mut().enumerate() {
-        for c in 0..3 {
-            p[c] = (images.iter().map(|im| im.pixels[i][c] as f64).sum::<f64>()
+        for (c, value) in p.iter_mut().enumerate() {
+            *value = (images.iter().map(|im| im.pixels[i][c] as f64).sum::<f64>()
                 / images.len() as f64) as f32;
         }
     }

@@ -17,7 +17,6 @@ use irad::sequence::{self, SequenceJob};
 
 use common::{with_gpu, Scratch};
 
-/// A scratch folder, removed when dropped.
 const ALBEDO: f32 = 0.5;
 const INTENSITY: f32 = 2.0;
 const HEIGHT: f32 = 0.5;

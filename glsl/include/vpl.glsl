@@ -14,7 +14,7 @@ struct Vpl {
     vec4 normal;    // surface: unit, on the side the light arrived from; area: emitting side;
                     // spot: the axis. w: material (surface, uint bits), cos(falloff) (spot)
     vec4 power;     // rgb: this VPL's share of the flux (its estimator weight included);
-                    // w: cos(cone) (spot)
+                    // w: cos(cone) (spot); the triangle (surface, uint bits)
     vec4 incident;  // surface: unit direction toward where the light came from
 };
 

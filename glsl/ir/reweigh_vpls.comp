@@ -109,9 +109,19 @@ void main() {
 
     // The path's light, chosen again as the walk chose it (its first Halton number under its
     // class's seed; the table is the same in every class).
-    float u0 = halton(0u, path, class_seeds[own]);
+    float u0 = halton(0u, path / params.classes, class_seeds[own]);
     uint r = min(uint(u0 * 2147483648.0), 0x7fffffffu);
     LightEntry e = light_entries[select_light(r)];
+    if (e.kind == 0u) {
+        // Not the walk's choice (it cannot differ, but an area light's entry must not index
+        // the analytic lights): the path as walked.
+        for (uint vertex = 0u; vertex < params.vertex_count; ++vertex) {
+            uvec4 level = schedule[vertex];
+            if (!slot_exists(level, path)) break;
+            vpls[level.y + path] = base_vpls[level.y + path];
+        }
+        return;
+    }
     Light now = lights[e.index];
     // The light vertex where its light is now.
     v0.position.xyz = now.position.xyz;
@@ -128,38 +138,46 @@ void main() {
 
     Vpl x1 = base_vpls[schedule[1].y + path];
     vec3 p1 = x1.position.xyz;
-    vec3 n1 = x1.normal.xyz;  // on the side the walk's light lit
-    vec3 origin = offset_origin(p1, n1);
+    vec3 n1 = x1.normal.xyz;  // shading normal, on the side the walk's light lit
+    // The geometric normal on the side the walked light lit (the walk's rule): the area
+    // density's cosine and the offset.
+    Light walked = class_lights[own * params.light_count + e.index];
+    vec3 d_gen = p1 - walked.position.xyz;
+    float dist2_gen = dot(d_gen, d_gen);
+    vec3 dir_gen = d_gen * inversesqrt(dist2_gen);
+    vec3 ng = shading_triangles[floatBitsToUint(x1.power.w)].geometric_normal.xyz;
+    if (dot(-dir_gen, ng) < 0.0) ng = -ng;
+    vec3 target = offset_origin(p1, ng);
 
-    // p_k(x1) for each class; the path's own class saw x1 as its first hit (visible).
+    // p_k(x1) for each class. The path's own class, and any class whose light stood where its
+    // did, saw x1 as its first hit; another is tested from its light toward x1, as the walk
+    // found x1.
     float density[MAX_CLASSES];
     for (uint k = 0u; k < params.classes; ++k) {
         Light lk = class_lights[k * params.light_count + e.index];
+        bool same = lk.position.xyz == walked.position.xyz &&
+                    (e.kind != 2u || lk.direction.xyz == walked.direction.xyz);
         vec3 d = p1 - lk.position.xyz;
         float dist2 = dot(d, d);
         float pk = 0.0;
         if (dist2 > 0.0) {
             vec3 dir = d * inversesqrt(dist2);
-            float cos1 = -dot(dir, n1);
+            float cos1 = -dot(dir, ng);
             if (cos1 > 0.0) pk = emission_pdf(lk, e.kind, dir) * cos1 / dist2;
-            if (pk > 0.0 && k != own &&
-                trace_any(origin, lk.position.xyz - origin, 0.9999)) pk = 0.0;
+            if (pk > 0.0 && !same &&
+                trace_any(lk.position.xyz, target - lk.position.xyz, 0.9999)) pk = 0.0;
         }
         density[k] = pk;
     }
 
     // f(y -> x1) up to the intensity, as walked and now (visible now where the fresh class,
     // whose light is this frame's, sees x1).
-    Light walked = class_lights[own * params.light_count + e.index];
-    vec3 d_gen = p1 - walked.position.xyz;
-    float dist2_gen = dot(d_gen, d_gen);
-    vec3 dir_gen = d_gen * inversesqrt(dist2_gen);
-    float f_gen = emission_shape(walked, e.kind, dir_gen) * (-dot(dir_gen, n1)) / dist2_gen;
+    float f_gen = emission_shape(walked, e.kind, dir_gen) * (-dot(dir_gen, ng)) / dist2_gen;
     vec3 d_now = p1 - now.position.xyz;
     float dist2_now = dot(d_now, d_now);
     vec3 dir_now = d_now * inversesqrt(max(dist2_now, 1e-30));
     float f_now = density[params.fresh] > 0.0
-        ? emission_shape(now, e.kind, dir_now) * (-dot(dir_now, n1)) / dist2_now
+        ? emission_shape(now, e.kind, dir_now) * (-dot(dir_now, ng)) / dist2_now
         : 0.0;
     float ratio = f_gen > 0.0 ? f_now / f_gen : 0.0;
 

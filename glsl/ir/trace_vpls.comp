@@ -16,9 +16,11 @@
 // as Keller says it must be), every path keeping a slot at every vertex. Where N_j reaches 0
 // the paths still alive go on by roulette (irad's tail, unbiased where Keller's walk stops).
 //
-// Reuse across animation frames (ir's --reuse K, src/methods/ir/reuse.rs): a frame may walk
-// only the paths i = path_phase (mod path_stride) and keep the others' slots; every walked
-// path clears its own slots first.
+// Reuse across animation frames (ir's --reuse K, src/methods/ir/reuse.rs): a dispatch walks
+// the paths i = path_phase (mod path_stride), one class, and leaves the others' slots; every
+// walked path clears its own slots first. Path i takes Halton point i / path_stride under the
+// class's own seed, so each class is a scrambled Halton set of its own (point i of one set
+// split by i mod K would put a class's first numbers in one 1/K of [0, 1)).
 
 #extension GL_GOOGLE_include_directive : require
 
@@ -48,8 +50,9 @@ layout(push_constant) uniform WalkParams {
 } params;
 
 float walk_number(uint dimension, uint path) {
-    if (dimension < HALTON_DIMENSIONS) return halton(dimension, path, params.seed);
-    return random(params.seed, path, 0x77616c6bu, dimension);
+    uint index = path / params.path_stride;
+    if (dimension < HALTON_DIMENSIONS) return halton(dimension, index, params.seed);
+    return random(params.seed, index, 0x77616c6bu, dimension);
 }
 
 void write_vpl(uint vertex, uint path, Vpl v) {
@@ -155,7 +158,8 @@ void main() {
         Vpl s;
         s.position = vec4(p, uintBitsToFloat(VPL_SURFACE));
         s.normal = vec4(n, uintBitsToFloat(mat));
-        s.power = vec4(beta / float(level.x), 0.0);
+        // w: the triangle hit (reweigh_vpls.comp reads its geometric normal).
+        s.power = vec4(beta / float(level.x), uintBitsToFloat(hit.triangle));
         s.incident = vec4(wo, 0.0);
         write_vpl(vertex, path, s);
 

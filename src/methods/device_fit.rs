@@ -73,7 +73,7 @@ pub fn check_scene(scene: &Scene, limit: u64) -> Result<(), String> {
             "{file}: {lights} lights (emissive triangles, point and spot lights): their light \
              BVH {}; this device holds at most {} lights a scene",
             over(nodes * node_bytes, limit),
-            (limit / node_bytes + 1) / 2
+            (limit / node_bytes).div_ceil(2)
         ));
     }
     if let Some(env) = &scene.environment {
@@ -215,7 +215,7 @@ mod tests {
         (scene.camera.width, scene.camera.height) = (1, 1);
         let limit = 64 * scene.triangles.len() as u64;
         assert_eq!(check_scene(&scene, limit), Ok(()));
-        let t = scene.triangles[0].clone();
+        let t = scene.triangles[0];
         scene.triangles.push(t);
         let e = check_scene(&scene, limit).unwrap_err();
         assert!(

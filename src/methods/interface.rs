@@ -70,7 +70,7 @@ pub trait RenderMethod: Sized + 'static {
 
     /// Sets up one render (buffers, tables) and returns its frames for the driver. `animation`
     /// says which animation frame `scene` is and hands the previous frame's scene with what
-    /// changed since, for a method that carries state across frames (`ACROSS_FRAMES`).
+    /// changed since, for a render that carries state across frames (`across_frames`).
     fn set_up<'a>(
         &'a self,
         ctx: &Context,

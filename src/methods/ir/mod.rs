@@ -152,11 +152,14 @@ pub const SETTINGS: &[Setting<IrSettings>] = &[
             max: reuse::MAX_CLASSES
         },
         Count,
-        "In a sequence, the frames a light path lives: each frame walks 1/K of the paths afresh \
-         and keeps the others from the frames before, re-weighed by multiple importance sampling \
-         over where the point and spot lights were when they were walked (Laine 07's \
-         incremental instant radiosity; unbiased per frame). A still render walks them all. \
-         1: every frame walks every path.",
+        "K: in a sequence, the frames a light path lives. The paths fall into K classes (K \
+         interleaved walks of vpls / K paths, rounded up); each frame walks one class afresh \
+         and keeps the others from the frames before, re-weighed by multiple importance \
+         sampling over where the point and spot lights were when they were walked (Laine 07's \
+         incremental instant radiosity; unbiased per frame on diffuse surfaces). A still \
+         render, and a sequence's first frame, walk every class. 1: no classes, every frame \
+         walks every path.",
+        needs: &[Need::AtMost("vpls"), Need::OneOf("interleave", &["1"])],
     ),
 ];
 
@@ -172,9 +175,15 @@ pub struct InstantRadiosity {
 }
 
 impl InstantRadiosity {
-    /// The per-frame VPL layout this scene and these settings give.
+    /// The per-frame VPL layout this scene and these settings give (`--reuse` K > 1: K
+    /// interleaved classes of paths, `Schedule::interleaved`).
     pub fn schedule(scene: &Scene, settings: &IrSettings) -> Schedule {
-        Schedule::new(settings.paths, mean_albedo(scene), settings.absorption)
+        Schedule::interleaved(
+            settings.paths,
+            mean_albedo(scene),
+            settings.absorption,
+            settings.reuse.clamp(1, reuse::MAX_CLASSES),
+        )
     }
 }
 
@@ -289,13 +298,13 @@ impl RenderMethod for InstantRadiosity {
             Some(h) => {
                 let fresh = animation.frame % class_count;
                 let mut classes = h.classes;
-                classes.seeds[fresh as usize] = first_seed;
+                classes.seeds[fresh as usize] = reuse::class_seed(first_seed, fresh, class_count);
                 classes.lights[fresh as usize] = lights.clone();
                 (h.base, classes, Some(fresh))
             }
             None => (
                 VplBuffers::new(ctx, layout)?,
-                Classes::all(class_count, first_seed, &lights),
+                Classes::walked(class_count, first_seed, &lights),
                 None,
             ),
         };
@@ -395,38 +404,38 @@ impl MethodFrames for IrFrames<'_> {
             (0, Some(fresh), Some(buffers)) => Some((fresh, buffers)),
             _ => None,
         };
-        cmd.pass("vpl walk", |cmd| match reweigh {
-            Some((fresh, _)) => ir.walk.record_paths(
-                cmd,
-                gpu_scene,
-                walk_vpls,
-                seed,
-                None,
-                PathClass {
-                    stride: self.class_count,
-                    phase: fresh,
-                },
-            ),
-            None => ir.walk.record(cmd, gpu_scene, walk_vpls, seed, None),
+        let k = self.class_count;
+        cmd.pass("vpl walk", |cmd| {
+            // Each class is a walk of its own (its own Halton set and seed); with one class,
+            // the plain walk.
+            let classes = match reweigh {
+                Some((fresh, _)) => fresh..fresh + 1,
+                None if k > 1 => 0..k,
+                None => return ir.walk.record(cmd, gpu_scene, walk_vpls, seed, None),
+            };
+            for class in classes {
+                let path_class = PathClass {
+                    stride: k,
+                    phase: class,
+                };
+                let class_seed = reuse::class_seed(seed, class, k);
+                ir.walk
+                    .record_paths(cmd, gpu_scene, walk_vpls, class_seed, None, path_class)?;
+            }
+            Ok(())
         })?;
         let vpls = match reweigh {
             Some((fresh, (frame_vpls, class_buffers))) => {
                 cmd.pass("vpl reweighing", |cmd| {
-                    ir.reweigh.record(
-                        cmd,
-                        gpu_scene,
-                        walk_vpls,
-                        frame_vpls,
-                        class_buffers,
-                        self.class_count,
-                        fresh,
-                    )
+                    ir.reweigh
+                        .record(cmd, gpu_scene, walk_vpls, frame_vpls, class_buffers, fresh)
                 })?;
                 frame_vpls
             }
             None => {
                 if frame > 0 {
-                    *self.classes.borrow_mut() = Classes::all(self.class_count, seed, &self.lights);
+                    *self.classes.borrow_mut() =
+                        Classes::walked(self.class_count, seed, &self.lights);
                 }
                 &walk_vpls.vpls
             }

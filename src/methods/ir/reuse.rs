@@ -17,6 +17,7 @@ use bytemuck::{Pod, Zeroable};
 use crate::gpu::{bind, Buffer, Commands, Context, GpuResult};
 use crate::methods::across_frames::{Carried, Change};
 use crate::methods::scene_kernel::SceneKernel;
+use crate::sampling::pcg;
 use crate::scene::gpu::{GpuLight, GpuScene, LightEntry};
 use crate::scene::{Light, Scene};
 
@@ -26,9 +27,9 @@ use super::walk::{Vpl, VplBuffers};
 pub const MAX_CLASSES: u32 = 16;
 
 pub const CARRIED: Carried = Carried {
-    state: "the light paths of the last K frames (--reuse K; each frame walks 1/K \
-            of them afresh), \
-            re-weighed for where the point and spot lights are now",
+    state: "with --reuse K above 1, the light paths of the last K frames (each frame walks \
+            1/K of them afresh), re-weighed for where the point and spot lights are now (a \
+            change of intensity, cone or light set walks them all)",
     invalidated_by: &[Change::Emission],
 };
 
@@ -51,12 +52,21 @@ pub struct Classes {
 }
 
 impl Classes {
-    /// Every class walked by one walk (seed `seed`) under `lights`.
-    pub fn all(count: u32, seed: u32, lights: &[GpuLight]) -> Classes {
+    /// Every class walked in one frame (walk seed `seed`) under `lights`.
+    pub fn walked(count: u32, seed: u32, lights: &[GpuLight]) -> Classes {
         Classes {
-            seeds: vec![seed; count as usize],
+            seeds: (0..count).map(|k| class_seed(seed, k, count)).collect(),
             lights: vec![lights.to_vec(); count as usize],
         }
+    }
+}
+
+/// The seed class `class` of `classes` walks with in a frame whose walk seed is `seed` (the
+/// walk's own with one class).
+pub fn class_seed(seed: u32, class: u32, classes: u32) -> u32 {
+    match classes {
+        0 | 1 => seed,
+        _ => pcg::hash(&[seed, class, 0x636c6173]),
     }
 }
 
@@ -113,6 +123,7 @@ pub(crate) const GPU_LAYOUTS: &[crate::gpu::contracts::GpuLayout] = {
 pub struct ClassBuffers {
     lights: Buffer<GpuLight>,
     seeds: Buffer<u32>,
+    class_count: u32,
     light_count: u32,
 }
 
@@ -125,6 +136,7 @@ impl ClassBuffers {
         Ok(ClassBuffers {
             lights: Buffer::from_slice(ctx, "ClassLights", &lights)?,
             seeds: Buffer::from_slice(ctx, "ClassSeeds", &classes.seeds)?,
+            class_count: classes.seeds.len() as u32,
             light_count,
         })
     }
@@ -147,7 +159,6 @@ impl ReweighVpls {
         base: &'a VplBuffers,
         frame_vpls: &'a Buffer<Vpl>,
         classes: &'a ClassBuffers,
-        class_count: u32,
         fresh: u32,
     ) -> GpuResult<()> {
         let mut bindings = scene.bindings();
@@ -159,7 +170,7 @@ impl ReweighVpls {
         let params = ReweighParams {
             path_count: base.layout.path_count,
             vertex_count: base.layout.levels.len() as u32,
-            classes: class_count,
+            classes: classes.class_count,
             light_count: classes.light_count,
             fresh,
         };

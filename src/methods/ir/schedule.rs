@@ -78,6 +78,41 @@ impl Schedule {
         }
     }
 
+    /// The schedule of `classes` interleaved walks of ceil(N / classes) paths each (ir's
+    /// `--reuse`, reuse.rs): path i = k + classes t is path t of class k, reaches vertex j iff
+    /// t < N_j of the class's own schedule, and a vertex's count is classes times the class's,
+    /// so every class has the same paths at every vertex (none is empty where another is not)
+    /// and a slot's weight 1 / (classes N_j) is the class's 1 / N_j averaged over the classes.
+    /// One class is `new`'s schedule.
+    pub fn interleaved(
+        path_count: u32,
+        mean_albedo: f64,
+        absorption: Absorption,
+        classes: u32,
+    ) -> Schedule {
+        let k = classes.max(1);
+        if k == 1 {
+            return Schedule::new(path_count, mean_albedo, absorption);
+        }
+        let class = Schedule::new(path_count.max(1).div_ceil(k), mean_albedo, absorption);
+        let mut offset = 0;
+        let levels = class
+            .levels
+            .iter()
+            .map(|l| {
+                let level = [l[0] * k, offset, l[2], l[3]];
+                offset += l[0] * k;
+                level
+            })
+            .collect();
+        Schedule {
+            path_count: class.path_count * k,
+            levels,
+            slot_count: offset,
+            mean_albedo,
+        }
+    }
+
     /// The slots of the vertices past the light vertex (indirect light only).
     pub fn surface_slots(&self) -> std::ops::Range<u32> {
         self.levels.first().map_or(0, |l| l[0])..self.slot_count
@@ -125,6 +160,24 @@ mod tests {
         assert_eq!(tail.len(), 10);
         assert!(tail.iter().all(|l| l[0] == 1 && l[2] == 1 && l[3] == 1));
         assert_eq!(tail[0][1], 1994);
+    }
+
+    /// Four classes of 250 paths: every class has the same paths at every vertex, so the
+    /// class a frame walks afresh is never missing where the others are.
+    #[test]
+    fn interleaved_classes_share_every_vertex_alike() {
+        let s = Schedule::interleaved(1000, 0.5, Absorption::Fractional, 4);
+        let class = Schedule::new(250, 0.5, Absorption::Fractional);
+        assert_eq!(s.path_count, 1000);
+        assert_eq!(s.levels.len(), class.levels.len());
+        for (l, c) in s.levels.iter().zip(&class.levels) {
+            assert_eq!((l[0], l[2], l[3]), (4 * c[0], c[2], c[3]));
+        }
+        assert_eq!(s.slot_count, 4 * class.slot_count);
+        assert_eq!(
+            Schedule::interleaved(1000, 0.5, Absorption::Fractional, 1),
+            Schedule::new(1000, 0.5, Absorption::Fractional)
+        );
     }
 
     #[test]
