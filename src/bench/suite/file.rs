@@ -564,7 +564,8 @@ fn family(file: &str, i: usize, entry: &SceneEntry) -> Result<Vec<Option<Generat
                 &format!("scene[{i}].lights"),
                 v.to_string(),
                 &format!(
-                    "only a generated scene takes a light count ({:?} is a scene file; a                      generated one is path = \"{}{}\")",
+                    "only a generated scene takes a light count ({:?} is a scene file; a generated one is \
+                     path = \"{}{}\")",
                     entry.path,
                     generated::PREFIX,
                     generated::GENERATORS[0].name

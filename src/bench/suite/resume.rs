@@ -234,7 +234,7 @@ fn shard_words(shard: Option<Shard>) -> String {
     shard.map(|s| format!(", shard {s}")).unwrap_or_default()
 }
 
-/// The runs of `old` that this run keeps: recorded ok or declined (a run that failed is tried
+/// The runs of `old` that this run keeps: recorded ok, declined or refused (a run that failed is tried
 /// again) for a planned run with the same id, scene contents, seed and parameters (a time
 /// budget's with its calibrated count), with its thumbnail and error map on disk.
 pub fn kept_runs(
