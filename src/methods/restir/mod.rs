@@ -301,6 +301,14 @@ impl RenderMethod for Restir {
         carries: &[CARRIED],
     };
 
+    /// Without temporal reuse nothing crosses frames (so a suite gives it no lead-in).
+    fn across_frames(settings: &RestirSettings) -> AcrossFrames {
+        match settings.temporal {
+            true => Self::ACROSS_FRAMES,
+            false => AcrossFrames::NOTHING,
+        }
+    }
+
     fn new(ctx: &Context) -> GpuResult<Self> {
         Ok(Restir {
             candidates: GenerateCandidates::new(ctx)?,
