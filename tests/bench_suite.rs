@@ -840,9 +840,22 @@ fn every_suite_file_loads_and_the_stability_suite_has_every_failure_scene() {
     // A generated family (scale.toml's halls of up to 2^20 lights: minutes of python and tens
     // of seconds to load) is checked at two small counts instead, generated into a scratch
     // folder; everything else in the file is as written.
+    let python3 = std::process::Command::new("python3")
+        .arg("--version")
+        .output()
+        .is_ok_and(|o| o.status.success());
+    assert!(
+        python3 || std::env::var("CI").is_err(),
+        "python3 is not installed"
+    );
     let generated = temp_dir("every-suite-generated");
     for path in &suites {
         let text = fs::read_to_string(path).unwrap();
+        // A generated scene needs python3 (CI has it; elsewhere the file is left out without it).
+        if text.contains("generated:") && !python3 {
+            eprintln!("note: python3 not found; {} not loaded", path.display());
+            continue;
+        }
         // Every scene's light counts, wherever the file writes them, become [16, 64].
         let mut table: toml::Table = toml::from_str(&text).unwrap();
         if let Some(toml::Value::Array(scenes)) = table.get_mut("scene") {

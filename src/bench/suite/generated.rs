@@ -118,7 +118,8 @@ pub fn scene_file(g: &Generator, lights: u32, folder: &Path) -> Result<PathBuf, 
         .output();
     let generated = match run {
         Err(e) => Err(format!(
-            "cannot run python3 ({e}), which runs the generator {}",
+            "cannot run python3 ({e}), which runs the generator {} (install it: apt-get \
+             install python3)",
             script.display()
         )),
         Ok(o) if !o.status.success() => Err(format!(
