@@ -109,6 +109,10 @@ fn plan(method: &str, key: &str) -> Option<Run> {
             why: "",
         },
         ("bir", "connections") => max(),
+        ("bir", "reverse_history") => Skip(
+            "each earlier batch's set is dispatches of its own, split as the batch's own set's \
+             connections are",
+        ),
         ("bir", "depth") => max(),
         ("bir", "ratio") => Skip(
             "a larger ratio keeps fewer VPLs (one at the maximum): no loop grows, only the \

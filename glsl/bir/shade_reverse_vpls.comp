@@ -27,6 +27,11 @@
 // next event and connection is a shadow ray's traversal loop: unsplit, 1024 light samples
 // came out 8.5% dark under --strategy reverse on the Cornell box (32x32, 4 frames), and a
 // frame of 2^20 VPLs connected each path to half a million slots in one invocation.
+//
+// bir's --reverse-history H: the radiance also connects to the standard VPLs of the H - 1
+// batches before (a still's earlier frames), each batch's set an unbiased estimate of the same
+// light, so each set's connections weigh vpl_weight = 1 / (sets used); a dispatch with
+// history = 1 adds one earlier set's connections only (no next events, never the first write).
 
 #extension GL_GOOGLE_include_directive : require
 
@@ -55,6 +60,8 @@ layout(push_constant) uniform ShadeParams {
     uint sample_end;
     uint connection_begin;  // and its range of each path's connections
     uint connection_end;
+    float vpl_weight;    // the connections' weight: 1 / the standard VPL sets connected to
+    uint history;        // 1: an earlier batch's set, its connections added to the power
 } params;
 
 // One next-event sample at x (offset already) with material m seen from wo: f cos L / pdf.
@@ -91,7 +98,7 @@ void main() {
 
     uint samples = max(params.light_samples, 1u);
     uint sample_end = min(params.sample_end, samples);
-    bool next_events = params.connection_begin == 0u;
+    bool next_events = params.connection_begin == 0u && params.history == 0u;
     // light -> x2: Kd / pi cos L / pdf.
     vec3 radiance = vec3(0.0);
     for (uint j = params.sample_begin; next_events && j < sample_end; ++j) {
@@ -140,7 +147,7 @@ void main() {
                     }
                     sum *= float(slots) / float(params.connections);
                 }
-                incoming += beta * sum;
+                incoming += beta * (sum * params.vpl_weight);
                 break;
             }
             vec3 ub = vec3(random(params.seed, k, 0x73686164u, dim + 6u + 8u * d),
@@ -159,7 +166,8 @@ void main() {
     }
 
     vec3 power = radiance * (PI * params.weight / (float(params.count) * v.power.w));
-    bool first = params.sample_begin == 0u && params.connection_begin == 0u;
+    bool first =
+        params.sample_begin == 0u && params.connection_begin == 0u && params.history == 0u;
     v.power.rgb = first ? power : v.power.rgb + power;
     reverse_vpls[k] = v;
 }

@@ -39,7 +39,7 @@ use crate::scene::Scene;
 
 use light_cdf::LightCdf;
 use resample::{Candidates, EstimateVplPower, ResampleBuffers, ResampleVpls, UpdateSideWeights};
-use reverse::{FindUncoveredVpls, ShadeReverseVpls, TraceReverseVpls};
+use reverse::{FindUncoveredVpls, ShadeReverseVpls, StandardSet, TraceReverseVpls};
 
 /// Which VPLs a frame shades.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -101,6 +101,9 @@ pub struct BirSettings {
     /// expensive indirect estimate gets one position per frame (`--direct-spp`).
     pub direct_spp: u32,
     pub pixels: PixelSampling,
+    /// H: the reverse VPLs' radiance connects to the standard VPLs of this batch and the H - 1
+    /// batches before it in the render, each set weighted 1 / H (1: this batch's alone).
+    pub reverse_history: u32,
 }
 
 impl Default for BirSettings {
@@ -128,6 +131,7 @@ impl Default for BirSettings {
             // footprint are 11% of the error (at 1: 33%).
             direct_spp: 4,
             pixels: PixelSampling::Jittered,
+            reverse_history: 1,
         }
     }
 }
@@ -268,7 +272,24 @@ pub const SETTINGS: &[Setting<BirSettings>] = &[
     common_settings!(compensate, needs: &[Need::Not("clamp", "0")]),
     common_settings!(direct_spp),
     common_settings!(pixel_centres),
+    field_setting!(
+        "reverse_history",
+        reverse_history,
+        Kind::Count {
+            min: 1,
+            max: MAX_REVERSE_HISTORY
+        },
+        Count,
+        "H: the reverse VPLs' radiance connects to the standard VPLs of this batch and of the \
+         H - 1 batches before it in the render (earlier frames of a still), each set weighted \
+         1 / H: the same light estimated from H times the light paths, for H times the \
+         connections. 1: this batch's alone.",
+        needs: &[Need::OneOf("strategy", REVERSE)],
+    ),
 ];
+
+/// Most standard VPL sets the reverse radiance connects to.
+pub const MAX_REVERSE_HISTORY: u32 = 16;
 
 /// How a frame's budget splits.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -465,6 +486,19 @@ impl RenderMethod for Bir {
         let clamp = settings
             .clamp
             .prepare(ctx, scene, gpu_scene, shaded_per_frame)?;
+        // Earlier batches' standard VPL sets for the reverse radiance (none without reverse
+        // VPLs).
+        let history_sets = match split.reverse {
+            0 => 0,
+            _ => settings.reverse_history.clamp(1, MAX_REVERSE_HISTORY) as usize - 1,
+        };
+        let history = StandardHistory {
+            sets: (0..history_sets)
+                .map(|_| Buffer::zeroed(ctx, "StandardHistory", vpls.vpls.len()))
+                .collect::<GpuResult<_>>()?,
+            filled: std::cell::Cell::new(0),
+            next: std::cell::Cell::new(0),
+        };
         Ok(Box::new(BirFrames {
             bir: self,
             settings,
@@ -483,6 +517,7 @@ impl RenderMethod for Bir {
             kept,
             light_cdf,
             clamp,
+            history,
         }))
     }
 }
@@ -506,6 +541,17 @@ struct BirFrames<'a> {
     kept: Buffer<Vpl>,
     light_cdf: Option<LightCdf>,
     clamp: FrameClamp,
+    /// The standard VPLs of the batches before (`reverse_history` - 1 sets, a ring).
+    history: StandardHistory,
+}
+
+/// Earlier batches' standard VPLs, as their walk left them (before the uncovered pass marks
+/// them), for the reverse radiance.
+struct StandardHistory {
+    sets: Vec<Buffer<Vpl>>,
+    /// How many hold a batch's set, and which is overwritten next.
+    filled: std::cell::Cell<usize>,
+    next: std::cell::Cell<usize>,
 }
 
 impl MethodFrames for BirFrames<'_> {
@@ -626,23 +672,43 @@ impl<'f> BirFrames<'f> {
                 )
             })?;
             cmd.pass("reverse radiance", |cmd| {
-                bir.shade_reverse.record(
-                    cmd,
-                    gpu_scene,
-                    reverse,
-                    &vpls.vpls,
-                    slots.clone(),
-                    settings.light_samples,
-                    settings.connections,
-                    settings.depth,
-                    reverse_seed,
-                    // Resampling applies the side weights itself.
-                    if resampling {
-                        1.0
-                    } else {
-                        split.reverse_weight
-                    },
-                )
+                // Resampling applies the side weights itself.
+                let side = if resampling {
+                    1.0
+                } else {
+                    split.reverse_weight
+                };
+                let history = &self.history;
+                let earlier = history.filled.get();
+                let weight = 1.0 / (1 + earlier) as f32;
+                let sets = std::iter::once((&vpls.vpls, false))
+                    .chain(history.sets[..earlier].iter().map(|s| (s, true)));
+                for (set, earlier_set) in sets {
+                    bir.shade_reverse.record(
+                        cmd,
+                        gpu_scene,
+                        reverse,
+                        set,
+                        slots.clone(),
+                        settings.light_samples,
+                        settings.connections,
+                        settings.depth,
+                        reverse_seed,
+                        side,
+                        StandardSet {
+                            weight,
+                            history: earlier_set,
+                        },
+                    )?;
+                }
+                // This batch's set joins the history in place of the oldest.
+                if !history.sets.is_empty() {
+                    let next = history.next.get();
+                    cmd.copy(&vpls.vpls, &history.sets[next]);
+                    history.next.set((next + 1) % history.sets.len());
+                    history.filled.set((earlier + 1).min(history.sets.len()));
+                }
+                Ok(())
             })?;
             // After the radiance pass, which connects to their unscaled power.
             if standard_count > 0 {

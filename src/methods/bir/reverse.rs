@@ -40,6 +40,8 @@ struct ShadeParams {
     sample_end: u32,
     connection_begin: u32,
     connection_end: u32,
+    vpl_weight: f32,
+    history: u32,
 }
 
 /// Shadow and closest-hit rays per invocation in one dispatch of bir's per-VPL kernels.
@@ -93,6 +95,8 @@ pub(crate) const GPU_LAYOUTS: &[crate::gpu::contracts::GpuLayout] = {
             sample_end,
             connection_begin,
             connection_end,
+            vpl_weight,
+            history,
         }),
         gpu_layout!(CoverParams in ["find_uncovered_vpls"] {
             vpl_begin,
@@ -148,6 +152,23 @@ impl TraceReverseVpls {
     }
 }
 
+/// Which standard VPL set a reverse radiance dispatch connects to, and its weight.
+#[derive(Clone, Copy, Debug)]
+pub struct StandardSet {
+    /// 1 / the number of sets the reverse VPLs connect to.
+    pub weight: f32,
+    /// An earlier batch's set: connections only, added.
+    pub history: bool,
+}
+
+impl StandardSet {
+    /// The batch's own set, alone.
+    pub const ONLY: StandardSet = StandardSet {
+        weight: 1.0,
+        history: false,
+    };
+}
+
 pub struct ShadeReverseVpls(SceneKernel);
 
 impl ShadeReverseVpls {
@@ -160,7 +181,8 @@ impl ShadeReverseVpls {
 
     /// Sets each reverse VPL's power from its radiance, lit by `light_samples` next-event
     /// samples and `connections` of the standard VPL slots `slots` of `vpls` per bounce (0:
-    /// all), times `weight`.
+    /// all), times `weight`; the connections weigh `set.weight`. With `set.history`, `vpls` is
+    /// an earlier batch's set and only its connections are added.
     #[allow(clippy::too_many_arguments)]
     pub fn record<'a>(
         &'a self,
@@ -174,6 +196,7 @@ impl ShadeReverseVpls {
         depth: u32,
         seed: u32,
         weight: f32,
+        set: StandardSet,
     ) -> GpuResult<()> {
         let mut bindings = scene.bindings();
         bindings.push(bind("Vpls", vpls));
@@ -200,6 +223,8 @@ impl ShadeReverseVpls {
             sample_end: 0,
             connection_begin: 0,
             connection_end: 0,
+            vpl_weight: set.weight,
+            history: u32::from(set.history),
         };
         // A sample's path casts a next-event ray at x2 and two rays per vertex, then one per
         // connection: whole samples per dispatch where they fit, else one sample per
