@@ -282,9 +282,18 @@ pub const SETTINGS: &[Setting<BirSettings>] = &[
         Count,
         "H: the reverse VPLs' radiance connects to the standard VPLs of this batch and of the \
          H - 1 batches before it in the render (earlier frames of a still), each set weighted \
-         1 / H: the same light estimated from H times the light paths, for H times the \
-         connections. 1: this batch's alone.",
-        needs: &[Need::OneOf("strategy", REVERSE)],
+         1 / the sets used: the same light estimated from up to H times the light paths, for \
+         as many times the connections. 1: this batch's alone. Not with the adaptive side \
+         weights, which earlier sets' batches set (a batch's weights would depend on the light \
+         paths its reverse VPLs connect to).",
+        needs: &[
+            Need::OneOf("strategy", REVERSE),
+            Need::Any(&[
+                Need::OneOf("strategy", &["reverse"]),
+                Need::OneOf("adaptive", &["false"]),
+                Need::OneOf("ratio", &["0"]),
+            ]),
+        ],
     ),
 ];
 
@@ -496,8 +505,6 @@ impl RenderMethod for Bir {
             sets: (0..history_sets)
                 .map(|_| Buffer::zeroed(ctx, "StandardHistory", vpls.vpls.len()))
                 .collect::<GpuResult<_>>()?,
-            filled: std::cell::Cell::new(0),
-            next: std::cell::Cell::new(0),
         };
         Ok(Box::new(BirFrames {
             bir: self,
@@ -549,9 +556,6 @@ struct BirFrames<'a> {
 /// them), for the reverse radiance.
 struct StandardHistory {
     sets: Vec<Buffer<Vpl>>,
-    /// How many hold a batch's set, and which is overwritten next.
-    filled: std::cell::Cell<usize>,
-    next: std::cell::Cell<usize>,
 }
 
 impl MethodFrames for BirFrames<'_> {
@@ -678,11 +682,15 @@ impl<'f> BirFrames<'f> {
                 } else {
                     split.reverse_weight
                 };
-                let history = &self.history;
-                let earlier = history.filled.get();
+                // The render's batch g has min(g, H - 1) earlier sets, the ring's slot g mod
+                // (H - 1) the oldest (derived from the batch, not kept: a frame may be
+                // recorded without running, as irad render's progress probe does).
+                let sets_held = self.history.sets.len();
+                let g = (frame * self.batches + b) as usize;
+                let earlier = g.min(sets_held);
                 let weight = 1.0 / (1 + earlier) as f32;
                 let sets = std::iter::once((&vpls.vpls, false))
-                    .chain(history.sets[..earlier].iter().map(|s| (s, true)));
+                    .chain(self.history.sets[..earlier].iter().map(|s| (s, true)));
                 for (set, earlier_set) in sets {
                     bir.shade_reverse.record(
                         cmd,
@@ -702,11 +710,8 @@ impl<'f> BirFrames<'f> {
                     )?;
                 }
                 // This batch's set joins the history in place of the oldest.
-                if !history.sets.is_empty() {
-                    let next = history.next.get();
-                    cmd.copy(&vpls.vpls, &history.sets[next]);
-                    history.next.set((next + 1) % history.sets.len());
-                    history.filled.set((earlier + 1).min(history.sets.len()));
+                if sets_held > 0 {
+                    cmd.copy(&vpls.vpls, &self.history.sets[g % sets_held]);
                 }
                 Ok(())
             })?;

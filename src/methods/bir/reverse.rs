@@ -161,14 +161,6 @@ pub struct StandardSet {
     pub history: bool,
 }
 
-impl StandardSet {
-    /// The batch's own set, alone.
-    pub const ONLY: StandardSet = StandardSet {
-        weight: 1.0,
-        history: false,
-    };
-}
-
 pub struct ShadeReverseVpls(SceneKernel);
 
 impl ShadeReverseVpls {
