@@ -286,14 +286,8 @@ pub const SETTINGS: &[Setting<BirSettings>] = &[
          as many times the connections. 1: this batch's alone. Not with the adaptive side \
          weights, which earlier sets' batches set (a batch's weights would depend on the light \
          paths its reverse VPLs connect to).",
-        needs: &[
-            Need::OneOf("strategy", REVERSE),
-            Need::Any(&[
-                Need::OneOf("strategy", &["reverse"]),
-                Need::OneOf("adaptive", &["false"]),
-                Need::OneOf("ratio", &["0"]),
-            ]),
-        ],
+        // Above 1 also refused with the adaptive side weights (`fits`).
+        needs: &[Need::OneOf("strategy", REVERSE)],
     ),
 ];
 
@@ -417,6 +411,17 @@ impl RenderMethod for Bir {
     }
 
     fn fits(s: &BirSettings, scene: &Scene, limit: u64) -> Result<(), String> {
+        // Earlier batches set the adaptive side weights, so with their light paths in the
+        // reverse radiance a batch's weights would depend on what it connects to: a bias.
+        if s.reverse_history > 1 && s.adaptive && s.strategy == Strategy::Both && s.ratio > 0 {
+            return Err(format!(
+                "bir: reverse_history = {} (--reverse-history) needs adaptive = false \
+                 (--adaptive=false), strategy = \"reverse\" or ratio = 0: the adaptive side \
+                 weights come from earlier batches, whose light paths the reverse VPLs would \
+                 connect to",
+                s.reverse_history
+            ));
+        }
         device_fit::check_compensation(&s.clamp, scene, limit)?;
         // Vpls: the standard walk's slots for a batch's light paths (set_up).
         let rho = mean_albedo(scene);
