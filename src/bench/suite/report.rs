@@ -425,7 +425,8 @@ fn limited_by_reference(r: &RunRecord) -> bool {
     }
 }
 
-fn fixed(v: Option<f64>, digits: usize) -> String {
+/// `v` with `digits` decimals, "-" where missing or not finite.
+pub(super) fn fixed(v: Option<f64>, digits: usize) -> String {
     match v {
         Some(x) if x.is_finite() => format!("{x:.digits$}"),
         _ => "-".into(),

@@ -13,6 +13,7 @@ use crate::bench::chart::{Chart, Point, Series};
 use crate::methods::Registry;
 
 use super::file::file_safe;
+use super::report::fixed;
 use super::results::{RunRecord, SceneUpload, Status, SuiteResults};
 
 /// One member of a family: its scene, light count and upload (None when the suite did not
@@ -343,13 +344,6 @@ pub fn markdown(results: &SuiteResults) -> String {
         }
     }
     md
-}
-
-fn fixed(v: Option<f64>, digits: usize) -> String {
-    match v {
-        Some(x) if x.is_finite() => format!("{x:.digits$}"),
-        _ => "-".into(),
-    }
 }
 
 fn sci(v: Option<f64>) -> String {
