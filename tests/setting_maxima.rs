@@ -150,6 +150,7 @@ fn plan(method: &str, key: &str) -> Option<Run> {
         // One frame: the candidates' loop (a light-BVH descent each) in one invocation.
         ("restir", "candidates") => one_frame(),
         ("restir", "bsdf_candidates") => one_frame(),
+        ("restir", "candidate_shadow_rays") => one_frame(),
         ("restir", "neighbours") => max(),
         ("restir", "radius") => Skip("a radius places the neighbours; no loop grows with it"),
         ("restir", "temporal_cap") => Skip("a cap on a reservoir's M: a weight, no loop counts it"),

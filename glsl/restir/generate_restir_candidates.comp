@@ -8,6 +8,15 @@
 // weights) / p^(y) needs no 1 / M. The chosen sample's shadow ray zeroes W where it is hidden
 // (visibility reuse; restir.glsl's invariant).
 //
+// A visibility-aware target (setting candidate_shadow_rays, T): the candidates are dealt into T
+// interleaved streams (light candidate j and BSDF candidate k to streams j mod T and k mod T),
+// each resampled as above with the weights of the whole pool; each stream's pick gets a shadow
+// ray, and the visible picks are resampled by their streams' weight sums. That is resampling
+// by p^ V over T samples: sum_t f(y_t) W_t is unbiased (the pool's balance weights sum to one
+// over all candidates, each stream's W_t is zero where its pick is hidden), and choosing t with
+// probability proportional to p^(y_t) W_t = (stream t's weight sum) with W = (sum over the
+// visible streams) / p^(y) keeps that mean. T = 1 is the single shadow ray above, bit for bit.
+//
 // Loop budget (docs/DESIGN.md "The loop budget"): at most 512 light candidates (the setting's
 // range), each a descent of at most 64 levels (tens on real scenes: 14 levels for 4288
 // lights) plus the environment texel's binary search (log2 of the map's texels) or the power
@@ -18,7 +27,8 @@
 // Random numbers per (pass seed, pixel, frame): light candidate j hashes dimension 16 + j once and
 // draws its selection, texel, position (2) and resampling numbers from that hash, PCG-hashed
 // with 0..4 (one hash4 a candidate instead of five); BSDF candidate j uses dimensions
-// 16 + 4096 + 8 j .. +3 (direction 3, resampling).
+// 16 + 4096 + 8 j .. +3 (direction 3, resampling); stream t's final resampling dimension
+// 16 + 4096 + 128 + t.
 
 #extension GL_GOOGLE_include_directive : require
 
@@ -39,6 +49,7 @@ layout(push_constant) uniform CandidateParams {
     uint seed;
     uint light_candidates;
     uint bsdf_candidates;
+    uint streams;
 } params;
 
 // How light candidates are drawn (src/methods/restir/kernels.rs specializes it): through
@@ -47,6 +58,9 @@ layout(constant_id = 3) const bool LIGHT_BVH = true;
 
 const uint LIGHT_DIMENSIONS = 16u;
 const uint BSDF_DIMENSIONS = 16u + 8u * 512u;
+const uint STREAM_DIMENSIONS = BSDF_DIMENSIONS + 8u * 16u;
+// The most streams (src/methods/restir/mod.rs's MAX_CANDIDATE_SHADOW_RAYS).
+const uint MAX_STREAMS = 8u;
 
 void main() {
     uvec2 pixel = gl_GlobalInvocationID.xy;
@@ -63,10 +77,18 @@ void main() {
     uint seed = params.seed;
     uint frame = params.frame;
 
-    float weight_sum = 0.0;
-    uint chosen_entry = NO_LIGHT;
-    vec3 chosen_y = vec3(0.0);
-    float chosen_target = 0.0;
+    // Each stream's weight sum and pick (the pick's target in its measure, as stored).
+    float weight_sum[MAX_STREAMS];
+    uint chosen_entry[MAX_STREAMS];
+    vec3 chosen_y[MAX_STREAMS];
+    float chosen_target[MAX_STREAMS];
+    uint streams = min(max(params.streams, 1u), MAX_STREAMS);
+    for (uint t = 0u; t < MAX_STREAMS; ++t) {
+        weight_sum[t] = 0.0;
+        chosen_entry[t] = NO_LIGHT;
+        chosen_y[t] = vec3(0.0);
+        chosen_target[t] = 0.0;
+    }
 
     // A do-while (bvh.glsl's triangle loop says why); light_candidates is at least 1. The
     // target is evaluated from the light sample itself (solid angle; the candidate weight is a
@@ -87,11 +109,12 @@ void main() {
             if (target > 0.0) {
                 float p_bsdf = ls.delta ? 0.0 : bsdf_pdf(m, s.n, s.wo, ls.direction);
                 float w = target / (m_light * ls.pdf + m_bsdf * p_bsdf);
-                if (reservoir_take(weight_sum, w, unit_float(pcg_hash(h ^ 0x4u)))) {
-                    chosen_entry = ls.entry;
-                    chosen_y = isinf(ls.distance) ? ls.direction
-                                                  : s.p + ls.direction * ls.distance;
-                    chosen_target = target * ls.to_area;
+                uint t = j % streams;
+                if (reservoir_take(weight_sum[t], w, unit_float(pcg_hash(h ^ 0x4u)))) {
+                    chosen_entry[t] = ls.entry;
+                    chosen_y[t] = isinf(ls.distance) ? ls.direction
+                                                     : s.p + ls.direction * ls.distance;
+                    chosen_target[t] = target * ls.to_area;
                 }
             }
         }
@@ -132,22 +155,43 @@ void main() {
         float target = luminance(restir_contribution(s, entry, y, w_dir, dist, to_area));
         if (!(target > 0.0)) continue;
         float w = target / ((m_light * p_light + m_bsdf * p_bsdf) * to_area);
-        if (reservoir_take(weight_sum, w, random(seed, index, frame, dim + 3u))) {
-            chosen_entry = entry;
-            chosen_y = y;
-            chosen_target = target;
+        uint t = k % streams;
+        if (reservoir_take(weight_sum[t], w, random(seed, index, frame, dim + 3u))) {
+            chosen_entry[t] = entry;
+            chosen_y[t] = y;
+            chosen_target[t] = target;
         }
     }
 
     Reservoir r = empty_reservoir(m_light + m_bsdf);
     // Weights past f32's range (a light too bright for its distance) drop the reservoir; it is
     // counted as a non-finite estimate so that the render's record warns.
-    bool finite = !(isnan(weight_sum) || isinf(weight_sum));
-    if (!finite) count_nonfinite_estimate();
-    if (chosen_entry != NO_LIGHT && weight_sum > 0.0 && finite) {
-        r.sample_point = vec4(chosen_y, uintBitsToFloat(chosen_entry));
-        r.weights.z = chosen_target;
-        r.weights.x = restir_visible(s, chosen_entry, chosen_y) ? weight_sum / chosen_target : 0.0;
+    bool finite = true;
+    for (uint t = 0u; t < streams; ++t) {
+        finite = finite && !(isnan(weight_sum[t]) || isinf(weight_sum[t]));
+    }
+    if (!finite) {
+        count_nonfinite_estimate();
+        reservoirs[index] = r;
+        return;
+    }
+    // The visible picks resampled by their streams' weight sums (the header). Where none is
+    // visible the reservoir keeps the first stream's pick with W = 0 (T = 1's hidden sample).
+    float visible_sum = 0.0;
+    uint kept = NO_LIGHT;
+    for (uint t = 0u; t < streams; ++t) {
+        if (chosen_entry[t] == NO_LIGHT || !(weight_sum[t] > 0.0)) continue;
+        if (kept == NO_LIGHT) kept = t;
+        if (restir_visible(s, chosen_entry[t], chosen_y[t])
+            && reservoir_take(visible_sum, weight_sum[t],
+                              random(seed, index, frame, STREAM_DIMENSIONS + t))) {
+            kept = t;
+        }
+    }
+    if (kept != NO_LIGHT) {
+        r.sample_point = vec4(chosen_y[kept], uintBitsToFloat(chosen_entry[kept]));
+        r.weights.z = chosen_target[kept];
+        r.weights.x = visible_sum > 0.0 ? visible_sum / chosen_target[kept] : 0.0;
     }
     reservoirs[index] = r;
 }

@@ -44,6 +44,7 @@ struct CandidateParams {
     seed: u32,
     light_candidates: u32,
     bsdf_candidates: u32,
+    streams: u32,
 }
 
 #[repr(C)]
@@ -203,6 +204,7 @@ impl GenerateCandidates {
         inputs: &FrameInputs<'a>,
         light_candidates: u32,
         bsdf_candidates: u32,
+        shadow_rays: u32,
         light_bvh: bool,
         accumulation: &'a Accumulation,
     ) -> GpuResult<()> {
@@ -216,6 +218,7 @@ impl GenerateCandidates {
             seed: pass_seed(inputs.seed, 0x63616e64),
             light_candidates,
             bsdf_candidates,
+            streams: shadow_rays,
         };
         kernel.dispatch(cmd, &bindings, &params, inputs.scene.image_workgroups())
     }

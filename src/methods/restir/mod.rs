@@ -81,6 +81,8 @@ pub struct RestirSettings {
     pub candidates: u32,
     /// B: BSDF candidates per pixel and frame.
     pub bsdf_candidates: u32,
+    /// T: candidate streams whose picks are shadow-tested, the visible ones resampled again.
+    pub candidate_shadow_rays: u32,
     pub light_sampler: LightSampler,
     /// Reuse of the previous frame's reservoir.
     pub temporal: bool,
@@ -107,6 +109,7 @@ impl Default for RestirSettings {
             seed: 0,
             candidates: 32,
             bsdf_candidates: 1,
+            candidate_shadow_rays: 1,
             light_sampler: LightSampler::Bvh,
             temporal: true,
             temporal_cap: 20,
@@ -126,6 +129,10 @@ impl Default for RestirSettings {
 /// loop budget"): 512 x (64 + a texel or table search of up to 24) leaves about 20000
 /// iterations to the rays.
 pub const MAX_CANDIDATES: u32 = 512;
+
+/// Most candidate streams shadow-tested (glsl's MAX_STREAMS: each stream's pick is held in the
+/// invocation's registers until the shadow rays).
+pub const MAX_CANDIDATE_SHADOW_RAYS: u32 = 8;
 
 pub const SETTINGS: &[Setting<RestirSettings>] = &[
     common_settings!(
@@ -152,6 +159,21 @@ pub const SETTINGS: &[Setting<RestirSettings>] = &[
         Count,
         "B: BSDF-sampled candidates per pixel and frame (an emissive hit or the environment), \
          combined with the light candidates by the balance heuristic.",
+    ),
+    field_setting!(
+        "candidate_shadow_rays",
+        candidate_shadow_rays,
+        Kind::Count {
+            min: 1,
+            max: MAX_CANDIDATE_SHADOW_RAYS
+        },
+        Count,
+        "T: a visibility-aware target for the candidates. They are dealt into T interleaved \
+         streams, each resampled by the unshadowed contribution; each stream's pick is \
+         shadow-tested and a visible one kept, resampled by the streams' weights (T shadow rays \
+         a pixel instead of one; unbiased). Pays where most candidates are hidden: on the \
+         many-light hall's walk 2 streams cut relMSE 13% for 2% more frame time \
+         (scenes/suites/realtime.toml).",
     ),
     common_settings!(
         light_sampler,
@@ -332,7 +354,8 @@ impl RenderMethod for Restir {
     }
 
     fn work(s: &RestirSettings) -> f64 {
-        s.frames as f64 * (s.candidates + s.bsdf_candidates + s.neighbours + 2) as f64
+        s.frames as f64
+            * (s.candidates + s.bsdf_candidates + s.candidate_shadow_rays + s.neighbours + 1) as f64
     }
 
     fn set_up<'a>(
@@ -463,6 +486,7 @@ impl MethodFrames for RestirFrames<'_> {
                 &inputs,
                 s.candidates,
                 s.bsdf_candidates,
+                s.candidate_shadow_rays,
                 s.light_sampler == LightSampler::Bvh,
                 shared.accumulation,
             )
