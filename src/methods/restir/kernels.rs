@@ -89,6 +89,7 @@ pub(crate) const GPU_LAYOUTS: &[crate::gpu::contracts::GpuLayout] = {
             seed,
             light_candidates,
             bsdf_candidates,
+            streams,
         }),
         gpu_layout!(TemporalParams in ["reuse_restir_temporal"] {
             previous_camera_position,
@@ -190,6 +191,16 @@ impl<'a> FrameInputs<'a> {
 /// constant LIGHT_BVH).
 pub struct GenerateCandidates(SceneKernel);
 
+/// The candidates a pixel draws each frame: M light and B BSDF candidates, the light ones
+/// through the light BVH or the power table, dealt into `shadow_rays` shadow-tested streams.
+#[derive(Clone, Copy)]
+pub struct CandidateCounts {
+    pub light: u32,
+    pub bsdf: u32,
+    pub shadow_rays: u32,
+    pub light_bvh: bool,
+}
+
 impl GenerateCandidates {
     pub fn new(ctx: &Context) -> GpuResult<Self> {
         Ok(GenerateCandidates(SceneKernel::new(
@@ -202,13 +213,10 @@ impl GenerateCandidates {
         &'a self,
         cmd: &mut Commands<'a>,
         inputs: &FrameInputs<'a>,
-        light_candidates: u32,
-        bsdf_candidates: u32,
-        shadow_rays: u32,
-        light_bvh: bool,
+        counts: CandidateCounts,
         accumulation: &'a Accumulation,
     ) -> GpuResult<()> {
-        let kernel = self.0.get_with(inputs.scene.features, light_bvh)?;
+        let kernel = self.0.get_with(inputs.scene.features, counts.light_bvh)?;
         let mut bindings = inputs.bindings(true);
         bindings.extend(inputs.scene.light_bvh_bindings());
         // For the count of reservoirs dropped with non-finite weights.
@@ -216,9 +224,9 @@ impl GenerateCandidates {
         let params = CandidateParams {
             frame: inputs.frame,
             seed: pass_seed(inputs.seed, 0x63616e64),
-            light_candidates,
-            bsdf_candidates,
-            streams: shadow_rays,
+            light_candidates: counts.light,
+            bsdf_candidates: counts.bsdf,
+            streams: counts.shadow_rays,
         };
         kernel.dispatch(cmd, &bindings, &params, inputs.scene.image_workgroups())
     }

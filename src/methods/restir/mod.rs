@@ -33,7 +33,7 @@ use super::paths::LightSampler;
 use super::settings::{common_settings, field_setting, named_choices, Kind, Need, Setting, Value};
 
 use kernels::{
-    FrameInputs, GenerateCandidates, History as TemporalHistory, PreviousLighting,
+    CandidateCounts, FrameInputs, GenerateCandidates, History as TemporalHistory, PreviousLighting,
     ReservoirBuffers, ReuseSpatial, ReuseTemporal, ShadeRestir, TemporalOptions,
     TEMPORAL_DEPTH_TOLERANCE, TEMPORAL_NORMAL_COS,
 };
@@ -484,10 +484,12 @@ impl MethodFrames for RestirFrames<'_> {
             restir.candidates.record(
                 cmd,
                 &inputs,
-                s.candidates,
-                s.bsdf_candidates,
-                s.candidate_shadow_rays,
-                s.light_sampler == LightSampler::Bvh,
+                CandidateCounts {
+                    light: s.candidates,
+                    bsdf: s.bsdf_candidates,
+                    shadow_rays: s.candidate_shadow_rays,
+                    light_bvh: s.light_sampler == LightSampler::Bvh,
+                },
                 shared.accumulation,
             )
         })?;
