@@ -304,6 +304,11 @@ impl Suite {
                 message: "no [[method]]: a suite needs at least one".into(),
             });
         }
+        // The methods' names and settings first: loading the scenes can take minutes (a
+        // generated hall is generated), and a misspelt method should not wait for it.
+        for (i, m) in f.method.iter().enumerate() {
+            parse_budgets(file, i, m, counts.seed, registry)?;
+        }
         let scenes = parse_scenes(
             file,
             &f,
@@ -1265,6 +1270,12 @@ mod tests {
         let parse = |text: &str| {
             Suite::parse_generating("s.toml", text, Path::new("."), Registry::builtin(), &dir)
         };
+        // A misspelt method is refused before any hall is generated.
+        let misspelt = text.replace("method = \"reference\"", "method = \"refrence\"");
+        assert_ne!(misspelt, text);
+        let e = parse(&misspelt).map(|_| ()).unwrap_err().to_string();
+        assert!(e.contains("refrence"), "{e}");
+        assert!(!dir.exists(), "generated before the methods were checked");
         let s = parse(&text).unwrap_or_else(|e| panic!("{e}"));
         let names: Vec<&str> = s.scenes.iter().map(|s| s.scene.name.as_str()).collect();
         assert_eq!(names, ["many-lights-4", "many-lights-16", "cornell-box"]);

@@ -99,6 +99,7 @@ pub fn scene_file(g: &Generator, lights: u32, folder: &Path) -> Result<PathBuf, 
         return Ok(scene);
     }
     fs::create_dir_all(folder).map_err(|e| format!("cannot create {}: {e}", folder.display()))?;
+    remove_abandoned(folder, &format!(".{}-{lights}.", g.name));
     let tmp = folder.join(format!(
         ".{}-{lights}.{}",
         g.name,
@@ -153,6 +154,37 @@ pub fn scene_file(g: &Generator, lights: u32, folder: &Path) -> Result<PathBuf, 
         ));
     }
     Ok(scene)
+}
+
+/// Removes the temporary folders under `folder` named `<prefix><host>.<pid>.<time>.tmp`
+/// (`unique_suffix`) that a generation on this host left when it was stopped: their process is
+/// gone. Another host's, or a running process's, are left alone.
+fn remove_abandoned(folder: &Path, prefix: &str) {
+    let Ok(entries) = fs::read_dir(folder) else {
+        return;
+    };
+    if !Path::new("/proc/self").exists() {
+        return; // no way to tell a running process here
+    }
+    let mine = format!("{prefix}{}.", super::references::host_name());
+    for entry in entries.flatten() {
+        let name = entry.file_name().to_string_lossy().into_owned();
+        let Some(rest) = name.strip_prefix(&mine) else {
+            continue;
+        };
+        let pid = rest.split('.').next().unwrap_or_default();
+        let gone = name.ends_with(".tmp")
+            && pid.parse::<u32>().is_ok_and(|pid| {
+                pid != std::process::id() && !Path::new(&format!("/proc/{pid}")).exists()
+            });
+        if gone {
+            log::info!(
+                "removing {}, left by a stopped generation",
+                entry.path().display()
+            );
+            let _ = fs::remove_dir_all(entry.path());
+        }
+    }
 }
 
 /// The counts of a `lights` value: one count or a list of them, each in 1..=`max`, none twice.
@@ -220,6 +252,27 @@ mod tests {
         let twice = err("[16, 32, 16]");
         assert_eq!((twice.0.as_str(), twice.1.as_str()), ("[2]", "16"));
         assert!(twice.2.contains("listed twice"));
+    }
+
+    #[test]
+    fn a_stopped_generation_is_cleaned_up_and_a_running_one_kept() {
+        let folder = std::env::temp_dir().join(format!("irad-abandoned-{}", std::process::id()));
+        let _ = fs::remove_dir_all(&folder);
+        let host = crate::bench::suite::references::host_name();
+        // No process has pid u32::MAX - 1 (Linux's pid_max is at most 2^22).
+        let stopped = format!(".many-lights-64.{host}.{}.1.tmp", u32::MAX - 1);
+        let running = format!(".many-lights-64.{host}.{}.1.tmp", std::process::id());
+        let other_host = format!(".many-lights-64.elsewhere-{host}.{}.1.tmp", u32::MAX - 1);
+        let other_count = format!(".many-lights-128.{host}.{}.1.tmp", u32::MAX - 1);
+        for name in [&stopped, &running, &other_host, &other_count] {
+            fs::create_dir_all(folder.join(name).join("many-lights")).unwrap();
+        }
+        remove_abandoned(&folder, ".many-lights-64.");
+        assert!(!folder.join(&stopped).exists());
+        for kept in [&running, &other_host, &other_count] {
+            assert!(folder.join(kept).exists(), "{kept}");
+        }
+        fs::remove_dir_all(&folder).unwrap();
     }
 
     #[test]

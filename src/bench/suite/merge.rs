@@ -83,7 +83,28 @@ pub fn merge(parts: &[PathBuf], out: &Path, allow_mixed_devices: bool) -> Result
             Some(m) => {
                 m.runs.extend(results.runs.iter().cloned());
                 m.references.extend(results.references.clone());
-                m.uploads.extend(results.uploads.clone());
+                // Each part uploads the scenes of its runs and times the CPU builds itself:
+                // the first part's figures stand (sorted parts: the same merge draws the same
+                // chart). A device that refused what another held is said, not hidden.
+                for (scene, upload) in &results.uploads {
+                    match m.uploads.get(scene) {
+                        None => {
+                            m.uploads.insert(scene.clone(), upload.clone());
+                        }
+                        Some(first) if first.refused.is_some() != upload.refused.is_some() => {
+                            log::warn!(
+                                "{scene}: {} by the device of {}, but not by another part's: \
+                                 the merged upload figures are the first part's",
+                                match upload.refused {
+                                    Some(_) => "refused",
+                                    None => "held",
+                                },
+                                part.display()
+                            );
+                        }
+                        Some(_) => {}
+                    }
+                }
                 m.complete &= results.complete;
             }
         }

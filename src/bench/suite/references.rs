@@ -284,15 +284,20 @@ pub fn combine(a: &Image, b: &Image, n_a: u64, n_b: u64) -> (Image, f64) {
 
 /// Host name, process id and time: unique across the machines sharing a cache.
 pub(super) fn unique_suffix() -> String {
-    let host = fs::read_to_string("/proc/sys/kernel/hostname")
-        .or_else(|_| fs::read_to_string("/etc/hostname"))
-        .map(|h| file_safe(h.trim()))
-        .unwrap_or_else(|_| "host".into());
+    let host = host_name();
     let nanos = std::time::SystemTime::now()
         .duration_since(std::time::UNIX_EPOCH)
         .map(|d| d.as_nanos())
         .unwrap_or(0);
     format!("{host}.{}.{nanos}.tmp", std::process::id())
+}
+
+/// This machine's name as `unique_suffix` writes it.
+pub(super) fn host_name() -> String {
+    fs::read_to_string("/proc/sys/kernel/hostname")
+        .or_else(|_| fs::read_to_string("/etc/hostname"))
+        .map(|h| file_safe(h.trim()))
+        .unwrap_or_else(|_| "host".into())
 }
 
 pub(super) fn rename(from: &Path, to: &Path) -> Result<()> {
