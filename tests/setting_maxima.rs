@@ -150,7 +150,13 @@ fn plan(method: &str, key: &str) -> Option<Run> {
         // One frame: the candidates' loop (a light-BVH descent each) in one invocation.
         ("restir", "candidates") => one_frame(),
         ("restir", "bsdf_candidates") => one_frame(),
-        ("restir", "candidate_shadow_rays") => one_frame(),
+        // Every stream holding candidates of both kinds: the longest loops before the rays.
+        ("restir", "candidate_shadow_rays") => At {
+            value: "MAX",
+            shared: "candidates = 512\nbsdf_candidates = 16",
+            run: "frames = 1",
+            why: "",
+        },
         ("restir", "neighbours") => max(),
         ("restir", "radius") => Skip("a radius places the neighbours; no loop grows with it"),
         ("restir", "temporal_cap") => Skip("a cap on a reservoir's M: a weight, no loop counts it"),

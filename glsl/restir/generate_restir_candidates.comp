@@ -22,7 +22,9 @@
 // lights) plus the environment texel's binary search (log2 of the map's texels) or the power
 // table's (log2 of the lights), so at most about 512 x (1 + 64 + 24) = 45000 iterations before
 // the rays, and at most 16 BSDF candidates, each one traversal, plus one shadow ray.
-// tests/setting_maxima.rs runs 512 candidates on many-lights-sky.
+// Then one shadow ray for each of at most 8 streams (candidate_shadow_rays).
+// tests/setting_maxima.rs runs 512 candidates on many-lights-sky, and 8 streams with 512 light
+// and 16 BSDF candidates.
 //
 // Random numbers per (pass seed, pixel, frame): light candidate j hashes dimension 16 + j once and
 // draws its selection, texel, position (2) and resampling numbers from that hash, PCG-hashed
@@ -57,9 +59,12 @@ layout(push_constant) uniform CandidateParams {
 layout(constant_id = 3) const bool LIGHT_BVH = true;
 
 const uint LIGHT_DIMENSIONS = 16u;
+// After the most light candidates (src/methods/restir/mod.rs's MAX_CANDIDATES)...
 const uint BSDF_DIMENSIONS = 16u + 8u * 512u;
+// ...and the most BSDF candidates (MAX_BSDF_CANDIDATES); a unit test of mod.rs holds these
+// to the Rust constants.
 const uint STREAM_DIMENSIONS = BSDF_DIMENSIONS + 8u * 16u;
-// The most streams (src/methods/restir/mod.rs's MAX_CANDIDATE_SHADOW_RAYS).
+// The most streams (MAX_CANDIDATE_SHADOW_RAYS).
 const uint MAX_STREAMS = 8u;
 
 void main() {
@@ -155,7 +160,8 @@ void main() {
         float target = luminance(restir_contribution(s, entry, y, w_dir, dist, to_area));
         if (!(target > 0.0)) continue;
         float w = target / ((m_light * p_light + m_bsdf * p_bsdf) * to_area);
-        uint t = k % streams;
+        // Dealt on after the light candidates, so that the streams' sizes differ by at most one.
+        uint t = (params.light_candidates + k) % streams;
         if (reservoir_take(weight_sum[t], w, random(seed, index, frame, dim + 3u))) {
             chosen_entry[t] = entry;
             chosen_y[t] = y;
@@ -176,7 +182,8 @@ void main() {
         return;
     }
     // The visible picks resampled by their streams' weight sums (the header). Where none is
-    // visible the reservoir keeps the first stream's pick with W = 0 (T = 1's hidden sample).
+    // visible the reservoir keeps the first non-empty stream's pick with W = 0 (T = 1's hidden
+    // sample).
     float visible_sum = 0.0;
     uint kept = NO_LIGHT;
     for (uint t = 0u; t < streams; ++t) {
@@ -187,6 +194,12 @@ void main() {
                               random(seed, index, frame, STREAM_DIMENSIONS + t))) {
             kept = t;
         }
+    }
+    // Finite streams can still sum past f32's range (T > 1): dropped and counted as above.
+    if (isinf(visible_sum)) {
+        count_nonfinite_estimate();
+        reservoirs[index] = r;
+        return;
     }
     if (kept != NO_LIGHT) {
         r.sample_point = vec4(chosen_y[kept], uintBitsToFloat(chosen_entry[kept]));

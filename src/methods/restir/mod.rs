@@ -130,6 +130,9 @@ impl Default for RestirSettings {
 /// iterations to the rays.
 pub const MAX_CANDIDATES: u32 = 512;
 
+/// Most BSDF candidates (their random-number dimensions in glsl are laid out for this many).
+pub const MAX_BSDF_CANDIDATES: u32 = 16;
+
 /// Most candidate streams shadow-tested (glsl's MAX_STREAMS: each stream's pick is held in the
 /// invocation's registers until the shadow rays).
 pub const MAX_CANDIDATE_SHADOW_RAYS: u32 = 8;
@@ -155,7 +158,10 @@ pub const SETTINGS: &[Setting<RestirSettings>] = &[
     field_setting!(
         "bsdf_candidates",
         bsdf_candidates,
-        Kind::Count { min: 0, max: 16 },
+        Kind::Count {
+            min: 0,
+            max: MAX_BSDF_CANDIDATES
+        },
         Count,
         "B: BSDF-sampled candidates per pixel and frame (an emissive hit or the environment), \
          combined with the light candidates by the balance heuristic.",
@@ -172,8 +178,8 @@ pub const SETTINGS: &[Setting<RestirSettings>] = &[
          streams, each resampled by the unshadowed contribution; each stream's pick is \
          shadow-tested and a visible one kept, resampled by the streams' weights (T shadow rays \
          a pixel instead of one; unbiased). Pays where most candidates are hidden: on the \
-         many-light hall's walk 2 streams cut relMSE 13% for 2% more frame time \
-         (scenes/suites/realtime.toml).",
+         many-light hall's walk 2 streams cut relMSE 13% at about the same frame time (one \
+         run; scenes/suites/realtime.toml).",
     ),
     common_settings!(
         light_sampler,
@@ -551,6 +557,27 @@ impl Drop for RestirFrames<'_> {
                 reservoirs,
                 light_keys: std::mem::take(&mut self.light_keys),
             });
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The candidate kernel lays out its random-number dimensions and its streams' registers
+    /// for the settings' maxima: raising one in Rust alone would overlap dimensions or cap T.
+    #[test]
+    fn the_candidate_kernel_is_laid_out_for_the_settings_maxima() {
+        let glsl = include_str!("../../../glsl/restir/generate_restir_candidates.comp");
+        for line in [
+            format!("const uint BSDF_DIMENSIONS = 16u + 8u * {MAX_CANDIDATES}u;"),
+            format!(
+                "const uint STREAM_DIMENSIONS = BSDF_DIMENSIONS + 8u * {MAX_BSDF_CANDIDATES}u;"
+            ),
+            format!("const uint MAX_STREAMS = {MAX_CANDIDATE_SHADOW_RAYS}u;"),
+        ] {
+            assert!(glsl.contains(&line), "{line}");
         }
     }
 }
