@@ -8,7 +8,7 @@
 //!   hemisphere that faces it, so every pixel's mean is 1/2.
 //!
 //! `cargo run --example custom_method` prints the figures; tests/custom_method.rs runs the
-//! same under `cargo test` (so CI runs it). README "Adding a method" walks through the steps.
+//! same under `cargo test` (so CI runs it). docs/adding-a-method.md walks through the steps.
 
 use std::path::{Path, PathBuf};
 

@@ -1,7 +1,7 @@
 //! Any method across many seeds on one scene: the image mean against the reference's, relMSE
 //! against a split reference, GPU time and the method's stats, averaged over seeds: how the
-//! README's many-seed figures were measured (bir's U office means, bundles' environment checks,
-//! env's equal-error ratios).
+//! many-seed figures of docs/RESULTS.md and docs/methods/ were measured (bir's U office means,
+//! bundles' environment checks, env's equal-error ratios).
 //!
 //!   cargo run --release --example method_seeds -- SCENE.toml WIDTHxHEIGHT SEEDS REF_SPP \
 //!       REF_DEPTH "bir:strategy=both,vpls=256,frames=8" "bundles:directions=uniform" ...

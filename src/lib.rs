@@ -5,7 +5,7 @@
 //! embedded Cornell box), the scene uploaded, a method with its settings (built as a struct,
 //! or by name from the keys `irad methods NAME` lists, as a suite file gives them), and the
 //! image it returns, with its per-pass GPU times. A method of your own is a `RenderMethod`
-//! added to a `Registry` (README "Adding a method", examples/custom_method.rs):
+//! added to a `Registry` (docs/adding-a-method.md, examples/custom_method.rs):
 //!
 //! ```
 //! use irad::methods::reference::Reference;

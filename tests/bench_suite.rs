@@ -1635,7 +1635,7 @@ fn per_frame_references_resume_shard_and_are_used_by_suites() {
     let _ = fs::remove_dir_all(&dir);
 }
 
-/// Frame-time budgets (README "Benchmark suites"): a suite with frame-time budgets on an animated scene calibrates the count
+/// Frame-time budgets (docs/suites.md): a suite with frame-time budgets on an animated scene calibrates the count
 /// per frame budget, renders the frames, and its results hold per-frame figures (one per frame
 /// of its `frames`), the worst frame and the flicker; the CSV has them, the report a
 /// frame-time table and a per-frame chart with a line per run and a point per frame, and the

@@ -1,4 +1,4 @@
-//! Scene loading (docs/DESIGN.md "Scene files"; README "Scenes"), CPU only: every committed
+//! Scene loading (docs/DESIGN.md "Scene files"; docs/scenes.md), CPU only: every committed
 //! scene and the embedded default load with the documented conventions; every kind of bad input
 //! gives one error naming the file, the field and the value.
 

@@ -38,8 +38,8 @@ uint random_u31(uint seed, uint pixel, uint sample_index, uint dimension) {
 }
 
 float radical_inverse(uint base, uint i) {
-    // Base 2 without a loop: the same value for i < 2^24 (and loops are costly: see the
-    // README's "Kernels" on lavapipe's loop limit).
+    // Base 2 without a loop: the same value for i < 2^24 (and loops are costly: see
+    // docs/code-layout.md "Kernels" on lavapipe's loop limit).
     if (base == 2u) return float(bitfieldReverse(i) >> 8u) * (1.0 / 16777216.0);
     float inv_base = 1.0 / float(base);
     float scale = inv_base;

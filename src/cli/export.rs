@@ -1,4 +1,4 @@
-//! `irad export`: a scene written for another renderer (README "Export to Mitsuba 3").
+//! `irad export`: a scene written for another renderer (docs/export.md).
 
 use std::path::PathBuf;
 

@@ -58,7 +58,7 @@ pub fn run(
 ) -> Result<()> {
     let Some(animation) = &scene.animation else {
         bail!(
-            "--sequence: {} is not animated (no [animation] in its file; README \"Animation\")",
+            "--sequence: {} is not animated (no [animation] in its file; docs/animation.md)",
             render::scene_label(scene)
         );
     };

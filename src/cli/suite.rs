@@ -19,7 +19,7 @@ use super::device_line;
 
 #[derive(clap::Args)]
 pub struct SuiteArgs {
-    /// Suite TOML file (format in README, "Benchmark suites"); scenes/failure/suite.toml
+    /// Suite TOML file (format in docs/suites.md); scenes/failure/suite.toml
     /// is the stability suite.
     #[arg(required_unless_present = "quick", conflicts_with = "quick")]
     suite: Option<PathBuf>,

@@ -56,7 +56,7 @@ pub struct Setting<S> {
     /// The suite file's key; the CLI flag is `--` + the key with `_` written `-`.
     pub key: &'static str,
     pub kind: Kind,
-    /// What it does, for `irad render --help`, `irad methods` and the README.
+    /// What it does, for `irad render --help`, `irad methods` and docs/commands.md.
     pub help: &'static str,
     /// The value in `s`; None where it is unset (then records leave it out and
     /// `unset` says what that means).
@@ -683,7 +683,8 @@ macro_rules! common_settings {
             Count,
             "Direct-light samples per pixel and frame, each from its own camera ray at a new \
              subpixel position, so direct light and the pixel footprint get this many samples \
-             per expensive frame while the VPL gather shades one position (README \"Budgets\").",
+             per expensive frame while the VPL gather shades one position \
+             (docs/methods/ir.md \"Budgets\").",
         )
     };
 }

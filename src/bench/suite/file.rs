@@ -2,7 +2,7 @@
 //! budgets, the reference settings, and how each run is timed. Parsed with unknown fields
 //! refused, every method setting checked by its table (`Registry::from_params`) before anything renders,
 //! then expanded into a deterministic list of runs (scene, then method entry, then budget), the
-//! order `--shard` splits. Format in README ("Benchmark suites").
+//! order `--shard` splits. Format in docs/suites.md.
 
 use std::collections::BTreeSet;
 use std::ops::Range;

@@ -166,7 +166,8 @@ pub const SETTINGS: &[Setting<EnvSettings>] = &[
          luminance mip pyramid descended 2x2 per level, as Falcor and Mitsuba 3; MIS with \
          BRDF), alpha (dynamic's samplers split per pixel by Lu 14 ch. 5's estimated alpha; \
          writes OUT.alpha.{exr,png}: red light samples, green BRDF samples). At equal time \
-         (README \"env\"): dynamic wins by 2.2-2.9x over latlong on sun-behind; latlong by \
+         (docs/RESULTS.md \"env: strategies at equal time\"): dynamic wins by 2.2-2.9x over \
+         latlong on sun-behind; latlong by \
          1.4x on glossy geometry under an open sky (glossy-env) and 1.5x on the dynamic \
          moving-sun. Per frame of a dynamic sky at equal frame time (scenes/suites/realtime.toml: \
          moving-sun-sequence and rising-sun-sequence, 64x48, 8 samples a frame, 13 and 52 ms \

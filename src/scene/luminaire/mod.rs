@@ -451,7 +451,7 @@ impl Luminaire {
         };
         let toml_path = dir.join("luminaire.toml");
         let text = format!(
-            "# A light-field luminaire (README \"Light-field luminaires\"); {what}.\n\
+            "# A light-field luminaire (docs/methods/lightfield.md); {what}.\n\
              grid = [{w}, {h}]\npitch = [{:?}, {:?}]\nbasis = \"{}\"\ndelta = {:?}\n\
              image_size = [{:?}, {:?}]\natlas = \"{atlas}\"\n",
             g.pitch[0],
