@@ -43,6 +43,59 @@ fn main() {
     )
     .unwrap();
     reference_code_hash(Path::new(&root));
+    git_commit(Path::new(&root));
+}
+
+/// The commit the binary is built from and whether its sources differ from it, for the render
+/// records (IRAD_GIT_COMMIT: 40 hex digits, "-dirty" appended where src, glsl, spv, build.rs
+/// or the Cargo files differ from the commit; "unknown" outside a git checkout). Rerun where
+/// the commit or those sources change.
+fn git_commit(root: &Path) {
+    for rel in ["src", "glsl", "build.rs", "Cargo.toml", "Cargo.lock"] {
+        println!("cargo:rerun-if-changed={rel}");
+    }
+    let git = |args: &[&str]| {
+        std::process::Command::new("git")
+            .arg("-C")
+            .arg(root)
+            .args(args)
+            .output()
+            .ok()
+            .filter(|o| o.status.success())
+            .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
+    };
+    // The files naming the commit: HEAD, the branch it points to, packed refs.
+    for path in [
+        "HEAD",
+        "packed-refs",
+        &git(&["symbolic-ref", "-q", "HEAD"]).unwrap_or_default(),
+    ] {
+        if let Some(p) = git(&["rev-parse", "--git-path", path]).filter(|_| !path.is_empty()) {
+            let p = root.join(p);
+            if p.exists() {
+                println!("cargo:rerun-if-changed={}", p.display());
+            }
+        }
+    }
+    let commit = match git(&["rev-parse", "HEAD"]) {
+        Some(c) if c.len() == 40 => {
+            let dirty = git(&[
+                "status",
+                "--porcelain",
+                "--",
+                "src",
+                "glsl",
+                "spv",
+                "build.rs",
+                "Cargo.toml",
+                "Cargo.lock",
+            ])
+            .is_none_or(|s| !s.is_empty());
+            format!("{c}{}", if dirty { "-dirty" } else { "" })
+        }
+        _ => "unknown".into(),
+    };
+    println!("cargo:rustc-env=IRAD_GIT_COMMIT={commit}");
 }
 
 /// Sources that shape a reference image besides its kernels' SPIR-V (hashed separately at run

@@ -182,6 +182,7 @@ pub fn render_checked_with(
         method: job.method.name().into(),
         parameters: job.method.parameters(),
         scene: scene_label(job.scene),
+        scene_path: job.scene.source.as_deref().map(image::sidecar::absolute),
         scene_hash: format!("{:016x}", job.scene.content_hash),
         resolution: [cam.width, cam.height],
         seed: job.method.seed() as u64,
@@ -203,10 +204,12 @@ pub fn render_checked_with(
         gpu_ms_total: output.passes.total_gpu_ms(),
         wall_ms: output.wall_ms,
         metrics,
+        reference: job.reference.as_deref().map(image::sidecar::absolute),
         warnings,
         stats: output.stats.iter().cloned().collect(),
         files: OutputFiles::new(&job.out, &names).names(),
         irad_version: image::sidecar::IRAD_VERSION.into(),
+        git_commit: image::sidecar::GIT_COMMIT.into(),
     };
     let files = image::write_all(&job.out, &output.image, &record, job.exposure, &output.maps)?;
     Ok(RenderReport {

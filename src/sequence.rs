@@ -135,6 +135,12 @@ pub struct SequenceRecord {
     pub device: String,
     pub driver: String,
     pub irad_version: String,
+    /// The commit irad was built from (`RenderRecord::git_commit`).
+    #[serde(default)]
+    pub git_commit: String,
+    /// The scene file's absolute path (`RenderRecord::scene_path`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub scene_path: Option<String>,
     /// The PNGs' exposure in stops.
     pub exposure: f32,
     /// Each complete frame, in order.
@@ -249,9 +255,11 @@ pub fn render_sequence(
         device: info.name.clone(),
         driver: info.driver.clone(),
         irad_version: image::sidecar::IRAD_VERSION.into(),
+        git_commit: image::sidecar::GIT_COMMIT.into(),
+        scene_path: job.scene.source.as_deref().map(image::sidecar::absolute),
         exposure: job.exposure,
         rendered: vec![],
-        reference: job.reference.as_ref().map(|r| r.display().to_string()),
+        reference: job.reference.as_deref().map(image::sidecar::absolute),
         metrics: None,
     };
     if let Some(dir) = &job.reference {

@@ -220,7 +220,16 @@ fn render_writes_exr_png_and_json() {
     let out = dir.join("spot");
     let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/spot-light/scene.toml");
     let o = irad(
-        &["render", scene, "--spp", "2", "-o", out.to_str().unwrap()],
+        &[
+            "render",
+            scene,
+            "--spp",
+            "2",
+            "--resolution",
+            "40x30",
+            "-o",
+            out.to_str().unwrap(),
+        ],
         &[("IRAD_VALIDATE", "1")],
     );
     let text = String::from_utf8_lossy(&o.stdout);
@@ -230,6 +239,7 @@ fn render_writes_exr_png_and_json() {
         assert!(text.contains(label), "`{label}` missing:\n{text}");
     }
     let image = irad::image::exr::read(&out.with_extension("exr")).unwrap();
+    assert_eq!((image.width, image.height), (40, 30), "--resolution");
     assert!(image.pixels.iter().flatten().all(|v| v.is_finite()));
     assert!(image.mean()[0] > 0.0, "the spot light scene rendered black");
     assert!(out.with_extension("png").exists());
@@ -245,6 +255,8 @@ fn render_writes_exr_png_and_json() {
             scene,
             "--spp",
             "2",
+            "--resolution",
+            "40x30",
             "-o",
             dir.join("again").to_str().unwrap(),
             "--reference",
@@ -256,6 +268,111 @@ fn render_writes_exr_png_and_json() {
     let record = irad::image::RenderRecord::read(&dir.join("again.json")).unwrap();
     let m = record.metrics.expect("metrics with --reference");
     assert_eq!((m.rel_mse, m.bias, m.nan_inf), (0.0, 0.0, 0));
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// `irad compare`: two EXRs give the figures `render --reference` gives, the figures as JSON
+/// and three error maps with colour bars; two folders of frames give each frame's and the
+/// sequence's; a file against a folder and a missing frame are refused by name.
+#[test]
+fn compare_scores_images_and_folders() {
+    let dir = temp_dir("compare");
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/spot-light/scene.toml");
+    let path = |name: &str| dir.join(name).to_str().unwrap().to_string();
+    for (name, spp) in [("ref", "16"), ("x", "2")] {
+        let o = irad(
+            &[
+                "render",
+                scene,
+                "--spp",
+                spp,
+                "--resolution",
+                "24x16",
+                "-o",
+                &path(name),
+            ],
+            &[],
+        );
+        assert!(o.status.success(), "{}", stderr(&o));
+    }
+    let o = irad(
+        &[
+            "render",
+            scene,
+            "--spp",
+            "2",
+            "--resolution",
+            "24x16",
+            "-o",
+            &path("scored"),
+            "--reference",
+            &path("ref.exr"),
+        ],
+        &[],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let record = irad::image::RenderRecord::read(&dir.join("scored.json")).unwrap();
+    assert!(record.reference.as_deref().unwrap().ends_with("ref.exr"));
+    assert!(std::path::Path::new(record.scene_path.as_deref().unwrap()).is_absolute());
+    assert!(!record.git_commit.is_empty());
+    let o = irad(
+        &[
+            "compare",
+            &path("x.exr"),
+            &path("ref.exr"),
+            "-o",
+            &path("cmp"),
+        ],
+        &[],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.contains("relMSE") && text.contains("FLIP"), "{text}");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("cmp.json")).unwrap()).unwrap();
+    let expected = record.metrics.unwrap();
+    assert_eq!(json["metrics"]["rel_mse"].as_f64(), Some(expected.rel_mse));
+    assert_eq!(json["metrics"]["bias"].as_f64(), Some(expected.bias));
+    assert!(json["metrics"]["flip"].as_f64().is_some_and(|f| f > 0.0));
+    for map in ["cmp.png", "cmp_signed.png", "cmp_flip.png"] {
+        let decoder = png::Decoder::new(std::io::BufReader::new(
+            std::fs::File::open(dir.join(map)).unwrap(),
+        ));
+        let info = decoder.read_info().unwrap();
+        let (w, h) = (info.info().width, info.info().height);
+        // The map (24x16) above its bar, widened for the labels.
+        assert!(w >= 24 && h > 16 + 8, "{map}: {w}x{h}");
+    }
+    // Folders: frame 3 of each twice, the test's frames once the reference's.
+    for (folder, from) in [("a", "x.exr"), ("b", "ref.exr")] {
+        std::fs::create_dir_all(dir.join(folder)).unwrap();
+        for f in ["frame_0003.exr", "frame_0004.exr"] {
+            std::fs::copy(dir.join(from), dir.join(folder).join(f)).unwrap();
+        }
+    }
+    let o = irad(
+        &["compare", &path("a"), &path("b"), "-o", &path("seq")],
+        &[],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("seq/compare.json")).unwrap())
+            .unwrap();
+    assert_eq!(json["frames"].as_array().unwrap().len(), 2);
+    assert_eq!(json["frames"][1]["frame"], 4);
+    assert_eq!(
+        json["sequence"]["mean"]["rel_mse"].as_f64(),
+        Some(expected.rel_mse)
+    );
+    assert!(dir.join("seq/frame_0004_signed.png").is_file());
+    // Refusals, each one line naming what is wrong.
+    let o = irad(&["compare", &path("x.exr"), &path("b")], &[]);
+    assert_clean_error(&o, &["a folder", "two EXRs or two folders"]);
+    std::fs::remove_file(dir.join("b/frame_0004.exr")).unwrap();
+    let o = irad(&["compare", &path("a"), &path("b")], &[]);
+    assert_clean_error(&o, &["lacks 1", "frame_0004.exr"]);
+    let o = irad(&["compare", &path("missing.exr"), &path("ref.exr")], &[]);
+    assert_clean_error(&o, &["missing.exr"]);
     std::fs::remove_dir_all(&dir).ok();
 }
 
@@ -281,6 +398,14 @@ fn render_errors_name_the_file() {
         &[],
     );
     assert_clean_error(&o, &["missing.exr"]);
+    // clap's own message: its first line names the flag, the value and the form.
+    let o = irad(&["render", scene, "--resolution", "640x0"], &[]);
+    let err = stderr(&o);
+    assert!(!o.status.success() && !err.contains("panicked"), "{err}");
+    let first = err.lines().next().unwrap_or_default();
+    for needle in ["error: ", "--resolution", "640x0", "WIDTHxHEIGHT", "16384"] {
+        assert!(first.contains(needle), "`{needle}` missing from: {err}");
+    }
     std::fs::remove_dir_all(&dir).ok();
 }
 

@@ -585,6 +585,7 @@ fn record() -> RenderRecord {
         method: "reference".into(),
         parameters,
         scene: "embedded:cornell-box".into(),
+        scene_path: Some("/home/u/scenes/a b/scene.toml".into()),
         scene_hash: "0123456789abcdef".into(),
         resolution: [256, 192],
         seed: u64::MAX,
@@ -616,12 +617,14 @@ fn record() -> RenderRecord {
             nan_inf: 0,
             flip: Some(0.125),
         }),
+        reference: Some("/home/u/out/reference.exr".into()),
         warnings: vec!["spot light 2: \"cone\" wider than 90 degrees".into()],
         stats: [("kept_reverse_fraction".to_string(), 0.25)]
             .into_iter()
             .collect(),
         files: vec!["cornell.exr".into(), "cornell.png".into()],
         irad_version: sidecar::IRAD_VERSION.into(),
+        git_commit: format!("{}-dirty", "0123456789abcdef0123456789abcdef01234567"),
     }
 }
 

@@ -7,7 +7,8 @@
 //!   here (a few hundred small emitters spanning three orders of magnitude of power, a point
 //!   and a spot light, occluders) with both light samplers, and the environment-lit
 //!   sun-behind scene; the biased combination's offset on the same scenes is
-//!   measured and printed (README "restir" quotes it);
+//!   measured and printed (docs/RESULTS.md "restir: image means against the reference"
+//!   quotes it);
 //! - pure RIS and full reuse against the exact per-pixel direct light of a diffuse plane under
 //!   two point lights and an emissive triangle (the RIS weights' and MIS weights' integral);
 //! - the band of pixels within the spatial radius of a depth edge, where neighbours are rejected
@@ -883,6 +884,7 @@ fn every_pass_is_timed_by_name() {
             "restir spatial",
             "restir shade",
         ];
+        let mut mean_m = Vec::new();
         for temporal in [true, false] {
             let s = RestirSettings {
                 frames: 3,
@@ -901,7 +903,23 @@ fn every_pass_is_timed_by_name() {
                 assert!((0.0..60_000.0).contains(&ms), "{name}: {ms} ms");
                 assert_eq!(*count, 3, "{name}: once per frame");
             }
+            // Its stats: the Cornell box's light reaches most of what the camera sees; reuse
+            // grows the confidence M past the frame's 33 candidates, temporal reuse the most.
+            let stat = |k: &str| {
+                out.stats
+                    .iter()
+                    .find(|(n, _)| n == k)
+                    .unwrap_or_else(|| panic!("no stat {k}: {:?}", out.stats))
+                    .1
+            };
+            let visible = stat("final_visible_fraction");
+            assert!((0.5..=1.0).contains(&visible), "visible fraction {visible}");
+            mean_m.push(stat("final_mean_m"));
         }
+        assert!(
+            mean_m[1] > 33.0 && mean_m[0] > 2.0 * mean_m[1],
+            "mean M with and without temporal reuse: {mean_m:?}"
+        );
     });
 }
 

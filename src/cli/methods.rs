@@ -3,6 +3,7 @@
 
 use anyhow::Result;
 
+use irad::methods::lights::Support;
 use irad::methods::settings::{describe_needs, Kind};
 use irad::methods::Registry;
 
@@ -19,6 +20,27 @@ pub fn run(args: &MethodsArgs) -> Result<()> {
         println!("methods (`irad methods NAME` lists one's settings):");
         for e in Registry::builtin().entries() {
             println!("  {:<12}{}", e.name(), e.summary());
+        }
+        println!();
+        println!(
+            "what each renders (yes; needs: a scene without it is declined; - declined) and the \
+             flag of its count, the work `irad render` and a suite's budgets set:"
+        );
+        println!(
+            "  {:<12}{:<14}{:<13}{:<11}{:<14}luminaires",
+            "method", "count flag", "environment", "emissive", "point, spot"
+        );
+        for e in Registry::builtin().entries() {
+            let l = e.lights();
+            println!(
+                "  {:<12}{:<14}{:<13}{:<11}{:<14}{}",
+                e.name(),
+                flag(e.count_key()),
+                support(l.environment),
+                support(l.area),
+                support(l.point),
+                support(l.luminaires)
+            );
         }
         return Ok(());
     };
@@ -65,6 +87,15 @@ pub fn run(args: &MethodsArgs) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// A kind of light's support as the methods table writes it.
+fn support(s: Support) -> &'static str {
+    match s {
+        Support::Renders => "yes",
+        Support::Needs(_) => "needs",
+        Support::Declines(_) => "-",
+    }
 }
 
 /// `text` in lines of at most `width` characters, broken at spaces.

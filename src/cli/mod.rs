@@ -1,6 +1,7 @@
 //! The `irad` command line: one module per command; this one parses and dispatches.
 
 mod bench;
+mod compare;
 mod export;
 mod info;
 mod logger;
@@ -56,6 +57,10 @@ enum Command {
     /// flags (`irad methods METHOD` lists them with their defaults); a flag the chosen method
     /// does not take is an error.
     Render(render::RenderArgs),
+    /// Score an image against a reference (two EXRs of one size, or two folders of frames
+    /// from `irad render --sequence`): relMSE, RMSE, bias, outliers, Lab error, NaN/Inf and
+    /// HDR-FLIP, and with -o the error maps as PNGs with colour bars and the figures as JSON.
+    Compare(compare::CompareArgs),
     /// List the methods, or one method's settings with their defaults and ranges: the flags
     /// of `irad render --method NAME` and the keys of a suite file's `params`.
     Methods(methods::MethodsArgs),
@@ -73,7 +78,7 @@ enum Command {
     /// Benchmarks that measure and print.
     #[command(subcommand)]
     Bench(bench::Bench),
-    /// Light-field luminaires (Lu 14 ch. 4; format in README "Light-field luminaires").
+    /// Light-field luminaires (Lu 14 ch. 4; format in docs/methods/lightfield.md).
     #[command(subcommand)]
     Luminaire(luminaire::LuminaireCommand),
     /// Write a scene for another renderer, to cross-check irad's images there.
@@ -132,6 +137,7 @@ fn run(mut cli: Cli) -> Result<()> {
         Command::Info => info::info(cli.device.as_ref()),
         Command::Render(args) => render::run(&options, args),
         Command::Methods(args) => methods::run(&args),
+        Command::Compare(args) => compare::run(args),
         Command::Selfcheck => info::selfcheck(&Context::new(&options)?),
         Command::Shaders { check } => shaders::run(check),
         Command::Luminaire(command) => luminaire::run(command),

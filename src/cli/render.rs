@@ -14,7 +14,7 @@ use super::{device_line, progress};
 
 #[derive(clap::Args)]
 pub struct RenderArgs {
-    /// Scene TOML file (format: README "Scenes"); default: the embedded Cornell box.
+    /// Scene TOML file (format: docs/scenes.md); default: the embedded Cornell box.
     scene: Option<PathBuf>,
     /// Rendering method (`irad methods` lists them and their settings).
     #[arg(long, default_value = "reference", value_parser = method_names())]
@@ -28,6 +28,11 @@ pub struct RenderArgs {
     /// Exposure of the PNG in stops (the EXR is never tone mapped).
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
     exposure: f32,
+    /// Render at WIDTHxHEIGHT instead of the scene's `camera.resolution` (each in 1..=16384).
+    /// The vertical field of view is kept, so another aspect ratio shows more or less of the
+    /// scene's sides.
+    #[arg(long, value_name = "WxH", value_parser = super::parse_size)]
+    resolution: Option<(u32, u32)>,
     /// Reference EXR of the same scene and size: adds relMSE, RMSE, Lab error, bias and
     /// outliers against it to the JSON and the summary. With --sequence, a folder of the same
     /// animation's reference frames (an earlier --sequence): each frame is scored against its
@@ -95,6 +100,15 @@ pub fn run(options: &ContextOptions, args: RenderArgs) -> Result<()> {
             scene::load(path)?
         }
         None => scene::default_scene(),
+    };
+    let scene = match args.resolution {
+        Some((width, height)) => {
+            let mut scene = scene;
+            scene.camera.width = width;
+            scene.camera.height = height;
+            scene
+        }
+        None => scene,
     };
     if let Some(range) = &args.sequence {
         if args.frame.is_some() {

@@ -1,6 +1,7 @@
 //! Images out of irad (docs/DESIGN.md "Outputs"): float RGB frames, EXR in and out, PNG through a
 //! tone map, the JSON sidecar, and the error metrics every accuracy figure uses.
 
+pub mod error_maps;
 pub mod exr;
 pub mod flip;
 pub mod metrics;

@@ -73,7 +73,7 @@ pub fn error_map_rgb8(x: &Image, r: &Image, factor: u32) -> (u32, u32, Vec<u8>) 
 }
 
 /// The ramp: black, dark red, red, orange, yellow, white at equal steps of log10(e).
-fn heat(e: f64) -> [u8; 3] {
+pub(crate) fn heat(e: f64) -> [u8; 3] {
     const STOPS: [[f64; 3]; 6] = [
         [0.0, 0.0, 0.0],
         [0.35, 0.0, 0.05],

@@ -26,6 +26,10 @@ pub struct RenderRecord {
     pub parameters: BTreeMap<String, serde_json::Value>,
     /// Scene file path, or `embedded:cornell-box` for the built-in scene.
     pub scene: String,
+    /// The scene file's absolute path (none for the built-in scene), so a record found later
+    /// names the very file whatever folder it was rendered from.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub scene_path: Option<String>,
     /// Content hash of the scene and its assets, 16 hex digits.
     pub scene_hash: String,
     /// [width, height] in pixels.
@@ -48,9 +52,12 @@ pub struct RenderRecord {
     pub gpu_ms_total: Option<f64>,
     /// Wall-clock time of the render, upload to readback.
     pub wall_ms: f64,
-    /// Error against the reference, when one was given.
+    /// Error against the reference, when one was given...
     #[serde(default)]
     pub metrics: Option<Metrics>,
+    /// ...and that reference: the EXR's absolute path.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reference: Option<String>,
     #[serde(default)]
     pub warnings: Vec<String>,
     /// Method-specific figures (bir: fractions of kept VPLs per side, rays per kept VPL).
@@ -61,6 +68,22 @@ pub struct RenderRecord {
     #[serde(default)]
     pub files: Vec<String>,
     pub irad_version: String,
+    /// The commit irad was built from, "-dirty" appended where its sources differed from it
+    /// (build.rs; "unknown" outside a git checkout): timings move between commits.
+    #[serde(default)]
+    pub git_commit: String,
+}
+
+/// This build's commit (build.rs).
+pub const GIT_COMMIT: &str = env!("IRAD_GIT_COMMIT");
+
+/// `path` made absolute (the current folder joined where it is relative; symbolic links kept),
+/// as records write the files they name.
+pub fn absolute(path: &Path) -> String {
+    std::path::absolute(path)
+        .unwrap_or_else(|_| path.to_path_buf())
+        .display()
+        .to_string()
 }
 
 /// The GPU time of one pass, summed over its `count` dispatches.

@@ -50,6 +50,9 @@ pub struct Chart {
     /// Lines printed under the chart after its own notes (on points it could not chart):
     /// what the chart leaves out and why.
     pub notes: Vec<String>,
+    /// A horizontal line across the plot at this y, where positive and finite: the reference's
+    /// own relMSE, below which no run's figure can be read (its noise floor).
+    pub floor: Option<f64>,
 }
 
 /// A point as drawn, read back from an SVG written by `to_svg`.
@@ -120,6 +123,7 @@ mod fixtures {
             y_label: "relMSE".into(),
             series,
             notes: Vec::new(),
+            floor: None,
         }
     }
 

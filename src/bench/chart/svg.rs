@@ -79,10 +79,17 @@ impl Chart {
             .collect();
         let any = charted.iter().any(|s| !s.is_empty());
         let (x_log_min, x_log_max) = decade_range(charted.iter().flatten().map(|p| p.x));
-        let (y_log_min, y_log_max) = decade_range(charted.iter().flatten().flat_map(|p| {
-            let (lo, hi) = bar(p).unwrap_or((p.y, p.y));
-            [p.y, lo, hi]
-        }));
+        let floor = self.floor.filter(|f| f.is_finite() && *f > 0.0 && any);
+        let (y_log_min, y_log_max) = decade_range(
+            charted
+                .iter()
+                .flatten()
+                .flat_map(|p| {
+                    let (lo, hi) = bar(p).unwrap_or((p.y, p.y));
+                    [p.y, lo, hi]
+                })
+                .chain(floor),
+        );
         let axes = Axes {
             x_log_min,
             x_log_max,
@@ -188,6 +195,16 @@ impl Chart {
             axes.bottom
         ));
         self.write_axes(&mut out, &axes);
+
+        // The reference's noise floor: a dotted grey line with its label at the right.
+        if let Some(f) = floor {
+            let (_, y) = axes.to_px(10f64.powf(axes.x_log_min), f);
+            out.line(format_args!(
+                r##"<g class="floor" data-y="{f}"><line x1="{LEFT:.3}" y1="{y:.3}" x2="{RIGHT:.3}" y2="{y:.3}" stroke="#888888" stroke-width="1" stroke-dasharray="2,3"/><text x="{:.3}" y="{:.3}" text-anchor="end" font-size="{LABEL_FONT}" fill="#666666">reference's own relMSE {f:.2e}</text></g>"##,
+                RIGHT - 4.0,
+                y - 4.0
+            ));
+        }
 
         // Lines and circles, one group per series.
         for (i, ((s, points), px)) in self.series.iter().zip(&charted).zip(&px).enumerate() {

@@ -147,6 +147,7 @@ pub fn chart(results: &SuiteResults, scene: &str) -> Chart {
             y_label: "relMSE, mean over frames and seeds".into(),
             series,
             notes: Vec::new(),
+            floor: None,
         };
     }
     Chart {
@@ -155,6 +156,7 @@ pub fn chart(results: &SuiteResults, scene: &str) -> Chart {
         y_label: "relMSE".into(),
         series,
         notes: Vec::new(),
+        floor: results.references.get(scene).and_then(|r| r.rel_mse),
     }
 }
 

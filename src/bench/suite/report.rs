@@ -7,7 +7,7 @@ use std::fmt::Write as _;
 use crate::image::preview::{ERROR_MAP_MAX, ERROR_MAP_MIN};
 
 use super::output::{animated, chart_path, frames_chart_path};
-use super::results::{RunRecord, Status, SuiteResults};
+use super::results::{RunRecord, Status, SuiteResults, STAR_MAX_BIAS, STAR_MAX_OUTLIERS};
 
 /// The mark of a Pareto-optimal run in the report's tables.
 pub const PARETO_MARK: &str = "★";
@@ -48,9 +48,12 @@ pub fn markdown(results: &SuiteResults) -> String {
          metrics\"); flicker is the per-pixel temporal variance over the flicker frames \
          relative to the reference, averaged, square-rooted. {PARETO_MARK} marks the runs no other \
          run of the scene beats in both GPU time and relMSE (on the same device); a run with \
-         NaN/Inf is never marked.{LIMITED_MARK} marks a relMSE within {LIMITED_FACTOR}x of the \
+         NaN/Inf, a bias over {:.0}% or outliers over {:.0}% of its pixels (a plainly wrong \
+         image: black, or fireflies) is never marked.{LIMITED_MARK} marks a relMSE within {LIMITED_FACTOR}x of the \
          reference's own (estimated from its two halves): there the reference's noise, not the \
-         run, sets the figure; render the reference with more samples."
+         run, sets the figure; render the reference with more samples.",
+        100.0 * STAR_MAX_BIAS,
+        100.0 * STAR_MAX_OUTLIERS
     );
     let _ = writeln!(
         md,
@@ -66,6 +69,7 @@ pub fn markdown(results: &SuiteResults) -> String {
     for scene in results.scenes() {
         let runs: Vec<&RunRecord> = results.runs.iter().filter(|r| r.scene == scene).collect();
         let _ = writeln!(md, "## {scene}\n");
+        md += &summary(&runs);
         let reference = results.references.get(&scene);
         if let Some(r) = reference {
             if !r.expected_to_fail.is_empty() {
@@ -135,6 +139,7 @@ pub fn markdown(results: &SuiteResults) -> String {
         md += "\n";
         md += &missed_footnotes(&runs);
         md += &equal_time_table(&runs);
+        md += &pass_times(&runs);
         let with_stats: Vec<&&RunRecord> = runs.iter().filter(|r| !r.stats.is_empty()).collect();
         if !with_stats.is_empty() {
             md += "Method figures (averaged over each run's images):\n\n";
@@ -365,17 +370,130 @@ fn equal_time_table(runs: &[&RunRecord]) -> String {
     md
 }
 
+/// The scene's one-line verdict: at each time budget, the run with the lowest net relMSE x GPU
+/// time among those plausibly right (the star's thresholds) and how far ahead of the next
+/// method it is; without time budgets, the starred runs.
+fn summary(runs: &[&RunRecord]) -> String {
+    let plausible = |r: &RunRecord| {
+        r.status == Status::Ok
+            && r.metrics.is_some_and(|m| {
+                m.nan_inf == 0 && m.bias <= STAR_MAX_BIAS && m.outliers <= STAR_MAX_OUTLIERS
+            })
+    };
+    let cost = |r: &RunRecord| -> Option<f64> {
+        let e = net_rel_mse(r)? * r.gpu_ms?;
+        (plausible(r) && e.is_finite() && e > 0.0).then_some(e)
+    };
+    let mut budgets: Vec<f64> = runs
+        .iter()
+        .filter_map(|r| r.time_ms.or(r.frame_ms))
+        .collect();
+    budgets.sort_by(f64::total_cmp);
+    budgets.dedup();
+    let mut parts = Vec::new();
+    for budget in &budgets {
+        let mut ranked: Vec<(f64, &RunRecord)> = runs
+            .iter()
+            .copied()
+            .filter(|r| r.time_ms.or(r.frame_ms) == Some(*budget))
+            .filter_map(|r| Some((cost(r)?, r)))
+            .collect();
+        ranked.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let per = if runs.iter().any(|r| r.frame_ms == Some(*budget)) {
+            " a frame"
+        } else {
+            ""
+        };
+        parts.push(match ranked.as_slice() {
+            [] => format!("at {budget} ms{per} no run is plausibly right"),
+            [(_, only)] => format!(
+                "at {budget} ms{per} {} (the only plausible run)",
+                only.label
+            ),
+            [(best, winner), rest @ ..] => {
+                match rest.iter().find(|(_, r)| r.label != winner.label) {
+                    Some((next, runner)) => format!(
+                        "at {budget} ms{per} {} wins, {:.2}x ahead of {}",
+                        winner.label,
+                        next / best,
+                        runner.label
+                    ),
+                    None => format!("at {budget} ms{per} {} wins", winner.label),
+                }
+            }
+        });
+    }
+    if budgets.is_empty() {
+        let starred: Vec<String> = runs
+            .iter()
+            .filter(|r| r.pareto)
+            .map(|r| format!("{} {}", r.label, r.budget))
+            .collect();
+        parts.push(match starred.is_empty() {
+            true => "no run is plausibly right (none starred)".into(),
+            false => format!(
+                "the best trade-offs of time and error: {}",
+                starred.join("; ")
+            ),
+        });
+    }
+    format!(
+        "**Summary** (net relMSE x GPU time among the runs within the star's bias and outlier \
+         thresholds): {}.\n\n",
+        parts.join("; ")
+    )
+}
+
+/// Each run's GPU time per pass (medians over its repeats): where the time goes.
+fn pass_times(runs: &[&RunRecord]) -> String {
+    let with: Vec<&&RunRecord> = runs.iter().filter(|r| !r.pass_gpu_ms.is_empty()).collect();
+    if with.is_empty() {
+        return String::new();
+    }
+    let mut md = String::from("GPU ms per pass (median over the run's repeats):\n\n");
+    for r in with {
+        let passes: Vec<String> = r
+            .pass_gpu_ms
+            .iter()
+            .map(|(name, ms)| format!("{name} {}", fixed(*ms, 2)))
+            .collect();
+        let _ = writeln!(md, "- {} {}: {}", r.label, r.budget, passes.join(", "));
+    }
+    md + "\n"
+}
+
 /// Marks the time of a run whose time budget cannot be met on this device (results.rs,
 /// `budget_missed`); a footnote under the table gives the times.
 pub const MISSED_MARK: &str = " †";
 
 fn missed_mark(r: &RunRecord) -> &'static str {
-    if r.budget_missed {
+    if r.budget_missed || off_budget(r).is_some() {
         MISSED_MARK
     } else {
         ""
     }
 }
+
+/// A run whose time budget was met in count but not in time: its time (GPU, or wall without
+/// timestamps) over the budget by more than `OFF_BUDGET` or under it by as much (the
+/// calibration's line predicted the count poorly). The ratio, its time and which clock; None
+/// within the band, for runs without a time budget, and for runs that cannot meet it at all
+/// (`budget_missed`, said apart).
+fn off_budget(r: &RunRecord) -> Option<(f64, f64, &'static str)> {
+    if r.budget_missed || r.status != Status::Ok {
+        return None;
+    }
+    let budget = r.time_ms.or(r.frame_ms)?;
+    let (t, clock) = r
+        .gpu_ms
+        .map(|t| (t, "GPU"))
+        .or(r.wall_ms.map(|t| (t, "wall")))?;
+    let ratio = t / budget;
+    (!(1.0 / OFF_BUDGET..=OFF_BUDGET).contains(&ratio)).then_some((ratio, t, clock))
+}
+
+/// How far from its time budget a calibrated run may land unmarked: 1.25x over or under.
+pub const OFF_BUDGET: f64 = 1.25;
 
 /// One footnote line per run whose time budget was missed; empty when none was.
 fn missed_footnotes(runs: &[&RunRecord]) -> String {
@@ -399,6 +517,32 @@ fn missed_footnotes(runs: &[&RunRecord]) -> String {
             r.time_ms
                 .or(r.frame_ms)
                 .map(|t| t.to_string())
+                .unwrap_or_else(|| "-".into()),
+        );
+    }
+    for r in runs.iter() {
+        let Some((ratio, t, clock)) = off_budget(r) else {
+            continue;
+        };
+        let _ =
+            writeln!(
+            md,
+            "{} {} budget {}: {} {} took {} {clock} ms{}, {:.2}x its budget of {} ms (calibrated \
+             count {}): compare it with the others at its own time, not at the budget's.\n",
+            MISSED_MARK.trim(),
+            if r.frame_ms.is_some() { "Frame-time" } else { "Time" },
+            if ratio < 1.0 { "undershot" } else { "overshot" },
+            r.label,
+            r.budget,
+            fixed(Some(t), 3),
+            if r.frame_ms.is_some() { " a frame" } else { "" },
+            ratio,
+            r.time_ms
+                .or(r.frame_ms)
+                .map(|t| t.to_string())
+                .unwrap_or_else(|| "-".into()),
+            r.calibrated_count
+                .map(|c| c.to_string())
                 .unwrap_or_else(|| "-".into()),
         );
     }

@@ -285,6 +285,17 @@ pub struct ReferenceSummary {
     pub frames: Vec<FrameReference>,
 }
 
+/// A run is starred (Pareto-optimal) only where its image is plausibly right: its bias (the
+/// image mean's offset from the reference's, over its renders) at most this...
+pub const STAR_MAX_BIAS: f64 = 0.10;
+/// ...and at most this share of its pixels outliers (10x the reference plus 0.1). A black image
+/// or one of fireflies can be fast and "least wrong" among broken runs; it is never the best.
+pub const STAR_MAX_OUTLIERS: f64 = 0.01;
+
+fn plausible(m: &Metrics) -> bool {
+    m.bias <= STAR_MAX_BIAS && m.outliers <= STAR_MAX_OUTLIERS
+}
+
 impl SuiteResults {
     pub fn read(path: &Path) -> Result<SuiteResults> {
         let text =
@@ -313,7 +324,8 @@ impl SuiteResults {
             let m = r.metrics?;
             let e = m.rel_mse;
             let finite = m.nan_inf == 0 && r.nonfinite_estimates == 0;
-            (r.status == Status::Ok && finite && t.is_finite() && e.is_finite()).then_some((t, e))
+            (r.status == Status::Ok && finite && t.is_finite() && e.is_finite() && plausible(&m))
+                .then_some((t, e))
         };
         let points: Vec<Option<(f64, f64)>> = self.runs.iter().map(point).collect();
         for i in 0..self.runs.len() {

@@ -184,6 +184,7 @@ fn frame_chart(results: &SuiteResults, family: &Family) -> Chart {
         y_label: "GPU ms per frame (run's GPU time / its count)".into(),
         series: method_chart(results, family, frame_ms, |_| None),
         notes: member_notes(family),
+        floor: None,
     }
 }
 
@@ -199,6 +200,7 @@ fn cost_chart(results: &SuiteResults, family: &Family) -> Chart {
         y_label: "net relMSE x GPU ms (lower is better)".into(),
         series: method_chart(results, family, cost, range),
         notes: member_notes(family),
+        floor: None,
     }
 }
 
@@ -233,6 +235,7 @@ fn upload_chart(family: &Family, title: String, y_label: &str, figures: &[Upload
         y_label: y_label.into(),
         series,
         notes: member_notes(family),
+        floor: None,
     }
 }
 

@@ -141,6 +141,11 @@ pub struct ReservoirBuffers {
 }
 
 impl ReservoirBuffers {
+    /// The last frame's final reservoirs (the spatial pass's), read back.
+    pub fn read_final(&self) -> GpuResult<Vec<Reservoir>> {
+        self.last.read()
+    }
+
     /// Zeroed: no previous frame (M = 0, an invalid surface is written by frame 0's spatial
     /// pass before any temporal pass reads it).
     pub fn new(ctx: &Context, pixels: usize) -> GpuResult<Self> {

@@ -261,9 +261,9 @@ pub const SETTINGS: &[Setting<RestirSettings>] = &[
          could have produced the sample, visibility included (a shadow ray per reservoir \
          reused); unbiased, but its weights ignore how the target differs between surfaces, \
          so on glossy lobes and grazing emitters reuse brings spikes that an image averaged \
-         over frames keeps (README \"restir and the light BVH\"). biased: 1 / (sum of M), \
+         over frames keeps (docs/methods/restir.md). biased: 1 / (sum of M), \
          darker where the pixel receives light its neighbours cannot (beside shadow edges, \
-         across normal changes; the README gives its bias).",
+         across normal changes; docs/RESULTS.md gives its bias).",
         |s| Some(Value::Name(s.combination.name())),
         |s, v| {
             s.combination = Combination::from_name(v.name()).expect("a checked name");
@@ -536,9 +536,27 @@ impl MethodFrames for RestirFrames<'_> {
         })
     }
 
+    /// Stats over the pixels that see a surface (a final reservoir with M > 0) in the last
+    /// frame: the fraction whose final sample is a visible light (W > 0) and the mean confidence
+    /// M, which temporal reuse grows to its cap.
     fn finish(&self, _shared: &Shared<'_>) -> GpuResult<Extras> {
         self.finished.set(true);
-        Ok(Extras::default())
+        let reservoirs = self
+            .reservoirs
+            .as_ref()
+            .expect("held until dropped")
+            .read_final()?;
+        let surfaces: Vec<_> = reservoirs.iter().filter(|r| r.weights.y > 0.0).collect();
+        let n = surfaces.len().max(1) as f64;
+        let lit = surfaces.iter().filter(|r| r.weights.x > 0.0).count() as f64;
+        let mean_m = surfaces.iter().map(|r| f64::from(r.weights.y)).sum::<f64>() / n;
+        Ok(Extras {
+            stats: vec![
+                ("final_visible_fraction".into(), lit / n),
+                ("final_mean_m".into(), mean_m),
+            ],
+            ..Extras::default()
+        })
     }
 }
 
