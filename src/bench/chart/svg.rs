@@ -405,6 +405,32 @@ mod tests {
     use crate::bench::chart::fixtures::{assert_well_formed, chart, count, point, sample};
     use crate::bench::chart::{read_svg, Series};
 
+    /// The reference's noise floor is a line across the plot at its value, the axis widened
+    /// to hold it when it is below every point; a chart without points draws none.
+    #[test]
+    fn the_noise_floor_is_a_line_at_its_value() {
+        let mut c = chart(vec![Series {
+            name: "pt".into(),
+            points: vec![point(2.0, 0.1, "a", "a"), point(8.0, 0.02, "b", "b")],
+        }]);
+        c.floor = Some(1e-4);
+        let svg = c.to_svg();
+        assert_well_formed(&svg);
+        assert!(
+            svg.contains(r#"<g class="floor" data-y="0.0001">"#),
+            "{svg}"
+        );
+        assert!(svg.contains("reference's own relMSE 1.00e-4"));
+        let (axes, plotted) = read_svg(&svg).unwrap();
+        assert!(axes.y_log_min <= -4.0, "{axes:?}");
+        assert_eq!(plotted.len(), 2);
+        let empty = Chart {
+            floor: Some(1e-4),
+            ..chart(vec![])
+        };
+        assert!(!empty.to_svg().contains("class=\"floor\""));
+    }
+
     #[test]
     fn markup_in_text_is_escaped_and_read_back() {
         let nasty = r#"<&">' vpls=64"#;

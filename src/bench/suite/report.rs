@@ -602,3 +602,77 @@ fn signed_percent(v: Option<f64>) -> String {
 fn escape(s: &str) -> String {
     s.replace('|', "\\|").replace('\n', " ")
 }
+
+#[cfg(test)]
+mod tests {
+    use super::super::results::tests::run;
+    use super::*;
+
+    fn timed(label: &str, budget: f64, gpu_ms: f64, rel_mse: f64) -> RunRecord {
+        let mut r = run("s", "gpu", gpu_ms, rel_mse);
+        r.label = label.into();
+        r.budget = format!("time_ms={budget}");
+        r.time_ms = Some(budget);
+        r.calibrated_count = Some(8);
+        r
+    }
+
+    /// At each budget the summary names the winner by relMSE x GPU time among the plausible
+    /// runs and its lead over the next method; a wrong image cannot win.
+    #[test]
+    fn the_summary_names_each_budgets_winner_among_plausible_runs() {
+        let a = timed("ir", 100.0, 100.0, 0.01);
+        let b = timed("bir", 100.0, 100.0, 0.04);
+        let mut black = timed("broken", 100.0, 100.0, 0.001);
+        black.metrics.as_mut().unwrap().bias = 0.99;
+        let c = timed("bir", 400.0, 400.0, 0.01);
+        let text = summary(&[&a, &b, &black, &c]);
+        assert!(
+            text.contains("at 100 ms ir wins, 4.00x ahead of bir"),
+            "{text}"
+        );
+        assert!(
+            text.contains("at 400 ms bir (the only plausible run)"),
+            "{text}"
+        );
+        assert!(!text.contains("broken"), "{text}");
+        // Count budgets: the starred runs.
+        let mut d = run("s", "gpu", 5.0, 0.1);
+        d.pareto = true;
+        d.budget = "spp=4".into();
+        let text = summary(&[&d]);
+        assert!(text.contains("pt spp=4"), "{text}");
+    }
+
+    /// A calibrated run that lands outside 1.25x of its budget, under or over, is marked and
+    /// footnoted; within the band, or with a count budget, it is not.
+    #[test]
+    fn off_budget_runs_are_marked_both_ways() {
+        let under = timed("ir", 500.0, 281.0, 0.1);
+        let over = timed("bir", 500.0, 700.0, 0.1);
+        let fine = timed("pt", 500.0, 480.0, 0.1);
+        let count = run("s", "gpu", 1.0, 0.1);
+        assert_eq!(missed_mark(&under), MISSED_MARK);
+        assert_eq!(missed_mark(&over), MISSED_MARK);
+        assert_eq!(missed_mark(&fine), "");
+        assert_eq!(missed_mark(&count), "");
+        let notes = missed_footnotes(&[&under, &over, &fine, &count]);
+        assert!(notes.contains("budget undershot: ir"), "{notes}");
+        assert!(notes.contains("0.56x its budget of 500 ms"), "{notes}");
+        assert!(notes.contains("budget overshot: bir"), "{notes}");
+        assert_eq!(notes.matches(MISSED_MARK.trim()).count(), 2, "{notes}");
+    }
+
+    #[test]
+    fn pass_times_list_each_runs_passes() {
+        let mut r = timed("ir", 100.0, 90.0, 0.1);
+        r.pass_gpu_ms.insert("gbuffer".into(), Some(1.25));
+        r.pass_gpu_ms.insert("vpl gather".into(), None);
+        let text = pass_times(&[&r]);
+        assert!(
+            text.contains("- ir time_ms=100: gbuffer 1.25, vpl gather -"),
+            "{text}"
+        );
+        assert_eq!(pass_times(&[&run("s", "gpu", 1.0, 0.1)]), "");
+    }
+}

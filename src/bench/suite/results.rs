@@ -674,6 +674,28 @@ pub(super) mod tests {
             marks,
             [true, true, false, true, true, false, true, true, false, false]
         );
+
+        // A plainly wrong image (a black one: bias near 100%; one of fireflies: outliers) is
+        // never starred, and does not take the star from the runs it would dominate.
+        let mut black = run("a", "gpu", 0.2, 0.05);
+        black.metrics.as_mut().unwrap().bias = 0.9997;
+        let mut fireflies = run("a", "gpu", 0.3, 0.02);
+        fireflies.metrics.as_mut().unwrap().outliers = 0.03;
+        let mut edge = run("a", "gpu", 0.4, 0.03);
+        edge.metrics.as_mut().unwrap().bias = STAR_MAX_BIAS;
+        edge.metrics.as_mut().unwrap().outliers = STAR_MAX_OUTLIERS;
+        results.runs.extend([black, fireflies, edge]);
+        results.mark_pareto();
+        let marks: Vec<bool> = results.runs.iter().map(|r| r.pareto).collect();
+        // The run at the thresholds dominates the first five of scene a; the two wrong ones
+        // are left out.
+        assert_eq!(
+            marks,
+            [
+                false, false, false, false, false, false, true, true, false, false, false, false,
+                true
+            ]
+        );
     }
 
     #[test]
