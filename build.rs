@@ -47,11 +47,22 @@ fn main() {
 }
 
 /// The commit the binary is built from and whether its sources differ from it, for the render
-/// records (IRAD_GIT_COMMIT: 40 hex digits, "-dirty" appended where src, glsl, spv, build.rs
-/// or the Cargo files differ from the commit; "unknown" outside a git checkout). Rerun where
+/// records (IRAD_GIT_COMMIT: 40 hex digits, "-dirty" appended where src, glsl, spv, the
+/// embedded Cornell box, build.rs or the Cargo files differ from the commit; "unknown" outside a git checkout). Rerun where
 /// the commit or those sources change.
 fn git_commit(root: &Path) {
-    for rel in ["src", "glsl", "build.rs", "Cargo.toml", "Cargo.lock"] {
+    // The sources the binary is built from: src, the kernels (glsl, spv) and the Cornell box
+    // it embeds (src/scene/load.rs).
+    const SOURCES: [&str; 7] = [
+        "src",
+        "glsl",
+        "spv",
+        "scenes/cornell-box",
+        "build.rs",
+        "Cargo.toml",
+        "Cargo.lock",
+    ];
+    for rel in SOURCES {
         println!("cargo:rerun-if-changed={rel}");
     }
     let git = |args: &[&str]| {
@@ -64,9 +75,12 @@ fn git_commit(root: &Path) {
             .filter(|o| o.status.success())
             .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
     };
-    // The files naming the commit: HEAD, the branch it points to, packed refs.
+    // The files naming the commit: HEAD, the branch it points to, packed refs, and HEAD's log,
+    // which every commit, checkout and reset appends to (a branch's ref can move from
+    // packed-refs to a new loose file that no earlier run knew to watch).
     for path in [
         "HEAD",
+        "logs/HEAD",
         "packed-refs",
         &git(&["symbolic-ref", "-q", "HEAD"]).unwrap_or_default(),
     ] {
@@ -79,18 +93,9 @@ fn git_commit(root: &Path) {
     }
     let commit = match git(&["rev-parse", "HEAD"]) {
         Some(c) if c.len() == 40 => {
-            let dirty = git(&[
-                "status",
-                "--porcelain",
-                "--",
-                "src",
-                "glsl",
-                "spv",
-                "build.rs",
-                "Cargo.toml",
-                "Cargo.lock",
-            ])
-            .is_none_or(|s| !s.is_empty());
+            let mut args = vec!["status", "--porcelain", "--"];
+            args.extend(SOURCES);
+            let dirty = git(&args).is_none_or(|s| !s.is_empty());
             format!("{c}{}", if dirty { "-dirty" } else { "" })
         }
         _ => "unknown".into(),

@@ -8,8 +8,8 @@
 //!
 //! The reference is two path-traced renders of REF_SPP samples each (seeds 77 and 78) with at
 //! most REF_DEPTH scattering events (1: direct light; 1024: all), at pixel centres when a
-//! configuration asks for `pixel_centres=true`, cached next to the scene as
-//! method_seeds_ref_{77,78}_WxH_SPP_dDEPTH[_centres]_HASH.exr (HASH: of the scene file's
+//! configuration asks for `pixel_centres=true`, cached as out/method_seeds/
+//! SCENE_ref_{77,78}_WxH_SPP_dDEPTH[_centres]_HASH.exr (HASH: of the scene file's
 //! text). Each configuration is METHOD:PARAMS, PARAMS comma-separated key=value pairs as in suite files (Method::from_params: numbers,
 //! true/false, or bare words for choices); it renders with seeds 1000.. and prints the image
 //! mean relative to the reference's (mean and standard error over seeds), relMSE against the
@@ -137,9 +137,13 @@ fn main() {
     let key = text.iter().fold(0xcbf29ce484222325u64, |h, &b| {
         (h ^ b as u64).wrapping_mul(0x100000001b3)
     });
+    // Under out/, never beside the scene: a cache is no part of the scene's folder.
+    let folder = std::path::Path::new("out").join("method_seeds");
+    std::fs::create_dir_all(&folder).expect("creating out/method_seeds");
     let cache = |seed: u32| {
-        scene_path.with_file_name(format!(
-            "method_seeds_ref_{seed}_{width}x{height}_{ref_spp}_d{ref_depth}{}_{key:016x}.exr",
+        folder.join(format!(
+            "{}_ref_{seed}_{width}x{height}_{ref_spp}_d{ref_depth}{}_{key:016x}.exr",
+            irad::bench::suite::file::file_safe(&scene.name),
             if centres { "_centres" } else { "" }
         ))
     };

@@ -120,6 +120,9 @@ pub struct SequenceJob<'a> {
 pub struct SequenceRecord {
     pub scene: String,
     pub scene_hash: String,
+    /// [width, height] of every frame ([0, 0] in records written before it was recorded).
+    #[serde(default)]
+    pub resolution: [u32; 2],
     pub method: String,
     /// The method's settings but the seed (each frame's is `seed` + its frame).
     pub parameters: BTreeMap<String, serde_json::Value>,
@@ -245,6 +248,7 @@ pub fn render_sequence(
     let mut record = SequenceRecord {
         scene: render::scene_label(job.scene),
         scene_hash: format!("{:016x}", job.scene.content_hash),
+        resolution: [job.scene.camera.width, job.scene.camera.height],
         method: job.method.name().into(),
         parameters: job.method.parameters(),
         seed: job.method.seed(),
@@ -421,6 +425,13 @@ fn check_reference_sequence(dir: &Path, now: &SequenceRecord, frames: Range<u32>
 
 /// What makes `earlier` another sequence than `now`, in words; None when it is the same one.
 fn differs(earlier: &SequenceRecord, now: &SequenceRecord) -> Option<String> {
+    // `--resolution` changes the frames' size, not the scene's hash.
+    if earlier.resolution != [0, 0] && earlier.resolution != now.resolution {
+        return Some(format!(
+            "its frames are {}x{}, now {}x{}",
+            earlier.resolution[0], earlier.resolution[1], now.resolution[0], now.resolution[1]
+        ));
+    }
     if earlier.scene_hash != now.scene_hash {
         return Some(format!(
             "the scene {} has other contents (hash {}, now {})",
@@ -490,15 +501,18 @@ fn complete_frame(
         && record.parameters == method.parameters()
         && record.seed == method.seed() as u64
         && record.scene_hash == format!("{:016x}", scene.content_hash)
+        && record.resolution == [scene.camera.width, scene.camera.height]
         && record.frame == Some(f);
     if !same {
         bail!(
-            "{} is a render of another sequence (method {}, seed {}, frame {:?}): remove it or \
-             choose another output folder",
+            "{} is a render of another sequence (method {}, seed {}, frame {:?}, {}x{}): remove \
+             it or choose another output folder",
             json.display(),
             record.method,
             record.seed,
-            record.frame
+            record.frame,
+            record.resolution[0],
+            record.resolution[1]
         );
     }
     let missing = record

@@ -365,6 +365,16 @@ fn compare_scores_images_and_folders() {
         Some(expected.rel_mse)
     );
     assert!(dir.join("seq/frame_0004_signed.png").is_file());
+    // A reference with more frames than the test: the test's are scored, the rest said.
+    std::fs::copy(dir.join("ref.exr"), dir.join("b/frame_0005.exr")).unwrap();
+    let o = irad(&["compare", &path("a"), &path("b")], &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        text.contains("1 of the reference's frames are not in"),
+        "{text}"
+    );
+    std::fs::remove_file(dir.join("b/frame_0005.exr")).unwrap();
     // Refusals, each one line naming what is wrong.
     let o = irad(&["compare", &path("x.exr"), &path("b")], &[]);
     assert_clean_error(&o, &["a folder", "two EXRs or two folders"]);
@@ -373,6 +383,41 @@ fn compare_scores_images_and_folders() {
     assert_clean_error(&o, &["lacks 1", "frame_0004.exr"]);
     let o = irad(&["compare", &path("missing.exr"), &path("ref.exr")], &[]);
     assert_clean_error(&o, &["missing.exr"]);
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// A sequence's frames have one size: resuming it at another `--resolution` is refused, naming
+/// both sizes, and the frames already there stay as they are.
+#[test]
+fn a_sequence_resumed_at_another_resolution_is_refused() {
+    let dir = temp_dir("sequence-resolution");
+    let scene = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/scenes/cornell-circling/scene.toml"
+    );
+    let out = dir.join("seq");
+    let render = |size: &str| {
+        irad(
+            &[
+                "render",
+                scene,
+                "--sequence=0..2",
+                "--samples-per-frame",
+                "1",
+                "--resolution",
+                size,
+                "-o",
+                out.to_str().unwrap(),
+            ],
+            &[],
+        )
+    };
+    let o = render("24x16");
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = render("20x16");
+    assert_clean_error(&o, &["another sequence", "24x16", "20x16"]);
+    let frame = irad::image::exr::read(&out.join("frame_0001.exr")).unwrap();
+    assert_eq!((frame.width, frame.height), (24, 16));
     std::fs::remove_dir_all(&dir).ok();
 }
 

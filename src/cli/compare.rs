@@ -164,8 +164,8 @@ fn compare_images(args: &CompareArgs) -> Result<Record> {
         write_maps(out, &x, &r, flip.as_ref())?;
     }
     Ok(Record {
-        test: args.test.display().to_string(),
-        reference: args.reference.display().to_string(),
+        test: irad::image::sidecar::absolute(&args.test),
+        reference: irad::image::sidecar::absolute(&args.reference),
         metrics: Some(m),
         frames: Vec::new(),
         sequence: None,
@@ -184,12 +184,21 @@ fn frames(dir: &Path) -> Result<Vec<(u32, PathBuf)>> {
         let number = name
             .strip_prefix("frame_")
             .and_then(|n| n.strip_suffix(".exr"))
+            .filter(|n| !n.is_empty() && n.bytes().all(|b| b.is_ascii_digit()))
             .and_then(|n| n.parse::<u32>().ok());
         if let Some(n) = number {
             found.push((n, path));
         }
     }
     found.sort();
+    if let Some(w) = found.windows(2).find(|w| w[0].0 == w[1].0) {
+        bail!(
+            "{} and {} are both frame {}",
+            w[0].1.display(),
+            w[1].1.display(),
+            w[0].0
+        );
+    }
     Ok(found)
 }
 
@@ -218,9 +227,25 @@ fn compare_folders(args: &CompareArgs) -> Result<Record> {
     if let Some(out) = &args.out {
         fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     }
+    // The test folder may hold part of the reference's frames (`--sequence=A..B`); a gap in
+    // its frames breaks the flicker, taken only between frames that follow each other.
+    let skipped = references.len() - tests.len();
+    if skipped > 0 {
+        println!(
+            "{} of the reference's frames are not in {}: scoring the {} that are",
+            skipped,
+            args.test.display(),
+            tests.len()
+        );
+    }
     let mut sequence = SequenceScore::default();
     let mut records = Vec::new();
+    let mut previous: Option<u32> = None;
     for (n, path) in &tests {
+        if previous.is_some_and(|p| p + 1 != *n) {
+            sequence.gap();
+        }
+        previous = Some(*n);
         let reference = &references.iter().find(|(m, _)| m == n).expect("checked").1;
         let (x, r) = (read(path)?, read(reference)?);
         let (mut m, flip) = score(&x, &r, !args.no_flip)
@@ -252,8 +277,8 @@ fn compare_folders(args: &CompareArgs) -> Result<Record> {
         summary.flicker
     );
     Ok(Record {
-        test: args.test.display().to_string(),
-        reference: args.reference.display().to_string(),
+        test: irad::image::sidecar::absolute(&args.test),
+        reference: irad::image::sidecar::absolute(&args.reference),
         metrics: None,
         frames: records,
         sequence: Some(summary),

@@ -368,6 +368,12 @@ pub struct SequenceScore {
 }
 
 impl SequenceScore {
+    /// The next frame pushed does not follow the last one (a gap in the frames scored): no
+    /// flicker is taken between them.
+    pub fn gap(&mut self) {
+        self.previous = None;
+    }
+
     /// A score that also takes each frame's mean HDR-FLIP at `pixels_per_degree`, so
     /// `SequenceMetrics::mean.flip` is their mean.
     pub fn with_flip(pixels_per_degree: f32) -> SequenceScore {

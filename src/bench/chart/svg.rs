@@ -79,17 +79,14 @@ impl Chart {
             .collect();
         let any = charted.iter().any(|s| !s.is_empty());
         let (x_log_min, x_log_max) = decade_range(charted.iter().flatten().map(|p| p.x));
-        let floor = self.floor.filter(|f| f.is_finite() && *f > 0.0 && any);
-        let (y_log_min, y_log_max) = decade_range(
-            charted
-                .iter()
-                .flatten()
-                .flat_map(|p| {
-                    let (lo, hi) = bar(p).unwrap_or((p.y, p.y));
-                    [p.y, lo, hi]
-                })
-                .chain(floor),
-        );
+        let (y_log_min, y_log_max) = decade_range(charted.iter().flatten().flat_map(|p| {
+            let (lo, hi) = bar(p).unwrap_or((p.y, p.y));
+            [p.y, lo, hi]
+        }));
+        // The floor where it falls on the points' axis; else a note (a reference far more
+        // converged than the runs would stretch the axis over empty decades).
+        let floor_value = self.floor.filter(|f| f.is_finite() && *f > 0.0 && any);
+        let floor = floor_value.filter(|f| (y_log_min..=y_log_max).contains(&f.log10()));
         let axes = Axes {
             x_log_min,
             x_log_max,
@@ -162,6 +159,16 @@ impl Chart {
             notes.push(format!(
                 "{hidden} point label(s) left out where they would cover others; \
                  each point's tooltip holds its label"
+            ));
+        }
+        if let (Some(f), None) = (floor_value, floor) {
+            notes.push(format!(
+                "the reference's own relMSE, {f:.2e}, is {} the plotted range",
+                if f.log10() < y_log_min {
+                    "below"
+                } else {
+                    "above"
+                }
             ));
         }
         notes.extend(self.notes.iter().cloned());
@@ -405,25 +412,27 @@ mod tests {
     use crate::bench::chart::fixtures::{assert_well_formed, chart, count, point, sample};
     use crate::bench::chart::{read_svg, Series};
 
-    /// The reference's noise floor is a line across the plot at its value, the axis widened
-    /// to hold it when it is below every point; a chart without points draws none.
+    /// The reference's noise floor is a line across the plot at its value where it falls on
+    /// the points' axis, else a note; a chart without points draws none.
     #[test]
     fn the_noise_floor_is_a_line_at_its_value() {
         let mut c = chart(vec![Series {
             name: "pt".into(),
             points: vec![point(2.0, 0.1, "a", "a"), point(8.0, 0.02, "b", "b")],
         }]);
-        c.floor = Some(1e-4);
+        c.floor = Some(0.05);
         let svg = c.to_svg();
         assert_well_formed(&svg);
-        assert!(
-            svg.contains(r#"<g class="floor" data-y="0.0001">"#),
-            "{svg}"
-        );
-        assert!(svg.contains("reference's own relMSE 1.00e-4"));
+        assert!(svg.contains(r#"<g class="floor" data-y="0.05">"#), "{svg}");
+        assert!(svg.contains("reference's own relMSE 5.00e-2"));
         let (axes, plotted) = read_svg(&svg).unwrap();
-        assert!(axes.y_log_min <= -4.0, "{axes:?}");
         assert_eq!(plotted.len(), 2);
+        // Far below the points: a note, the axis left as the points set it.
+        c.floor = Some(1e-7);
+        let far = c.to_svg();
+        assert!(!far.contains("class=\"floor\""));
+        assert!(far.contains("1.00e-7, is below the plotted range"), "{far}");
+        assert_eq!(read_svg(&far).unwrap().0, axes);
         let empty = Chart {
             floor: Some(1e-4),
             ..chart(vec![])

@@ -376,12 +376,17 @@ fn equal_time_table(runs: &[&RunRecord]) -> String {
 fn summary(runs: &[&RunRecord]) -> String {
     let plausible = |r: &RunRecord| {
         r.status == Status::Ok
+            && r.nonfinite_estimates == 0
             && r.metrics.is_some_and(|m| {
                 m.nan_inf == 0 && m.bias <= STAR_MAX_BIAS && m.outliers <= STAR_MAX_OUTLIERS
             })
     };
+    // Net relMSE where the reference's noise leaves one, else the relMSE itself (a run within
+    // the reference's noise is among the best, not out); GPU time, else wall time.
     let cost = |r: &RunRecord| -> Option<f64> {
-        let e = net_rel_mse(r)? * r.gpu_ms?;
+        let gross = r.metrics?.rel_mse;
+        let net = net_rel_mse(r).filter(|e| *e > 0.0).unwrap_or(gross);
+        let e = net * r.gpu_ms.or(r.wall_ms)?;
         (plausible(r) && e.is_finite() && e > 0.0).then_some(e)
     };
     let mut budgets: Vec<f64> = runs
@@ -404,7 +409,13 @@ fn summary(runs: &[&RunRecord]) -> String {
         } else {
             ""
         };
+        let ran = runs.iter().any(|r| {
+            r.time_ms.or(r.frame_ms) == Some(*budget)
+                && r.status == Status::Ok
+                && r.metrics.is_some()
+        });
         parts.push(match ranked.as_slice() {
+            [] if !ran => format!("at {budget} ms{per} no run was scored"),
             [] => format!("at {budget} ms{per} no run is plausibly right"),
             [(_, only)] => format!(
                 "at {budget} ms{per} {} (the only plausible run)",
@@ -438,15 +449,17 @@ fn summary(runs: &[&RunRecord]) -> String {
         });
     }
     format!(
-        "**Summary** (net relMSE x GPU time among the runs within the star's bias and outlier \
-         thresholds): {}.\n\n",
+        "**Summary** (net relMSE x GPU time among the runs within the star's thresholds): {}.\n\n",
         parts.join("; ")
     )
 }
 
 /// Each run's GPU time per pass (medians over its repeats): where the time goes.
 fn pass_times(runs: &[&RunRecord]) -> String {
-    let with: Vec<&&RunRecord> = runs.iter().filter(|r| !r.pass_gpu_ms.is_empty()).collect();
+    let with: Vec<&&RunRecord> = runs
+        .iter()
+        .filter(|r| r.pass_gpu_ms.values().any(Option::is_some))
+        .collect();
     if with.is_empty() {
         return String::new();
     }
@@ -636,6 +649,22 @@ mod tests {
             "{text}"
         );
         assert!(!text.contains("broken"), "{text}");
+        // A run within the reference's noise (net relMSE <= 0) ranks by its relMSE, and a
+        // run without GPU times by its wall time: both are in.
+        let mut limited = timed("restir", 50.0, 50.0, 0.001);
+        limited.reference_rel_mse = Some(0.002);
+        let mut no_timestamps = timed("env", 50.0, 50.0, 0.01);
+        no_timestamps.gpu_ms = None;
+        no_timestamps.wall_ms = Some(50.0);
+        let text = summary(&[&limited, &no_timestamps]);
+        assert!(
+            text.contains("at 50 ms restir wins, 10.00x ahead of env"),
+            "{text}"
+        );
+        let mut declined = timed("ir", 70.0, 70.0, 0.01);
+        declined.status = Status::Declined;
+        declined.metrics = None;
+        assert!(summary(&[&declined]).contains("at 70 ms no run was scored"));
         // Count budgets: the starred runs.
         let mut d = run("s", "gpu", 5.0, 0.1);
         d.pareto = true;

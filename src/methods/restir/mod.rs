@@ -540,12 +540,13 @@ impl MethodFrames for RestirFrames<'_> {
     /// frame: the fraction whose final sample is a visible light (W > 0) and the mean confidence
     /// M, which temporal reuse grows to its cap.
     fn finish(&self, _shared: &Shared<'_>) -> GpuResult<Extras> {
-        self.finished.set(true);
+        // (Read before the render is marked finished: a failed readback leaves no history.)
         let reservoirs = self
             .reservoirs
             .as_ref()
             .expect("held until dropped")
             .read_final()?;
+        self.finished.set(true);
         let surfaces: Vec<_> = reservoirs.iter().filter(|r| r.weights.y > 0.0).collect();
         let n = surfaces.len().max(1) as f64;
         let lit = surfaces.iter().filter(|r| r.weights.x > 0.0).count() as f64;
