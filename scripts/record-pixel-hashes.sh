@@ -6,5 +6,5 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 IRAD_DEVICE=llvmpipe bash scripts/test.sh --statistical
-IRAD_DEVICE=llvmpipe IRAD_RECORD_PIXEL_HASHES=1 cargo test --locked --test pixel_hashes
+IRAD_DEVICE=llvmpipe IRAD_RECORD_PIXEL_HASHES=1 cargo test --locked --test all -- pixel_hashes::
 git --no-pager diff --stat -- tests/data/pixel_hashes.txt

@@ -38,11 +38,25 @@ SECOND_PASS_SKIPS=(
   roulette_over_lights_keeps_the_mean
 )
 
-# The statistical tier's test names: the first `fn` after each attribute. Integration tests
-# are top-level functions, so the name is what `--exact` matches.
+# The statistical tier's test names: the first `fn` after each attribute. Each tests/NAME.rs is
+# the module NAME of the one integration-test binary (tests/all.rs), so `--exact` matches
+# NAME::fn.
 statistical_tests() {
   awk '/#\[ignore = "statistical tier/ { want = 1; next }
-       want && match($0, /fn [A-Za-z0-9_]+/) { print substr($0, RSTART + 3, RLENGTH - 3); want = 0 }' tests/*.rs
+       want && match($0, /fn [A-Za-z0-9_]+/) {
+         module = FILENAME; sub(/^.*\//, "", module); sub(/\.rs$/, "", module)
+         print module "::" substr($0, RSTART + 3, RLENGTH - 3); want = 0 }' tests/*.rs
+}
+
+# The second pass's tests: every test of these files (modules of tests/all.rs) but the skips.
+SECOND_PASS_FILES=(prefix_sum bvh buffers reference ir bir bundles env lightfield tables
+  pixel_hashes custom_method light_bvh)
+second_pass_tests() {
+  local files skips
+  files=$(IFS='|'; echo "${SECOND_PASS_FILES[*]}")
+  skips=$(IFS='|'; echo "${SECOND_PASS_SKIPS[*]}")
+  cargo test --locked --test all -- --list --format terse 2>/dev/null \
+    | sed -n 's/: test$//p' | grep -E "^($files)::" | grep -vE "::($skips)\$"
 }
 
 set -euo pipefail
@@ -63,16 +77,16 @@ if [ "${1:-}" = "--statistical" ]; then
   [ "$#" -gt 0 ] && shift
   harness_args=("$@")
   echo "== the statistical tier: ${#names[@]} tests"
-  exec cargo test --locked "${cargo_args[@]}" -- "${harness_args[@]}" --ignored --exact "${names[@]}"
+  exec cargo test --locked --test all "${cargo_args[@]}" -- "${harness_args[@]}" --ignored --exact "${names[@]}"
 fi
 cargo test --locked "$@"
 if [ "$#" -eq 0 ]; then
   echo "== the GPU tests again, staged buffers and 4-lane subgroups"
-  skips=()
-  for t in "${SECOND_PASS_SKIPS[@]}"; do skips+=(--skip "$t"); done
-  IRAD_FORCE_STAGING=1 LP_NATIVE_VECTOR_WIDTH=128 cargo test --locked \
-    --test prefix_sum --test bvh --test buffers --test reference --test ir --test bir \
-    --test bundles --test env --test lightfield --test tables --test pixel_hashes \
-    --test custom_method --test light_bvh \
-    -- --exact "${skips[@]}"
+  mapfile -t second < <(second_pass_tests)
+  if [ "${#second[@]}" -eq 0 ]; then
+    echo "scripts/test.sh: found no tests for the second pass" >&2
+    exit 1
+  fi
+  IRAD_FORCE_STAGING=1 LP_NATIVE_VECTOR_WIDTH=128 cargo test --locked --test all \
+    -- --exact "${second[@]}"
 fi

@@ -3,7 +3,7 @@
 //! shards merge into the results of one whole run; an interrupted suite leaves readable
 //! results; bad suite files are one clear error.
 
-mod common;
+use crate::common;
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::fs;

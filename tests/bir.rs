@@ -1,6 +1,6 @@
 //! Bidirectional instant radiosity (Segovia 06): each strategy's estimator against the reference.
 
-mod common;
+use crate::common;
 
 use irad::gpu::Context;
 use irad::methods::bir::{Bir, BirSettings, Strategy};

@@ -1,7 +1,7 @@
 //! Buffers: upload and readback, sizes from what is asked, and errors naming the buffer and the
 //! sizes when a request exceeds the device.
 
-mod common;
+use crate::common;
 
 use irad::gpu::{Buffer, GpuError};
 

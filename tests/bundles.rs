@@ -1,7 +1,7 @@
 //! Real-time bidirectional path tracing (Tokuyoshi 12): each strategy of `bundles` against the
 //! reference path tracer limited to the same path length.
 
-mod common;
+use crate::common;
 
 use glam::Vec3;
 use irad::gpu::Context;

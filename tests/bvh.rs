@@ -11,7 +11,7 @@
 //! hit within 1e-4 of the CPU's t on the CPU too, or the hit within 1e-5 of an edge in
 //! barycentric terms), and may be at most 1e-4 of the rays.
 
-mod common;
+use crate::common;
 
 use glam::Vec3;
 use obvhs::bvh2::builder::build_bvh2_from_tris;

@@ -3,7 +3,7 @@
 //! unclamped gather is all spikes, ir and bir at their defaults (b from the scene, compensated)
 //! keep the reference's mean, and no pixel is a spike.
 
-mod common;
+use crate::common;
 
 use irad::gpu::Context;
 use irad::image::Image;

@@ -2,7 +2,7 @@
 //! (ambient occlusion with its own kernel and settings table) registered, rendered through the
 //! library and through a suite, and checked against its closed forms (the example's `run`).
 
-mod common;
+use crate::common;
 
 #[path = "../examples/custom_method.rs"]
 #[allow(dead_code)]

@@ -2,7 +2,7 @@
 //! different seeds give different noise around the same mean (within the standard error
 //! measured from the images).
 
-mod common;
+use crate::common;
 
 use glam::Vec3;
 use irad::gpu::Context;

@@ -1,7 +1,7 @@
 //! Dynamic environment-map sampling (Lu 14 ch. 3): every strategy of `env` against
 //! the path tracer's direct light, and the cube-map sampler against its own pdf.
 
-mod common;
+use crate::common;
 
 use glam::{DVec3, Vec3};
 use irad::gpu::{Commands, Context};

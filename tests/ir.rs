@@ -1,7 +1,7 @@
 //! Instant radiosity (Keller 97): the walk's survivor counts, and the estimator against
 //! the reference.
 
-mod common;
+use crate::common;
 
 use glam::Vec3;
 use irad::gpu::{Commands, Context};

@@ -1,7 +1,7 @@
 //! Kernels: every embedded module reflects and builds a pipeline; layouts come from the SPIR-V;
 //! bindings and push constants that do not match the shader are errors naming kernel and binding.
 
-mod common;
+use crate::common;
 
 use irad::gpu::reflect::{reflect, BindingKind};
 use irad::gpu::spirv::{embedded, embedded_names};

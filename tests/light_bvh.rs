@@ -22,7 +22,7 @@
 //! cannot choose would not show here: its BSDF hits take MIS weight 1. The CPU tests in
 //! src/sampling/light_bvh.rs check that every light that reaches a point has pmf > 0.)
 
-mod common;
+use crate::common;
 
 use glam::{Vec3, Vec4};
 use irad::gpu::{bind, Buffer, Commands, Context, Kernel};

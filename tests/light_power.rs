@@ -5,7 +5,7 @@
 //! is refused naming the file, the field and that largest value. And restir reports the
 //! reservoirs it drops when their weights overflow (a scene built in code, past the loader).
 
-mod common;
+use crate::common;
 
 use std::path::PathBuf;
 

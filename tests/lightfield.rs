@@ -2,7 +2,7 @@
 //! the f64 mirror, every strategy's mean against the brute force, the strategies at equal
 //! error, the closed-form disk, where samples go, and the estimator near the image plane.
 
-mod common;
+use crate::common;
 
 use irad::gpu::Commands;
 use irad::methods::lightfield::tables::LuminaireTables;

@@ -6,7 +6,7 @@
 //! for a change that means to alter images (say which in its commit), after the statistical
 //! tier has passed: these hashes stand in CI for the statistical tests (scripts/test.sh).
 
-mod common;
+use crate::common;
 
 use irad::methods::renderers::Renderers;
 use irad::methods::Method;

@@ -2,7 +2,7 @@
 //! included, never constant) of many lengths, single and batched, within 1e-5 relative error
 //! per element and per row total (src/gpu/prefix_sum.rs bounds it).
 
-mod common;
+use crate::common;
 
 use irad::gpu::{prefix_sum::PrefixSum, Buffer, Commands, Context, GpuError};
 use irad::sampling::scan::{cdf_like_values, inclusive_scan_rows, max_relative_error};

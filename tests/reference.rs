@@ -2,7 +2,7 @@
 //! checks that its own Monte Carlo standard error is well below that, so a pass is not luck and
 //! a wrong estimator (a missing cos, pi or MIS weight) fails.
 
-mod common;
+use crate::common;
 
 use std::f64::consts::PI;
 

@@ -21,7 +21,7 @@
 //! standard error (this method's and the reference's) must be well below the tolerance it
 //! implies, so a wrong weight (a missing 1 / M, pdf, Jacobian or visibility in Z) fails.
 
-mod common;
+use crate::common;
 
 use std::f64::consts::PI;
 use std::ops::Range;

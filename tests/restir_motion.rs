@@ -20,7 +20,7 @@
 //! Standard errors are those of per-render means over independent seeds (reuse correlates
 //! pixels).
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 

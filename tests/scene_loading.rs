@@ -962,7 +962,7 @@ fn small_scenes_facts() {
 /// Regenerates scenes/failure/sun-behind/sky.exr: the glossy-env sky's gradient and a low sun
 /// toward -Z (0 to 11 degrees up, hidden by the wall), 4 texels across the u = 0 seam,
 /// 2000 W/(sr m^2).
-/// `cargo test --test scene_loading -- --ignored`.
+/// `cargo test --test all -- --ignored scene_loading::`.
 #[test]
 #[ignore]
 fn regenerate_sun_behind_sky() {
@@ -987,7 +987,7 @@ fn regenerate_sun_behind_sky() {
 }
 
 /// Regenerates scenes/glossy-env/sky.exr: a blue sky brightening to the horizon, a dim ground
-/// and a small sun (4 texels). `cargo test --test scene_loading -- --ignored`.
+/// and a small sun (4 texels). `cargo test --test all -- --ignored scene_loading::`.
 #[test]
 #[ignore]
 fn regenerate_glossy_env_sky() {
@@ -1137,8 +1137,8 @@ fn the_many_lights_generator_writes_halls_irad_loads() {
 }
 
 /// The generator's largest hall, 2^20 lights (about a minute of python and 140 MB of OBJ), loads
-/// with its 2^21 emissive triangles. Too slow for CI: `cargo test --test scene_loading --
-/// --ignored many_lights`.
+/// with its 2^21 emissive triangles. Too slow for CI: `cargo test --test all --
+/// --ignored scene_loading::many_lights`.
 #[test]
 #[ignore]
 fn the_many_lights_generator_writes_a_hall_of_2_20_lights() {

@@ -4,7 +4,7 @@
 //! sequence resumes to the files of one run through, and a folder of another sequence is
 //! refused.
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 

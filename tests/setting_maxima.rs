@@ -21,7 +21,7 @@
 //! count) are listed with the reason. A new `Kind::Count` setting fails the test until it has a
 //! row here.
 
-mod common;
+use crate::common;
 
 use common::{luminance_mean, scene_file, with_gpu};
 use irad::methods::settings::Kind;

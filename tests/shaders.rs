@@ -2,7 +2,7 @@
 //! spirv-val accepts every module. CI installs glslang and spirv-tools, so there these always
 //! run; elsewhere a missing tool skips with a note.
 
-mod common;
+use crate::common;
 
 // The shader build belongs to the binary (`irad shaders`), not the library's API: the test
 // compiles its source file in.

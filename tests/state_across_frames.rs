@@ -11,7 +11,7 @@
 //! camera seeing nothing else), so methods that stop after one or two bounces (env, restir,
 //! bundles) are judged against the full path tracer.
 
-mod common;
+use crate::common;
 
 use glam::Vec3;
 use irad::methods::{Method, Registry, Renderers, Support};

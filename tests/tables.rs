@@ -4,7 +4,7 @@
 //! every-frame`) rebuilds a still map's every frame with the same image bits. The counts are
 //! the ones a render's JSON records per pass.
 
-mod common;
+use crate::common;
 
 use glam::Vec3;
 use irad::methods::bundles::{Bundles, BundlesSettings};

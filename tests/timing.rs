@@ -1,6 +1,6 @@
 //! Timestamps: every pass is reported by name, in order, with its GPU time, beside the wall clock.
 
-mod common;
+use crate::common;
 
 use irad::gpu::{copy::CopyValues, Buffer, Commands};
 

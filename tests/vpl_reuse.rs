@@ -3,7 +3,7 @@
 //! light is now, must be as bright, half by half, as one whose paths are all fresh; and the
 //! paths are kept only where they may be (a sequence's later frames, the same light table).
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 
