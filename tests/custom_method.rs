@@ -6,12 +6,12 @@ use crate::common;
 
 #[path = "../examples/custom_method.rs"]
 #[allow(dead_code)]
-mod custom_method;
+mod example;
 
 #[test]
 fn a_method_defined_outside_irad_renders_through_the_library_and_a_suite() {
     common::with_gpu(|ctx| {
-        for line in custom_method::run(ctx).unwrap() {
+        for line in example::run(ctx).unwrap() {
             println!("{line}");
         }
     });
