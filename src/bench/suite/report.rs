@@ -140,16 +140,7 @@ pub fn markdown(results: &SuiteResults) -> String {
         md += &missed_footnotes(&runs);
         md += &equal_time_table(&runs);
         md += &pass_times(&runs);
-        let with_stats: Vec<&&RunRecord> = runs.iter().filter(|r| !r.stats.is_empty()).collect();
-        if !with_stats.is_empty() {
-            md += "Method figures (averaged over each run's images):\n\n";
-            for r in with_stats {
-                let figures: Vec<String> =
-                    r.stats.iter().map(|(k, v)| format!("{k} {v:.4}")).collect();
-                let _ = writeln!(md, "- {} {}: {}", r.label, r.budget, figures.join(", "));
-            }
-            md += "\n";
-        }
+        md += &method_figures(&runs);
         md += "| run | image | error map |\n|---|---|---|\n";
         if let Some(r) = reference {
             let _ = writeln!(
@@ -454,6 +445,74 @@ fn summary(runs: &[&RunRecord]) -> String {
     )
 }
 
+/// The methods' own figures (`stats`, averaged over each run's images), grouped by method and
+/// named for people (`stat_name`), the record's key after each.
+fn method_figures(runs: &[&RunRecord]) -> String {
+    let mut methods: Vec<&str> = runs
+        .iter()
+        .filter(|r| !r.stats.is_empty())
+        .map(|r| r.method.as_str())
+        .collect();
+    methods.dedup();
+    methods.sort();
+    methods.dedup();
+    if methods.is_empty() {
+        return String::new();
+    }
+    let mut md = String::from("Method figures (averaged over each run's images):\n\n");
+    for method in methods {
+        let _ = writeln!(md, "- **{method}**");
+        for r in runs
+            .iter()
+            .filter(|r| r.method == method && !r.stats.is_empty())
+        {
+            let figures: Vec<String> = r
+                .stats
+                .iter()
+                .map(|(k, v)| format!("{} {} (`{k}`)", stat_name(k), significant(*v)))
+                .collect();
+            let _ = writeln!(md, "  - {} {}: {}", r.label, r.budget, figures.join("; "));
+        }
+    }
+    md + "\n"
+}
+
+/// A method's figure as people say it; the key itself where none is known.
+pub fn stat_name(key: &str) -> &str {
+    match key {
+        "kept_standard_fraction" => "share of standard VPLs kept",
+        "kept_reverse_fraction" => "share of reverse VPLs kept",
+        "final_standard_weight" => "final weight of the standard side",
+        "light_samples_per_pixel" => "light samples per pixel and frame",
+        "effective_light_fraction" => "share of light samples above the surface",
+        "alpha_samples" => "samples that estimated alpha",
+        "mean_alpha" => "mean alpha (light sampling's share)",
+        "iterations_per_chunk" => "iterations per dispatch",
+        "light_vertices_per_iteration" => "light vertices per iteration",
+        "bundle_env_offset" => "offset of the bundles' environment directions",
+        "two_bounce_clamp" => "two-bounce clamp",
+        "rays_per_iteration_max" => "most rays in one iteration",
+        "reuse_kept_paths" => "light paths kept from earlier frames",
+        "luminaire_samples_per_pixel" => "luminaire samples per lit pixel and frame",
+        "pixels_with_luminaire_samples" => "pixels with luminaire samples",
+        "most_luminaire_samples_per_pixel" => "most luminaire samples in one pixel and frame",
+        "final_visible_fraction" => "share of final samples visible",
+        "final_mean_m" => "mean confidence M of the final reservoirs",
+        other => other,
+    }
+}
+
+/// Four significant digits, without a trailing run of zeros for whole numbers.
+fn significant(v: f64) -> String {
+    if v.is_finite() && v == v.trunc() && v.abs() < 1e9 {
+        format!("{v:.0}")
+    } else if v != 0.0 && v.is_finite() && (v.abs() < 1e-3 || v.abs() >= 1e5) {
+        format!("{v:.3e}")
+    } else {
+        format!("{v:.4}")
+    }
+}
+
 /// Each run's GPU time per pass (medians over its repeats): where the time goes.
 fn pass_times(runs: &[&RunRecord]) -> String {
     let with: Vec<&&RunRecord> = runs
@@ -690,6 +749,34 @@ mod tests {
         assert!(notes.contains("0.56x its budget of 500 ms"), "{notes}");
         assert!(notes.contains("budget overshot: bir"), "{notes}");
         assert_eq!(notes.matches(MISSED_MARK.trim()).count(), 2, "{notes}");
+    }
+
+    /// Method figures are grouped by method and named for people, the key kept beside.
+    #[test]
+    fn method_figures_are_grouped_and_named() {
+        let mut a = timed("bir", 100.0, 90.0, 0.1);
+        a.method = "bir".into();
+        a.stats.insert("kept_standard_fraction".into(), 0.25);
+        let mut b = timed("ir-reuse", 100.0, 90.0, 0.1);
+        b.method = "ir".into();
+        b.stats.insert("reuse_kept_paths".into(), 96.0);
+        b.stats.insert("some_new_figure".into(), 1.5e-5);
+        let mut c = timed("bir-2", 200.0, 190.0, 0.1);
+        c.method = "bir".into();
+        c.stats.insert("kept_standard_fraction".into(), 0.5);
+        let text = method_figures(&[&a, &b, &c]);
+        let bir = text.find("- **bir**").unwrap();
+        let ir = text.find("- **ir**").unwrap();
+        assert!(bir < ir, "{text}");
+        assert!(text.contains(
+            "  - bir-2 time_ms=200: share of standard VPLs kept 0.5000 (`kept_standard_fraction`)"
+        ));
+        assert!(text.contains("light paths kept from earlier frames 96 (`reuse_kept_paths`)"));
+        assert!(
+            text.contains("some_new_figure 1.500e-5 (`some_new_figure`)"),
+            "{text}"
+        );
+        assert_eq!(method_figures(&[&run("s", "gpu", 1.0, 0.1)]), "");
     }
 
     #[test]
