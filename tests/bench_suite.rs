@@ -217,6 +217,20 @@ fn quick_suite_writes_every_output_and_charts_the_csv_figures() {
         );
     }
     assert!(results.runs.iter().any(|r| r.pareto));
+    // report.html: every scored run's row and image, each scene's viewer.
+    let html = fs::read_to_string(out.join("report.html")).unwrap();
+    for r in results.runs.iter().filter(|r| r.status == Status::Ok) {
+        let name = format!("{} {}", r.label, r.budget);
+        assert!(html.contains(&format!("data-image=\"{name}\"")), "{name}");
+        assert!(
+            html.contains(&format!("{name:?}:{{\"width\":")),
+            "{name}'s image"
+        );
+    }
+    assert_eq!(
+        html.matches("<div class=\"viewer\">").count(),
+        results.scenes().len()
+    );
     // Every reference knows its own error (from its halves), and the report says it.
     let report = fs::read_to_string(out.join("report.md")).unwrap();
     for (scene, r) in &results.references {

@@ -12,6 +12,7 @@ pub mod converged;
 pub mod eta;
 pub mod file;
 pub mod generated;
+pub mod html;
 pub mod measure;
 pub mod merge;
 pub mod output;
@@ -423,6 +424,9 @@ fn record_reference(
         preview::factor_for(found.image.width, THUMBNAIL_WIDTH),
     );
     image::png::write(&options.out.join(&image_name), &thumb, 0.0).map_err(|e| format!("{e:#}"))?;
+    // The full float image beside it, for report.html's viewer (html.rs).
+    image::exr::write(&options.out.join(html::exr_of(&image_name)), &found.image)
+        .map_err(|e| format!("{e:#}"))?;
     let failure = scene.failure.as_ref();
     results.references.insert(
         scene.name.clone(),
@@ -769,6 +773,7 @@ fn write_images(
     )?;
     let (w, h, data) = preview::error_map_rgb8(image, reference, factor);
     image::png::write_rgb8(&options.out.join(&error_name), w, h, &data)?;
+    image::exr::write(&options.out.join(html::exr_of(&image_name)), image)?;
     record.image = Some(image_name);
     record.error_map = Some(error_name);
     Ok(())

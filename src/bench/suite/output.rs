@@ -197,7 +197,13 @@ pub fn write(out: &Path, results: &SuiteResults) -> Result<()> {
             atomic_write(&path, &chart.to_svg())?;
         }
     }
-    atomic_write(&out.join("report.md"), &report::markdown(results))
+    atomic_write(&out.join("report.md"), &report::markdown(results))?;
+    // The page reads every run's image, so it is written once the suite is complete (each
+    // write of an incomplete suite would read them all again).
+    if results.complete {
+        atomic_write(&out.join("report.html"), &super::html::page(out, results)?)?;
+    }
+    Ok(())
 }
 
 fn atomic_write(path: &Path, text: &str) -> Result<()> {

@@ -632,6 +632,45 @@ pub(super) mod tests {
         }
     }
 
+    /// A complete suite's results holding `runs` (device "gpu").
+    pub(in crate::bench::suite) fn suite_results(runs: Vec<RunRecord>) -> SuiteResults {
+        SuiteResults {
+            suite: "s".into(),
+            suite_file: String::new(),
+            suite_hash: String::new(),
+            description: String::new(),
+            shard: None,
+            runs_in_suite: runs.len(),
+            runs_planned: runs.len(),
+            complete: true,
+            device: "gpu".into(),
+            driver: String::new(),
+            irad_version: String::new(),
+            references: BTreeMap::new(),
+            runs,
+            suite_text: String::new(),
+            scene_files: Vec::new(),
+            uploads: BTreeMap::new(),
+        }
+    }
+
+    /// A still scene's reference whose thumbnail is `image`.
+    pub(in crate::bench::suite) fn reference_summary(image: &str) -> ReferenceSummary {
+        ReferenceSummary {
+            spp: 64,
+            image: image.into(),
+            cache: String::new(),
+            seed: 1,
+            gpu_ms: None,
+            rel_mse: Some(1e-4),
+            converged: false,
+            expected_to_fail: Vec::new(),
+            why: String::new(),
+            source: String::new(),
+            frames: Vec::new(),
+        }
+    }
+
     #[test]
     fn pareto_marks_the_undominated_runs_per_scene_and_device() {
         let mut runs = vec![

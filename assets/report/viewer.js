@@ -1,0 +1,303 @@
+// irad's image viewer for report.html (issue 47 item 1; work in progress on wip/html-report).
+// No library: images arrive as half-float RGB in base64 (IRAD_DATA, written by the Rust side),
+// are decoded once into Float32Arrays, and drawn into a canvas with nearest-neighbour zoom, so
+// one screen pixel shows one image pixel's exact value at any zoom.
+//
+// A viewer compares image A (a run) with image B (the reference or another run):
+//   split  - A left of the slider, B right of it;
+//   flip   - A or B, toggled with F (or the flip button);
+//   relmse - per-pixel relMSE of A against B, log scale 1e-4 (black) .. 10 (white);
+//   signed - (Y(A) - Y(B)) / sqrt(Y(B)^2 + 0.01), blue -1 .. black 0 .. red +1.
+// Exposure (stops) and the tone curve apply to split and flip. Wheel zooms about the cursor,
+// drag pans; A and B always share the view (one canvas). The readout shows both pixels' values.
+"use strict";
+
+const HALF = (() => {
+  // Every half float's value, indexed by its bits.
+  const table = new Float32Array(65536);
+  for (let h = 0; h < 65536; h++) {
+    const s = h & 0x8000 ? -1 : 1;
+    const e = (h >> 10) & 0x1f;
+    const m = h & 0x3ff;
+    let v;
+    if (e === 0) v = m * Math.pow(2, -24);
+    else if (e === 31) v = m ? NaN : Infinity;
+    else v = (1 + m / 1024) * Math.pow(2, e - 15);
+    table[h] = s * v;
+  }
+  return table;
+})();
+
+// base64 half-float RGB, `width` x `height`, rows top to bottom, into a Float32Array.
+function decodeImage(b64, width, height) {
+  const bytes = Uint8Array.from(atob(b64), (c) => c.charCodeAt(0));
+  const halves = new Uint16Array(bytes.buffer, 0, 3 * width * height);
+  const out = new Float32Array(halves.length);
+  for (let i = 0; i < halves.length; i++) out[i] = HALF[halves[i]];
+  return { width, height, rgb: out };
+}
+
+const TONE = {
+  srgb: (v) => (v <= 0.0031308 ? 12.92 * v : 1.055 * Math.pow(v, 1 / 2.4) - 0.055),
+  gamma22: (v) => Math.pow(Math.max(v, 0), 1 / 2.2),
+  linear: (v) => v,
+  // Narkowicz's ACES fit, then sRGB.
+  aces: (v) => TONE.srgb((v * (2.51 * v + 0.03)) / (v * (2.43 * v + 0.59) + 0.14)),
+};
+
+function luminance(r, g, b) {
+  return 0.2126 * r + 0.7152 * g + 0.0722 * b;
+}
+
+// The heat ramp of the reports' error maps (src/image/preview.rs): black, dark red, red,
+// orange, yellow, white at equal steps of log10(e) over [1e-4, 10].
+const HEAT = [
+  [0, 0, 0], [0.35, 0, 0.05], [0.8, 0.1, 0.05], [1, 0.5, 0], [1, 0.9, 0.1], [1, 1, 1],
+];
+function heat(t) {
+  const s = Math.min(Math.max(t, 0), 1) * (HEAT.length - 1);
+  const i = Math.min(Math.floor(s), HEAT.length - 2);
+  const u = s - i;
+  return HEAT[i].map((c, k) => 255 * (c + u * (HEAT[i + 1][k] - c)));
+}
+function heatOfError(e) {
+  return heat(e > 0 ? (Math.log10(e) + 4) / 5 : 0);
+}
+// Blue, black at 0.5, red (src/image/error_maps.rs's diverging ramp).
+function diverging(t) {
+  const s = 2 * Math.min(Math.max(t, 0), 1) - 1;
+  return s < 0 ? [64 * -s, 140 * -s, 255 * -s] : [255 * s, 51 * s, 26 * s];
+}
+
+class Viewer {
+  constructor(root, images, options) {
+    this.root = root;
+    this.images = images; // name -> decoded image
+    this.names = Object.keys(images);
+    this.a = options.a || this.names[0];
+    this.b = options.b || this.names[this.names.length - 1];
+    this.mode = "split";
+    this.showB = false; // flip mode: which one is shown
+    this.exposure = 0;
+    this.tone = "srgb";
+    this.split = 0.5; // the slider's place, a fraction of the canvas width
+    this.canvas = root.querySelector("canvas.view");
+    this.bar = root.querySelector("canvas.bar");
+    this.readout = root.querySelector(".readout");
+    this.fit();
+    this.bind();
+    this.draw();
+  }
+
+  image(name) {
+    return this.images[name];
+  }
+
+  // The whole image in the canvas, at an integer zoom where it fits.
+  fit() {
+    const im = this.image(this.a);
+    const scale = Math.max(1, Math.floor(Math.min(this.canvas.width / im.width, this.canvas.height / im.height)));
+    this.scale = scale;
+    this.ox = (this.canvas.width - im.width * scale) / 2;
+    this.oy = (this.canvas.height - im.height * scale) / 2;
+  }
+
+  // Canvas pixel -> image pixel (integer), or null outside the image.
+  pixelAt(cx, cy) {
+    const im = this.image(this.a);
+    const x = Math.floor((cx - this.ox) / this.scale);
+    const y = Math.floor((cy - this.oy) / this.scale);
+    return x >= 0 && y >= 0 && x < im.width && y < im.height ? [x, y] : null;
+  }
+
+  value(name, x, y) {
+    const im = this.image(name);
+    const i = 3 * (y * im.width + x);
+    return [im.rgb[i], im.rgb[i + 1], im.rgb[i + 2]];
+  }
+
+  colour(cx, x, y) {
+    const A = this.value(this.a, x, y);
+    const B = this.value(this.b, x, y);
+    if (this.mode === "relmse") {
+      if (!A.every(Number.isFinite)) return [255, 0, 255];
+      let e = 0;
+      for (let c = 0; c < 3; c++) e += ((A[c] - B[c]) ** 2 / (B[c] * B[c] + 0.01)) / 3;
+      return heatOfError(e);
+    }
+    if (this.mode === "signed") {
+      if (!A.every(Number.isFinite)) return [255, 0, 255];
+      const ya = luminance(...A);
+      const yb = luminance(...B);
+      return diverging(0.5 + 0.5 * Math.max(-1, Math.min(1, (ya - yb) / Math.sqrt(yb * yb + 0.01))));
+    }
+    const useB = this.mode === "flip" ? this.showB : cx >= this.split * this.canvas.width;
+    const v = useB ? B : A;
+    const k = Math.pow(2, this.exposure);
+    const tone = TONE[this.tone];
+    return v.map((c) => (Number.isFinite(c) ? 255 * Math.min(Math.max(tone(c * k), 0), 1) : 0));
+  }
+
+  draw() {
+    const ctx = this.canvas.getContext("2d");
+    const { width, height } = this.canvas;
+    const out = ctx.createImageData(width, height);
+    for (let cy = 0; cy < height; cy++) {
+      for (let cx = 0; cx < width; cx++) {
+        const p = this.pixelAt(cx + 0.5, cy + 0.5);
+        const o = 4 * (cy * width + cx);
+        const rgb = p ? this.colour(cx, p[0], p[1]) : [32, 32, 32];
+        out.data[o] = rgb[0];
+        out.data[o + 1] = rgb[1];
+        out.data[o + 2] = rgb[2];
+        out.data[o + 3] = 255;
+      }
+    }
+    ctx.putImageData(out, 0, 0);
+    if (this.mode === "split") {
+      const x = Math.round(this.split * width) + 0.5;
+      ctx.strokeStyle = "#fff";
+      ctx.beginPath();
+      ctx.moveTo(x, 0);
+      ctx.lineTo(x, height);
+      ctx.stroke();
+    }
+    this.drawBar();
+    this.root.dataset.mode = this.mode;
+    this.root.dataset.shown = this.mode === "flip" ? (this.showB ? this.b : this.a) : "";
+  }
+
+  drawBar() {
+    const ctx = this.bar.getContext("2d");
+    const { width, height } = this.bar;
+    ctx.clearRect(0, 0, width, height);
+    if (this.mode !== "relmse" && this.mode !== "signed") return;
+    for (let x = 0; x < width; x++) {
+      const t = x / (width - 1);
+      const rgb = this.mode === "relmse" ? heat(t) : diverging(t);
+      ctx.fillStyle = `rgb(${rgb[0]},${rgb[1]},${rgb[2]})`;
+      ctx.fillRect(x, 0, 1, height - 14);
+    }
+    ctx.fillStyle = "#222";
+    ctx.font = "11px sans-serif";
+    const labels = this.mode === "relmse" ? ["1e-4", "1e-3", "0.01", "0.1", "1", "10"] : ["-1", "-0.5", "0", "0.5", "1"];
+    labels.forEach((l, i) => {
+      const x = (i / (labels.length - 1)) * (width - 1);
+      ctx.textAlign = i === 0 ? "left" : i === labels.length - 1 ? "right" : "center";
+      ctx.fillText(l, x, height - 2);
+    });
+  }
+
+  showReadout(cx, cy) {
+    const p = this.pixelAt(cx, cy);
+    if (!p) {
+      this.readout.textContent = "";
+      return;
+    }
+    const fmt = (v) => v.map((c) => c.toPrecision(5)).join(", ");
+    const A = this.value(this.a, p[0], p[1]);
+    const B = this.value(this.b, p[0], p[1]);
+    this.readout.dataset.x = p[0];
+    this.readout.dataset.y = p[1];
+    this.readout.dataset.a = A.join(",");
+    this.readout.dataset.b = B.join(",");
+    this.readout.textContent = `(${p[0]}, ${p[1]})  ${this.a}: ${fmt(A)}  |  ${this.b}: ${fmt(B)}`;
+  }
+
+  // Zoom by `factor` about canvas point (cx, cy), keeping the image pixel under it in place.
+  zoom(factor, cx, cy) {
+    const scale = Math.min(Math.max(this.scale * factor, 0.25), 256);
+    this.ox = cx - ((cx - this.ox) * scale) / this.scale;
+    this.oy = cy - ((cy - this.oy) * scale) / this.scale;
+    this.scale = scale;
+    this.draw();
+  }
+
+  bind() {
+    const c = this.canvas;
+    const local = (e) => {
+      const r = c.getBoundingClientRect();
+      return [((e.clientX - r.left) * c.width) / r.width, ((e.clientY - r.top) * c.height) / r.height];
+    };
+    c.addEventListener("wheel", (e) => {
+      e.preventDefault();
+      const [cx, cy] = local(e);
+      this.zoom(e.deltaY < 0 ? 2 : 0.5, cx, cy);
+      this.showReadout(cx, cy);
+    });
+    let drag = null;
+    c.addEventListener("pointerdown", (e) => {
+      drag = local(e);
+      c.setPointerCapture(e.pointerId);
+    });
+    c.addEventListener("pointerup", () => (drag = null));
+    c.addEventListener("pointermove", (e) => {
+      const [cx, cy] = local(e);
+      if (drag) {
+        if (this.mode === "split" && e.shiftKey) {
+          this.split = cx / c.width;
+        } else {
+          this.ox += cx - drag[0];
+          this.oy += cy - drag[1];
+        }
+        drag = [cx, cy];
+        this.draw();
+      }
+      this.showReadout(cx, cy);
+    });
+    const q = (sel) => this.root.querySelector(sel);
+    const sel = (s, names, value, set) => {
+      s.innerHTML = names.map((n) => `<option${n === value ? " selected" : ""}>${n}</option>`).join("");
+      s.addEventListener("change", () => {
+        set(s.value);
+        this.draw();
+      });
+    };
+    sel(q("select.a"), this.names, this.a, (v) => (this.a = v));
+    sel(q("select.b"), this.names, this.b, (v) => (this.b = v));
+    q("select.mode").addEventListener("change", (e) => {
+      this.mode = e.target.value;
+      this.draw();
+    });
+    q("select.tone").addEventListener("change", (e) => {
+      this.tone = e.target.value;
+      this.draw();
+    });
+    const exposure = q("input.exposure");
+    exposure.addEventListener("input", () => {
+      this.exposure = Number(exposure.value);
+      q(".exposure-value").textContent = `${this.exposure >= 0 ? "+" : ""}${this.exposure.toFixed(1)} stops`;
+      this.draw();
+    });
+    const split = q("input.split");
+    split.addEventListener("input", () => {
+      this.split = Number(split.value) / 100;
+      this.draw();
+    });
+    q("button.flip").addEventListener("click", () => this.flip());
+    q("button.fit").addEventListener("click", () => {
+      this.fit();
+      this.draw();
+    });
+    this.root.tabIndex = 0;
+    this.root.addEventListener("keydown", (e) => {
+      if (e.key === "f" || e.key === "F") this.flip();
+      else if (e.key === "e") exposure.stepUp(), exposure.dispatchEvent(new Event("input"));
+      else if (e.key === "E") exposure.stepDown(), exposure.dispatchEvent(new Event("input"));
+      else return;
+      e.preventDefault();
+    });
+  }
+
+  flip() {
+    if (this.mode !== "flip") {
+      this.mode = "flip";
+      this.root.querySelector("select.mode").value = "flip";
+      this.showB = false;
+    }
+    this.showB = !this.showB;
+    this.draw();
+  }
+}
+
+window.IradViewer = { Viewer, decodeImage, HALF };
