@@ -30,7 +30,9 @@ const HALF = (() => {
 
 // base64 half-float RGB, `width` x `height`, rows top to bottom, into a Float32Array.
 function decodeImage(b64, width, height) {
-  const bytes = Uint8Array.from(atob(b64), (c) => c.charCodeAt(0));
+  const text = atob(b64);
+  const bytes = new Uint8Array(text.length);
+  for (let i = 0; i < text.length; i++) bytes[i] = text.charCodeAt(i);
   const halves = new Uint16Array(bytes.buffer, 0, 3 * width * height);
   const out = new Float32Array(halves.length);
   for (let i = 0; i < halves.length; i++) out[i] = HALF[halves[i]];
@@ -72,7 +74,9 @@ function diverging(t) {
 class Viewer {
   constructor(root, images, options) {
     this.root = root;
-    this.images = images; // name -> decoded image
+    // name -> decoded image, or a function that decodes it (on first use: a page of many
+    // large images would otherwise decode them all when it loads).
+    this.images = images;
     this.names = Object.keys(images);
     this.a = options.a || this.names[0];
     this.b = options.b || this.names[this.names.length - 1];
@@ -90,13 +94,16 @@ class Viewer {
   }
 
   image(name) {
+    if (typeof this.images[name] === "function") this.images[name] = this.images[name]();
     return this.images[name];
   }
 
   // The whole image in the canvas, at an integer zoom where it fits.
   fit() {
     const im = this.image(this.a);
-    const scale = Math.max(1, Math.floor(Math.min(this.canvas.width / im.width, this.canvas.height / im.height)));
+    const fits = Math.min(this.canvas.width / im.width, this.canvas.height / im.height);
+    // An integer zoom where the image fits at 1:1 or more, else the fraction that fits.
+    const scale = fits >= 1 ? Math.floor(fits) : fits;
     this.scale = scale;
     this.ox = (this.canvas.width - im.width * scale) / 2;
     this.oy = (this.canvas.height - im.height * scale) / 2;
@@ -120,13 +127,13 @@ class Viewer {
     const A = this.value(this.a, x, y);
     const B = this.value(this.b, x, y);
     if (this.mode === "relmse") {
-      if (!A.every(Number.isFinite)) return [255, 0, 255];
+      if (!A.every(Number.isFinite) || !B.every(Number.isFinite)) return [255, 0, 255];
       let e = 0;
       for (let c = 0; c < 3; c++) e += ((A[c] - B[c]) ** 2 / (B[c] * B[c] + 0.01)) / 3;
       return heatOfError(e);
     }
     if (this.mode === "signed") {
-      if (!A.every(Number.isFinite)) return [255, 0, 255];
+      if (!A.every(Number.isFinite) || !B.every(Number.isFinite)) return [255, 0, 255];
       const ya = luminance(...A);
       const yb = luminance(...B);
       return diverging(0.5 + 0.5 * Math.max(-1, Math.min(1, (ya - yb) / Math.sqrt(yb * yb + 0.01))));
@@ -135,7 +142,8 @@ class Viewer {
     const v = useB ? B : A;
     const k = Math.pow(2, this.exposure);
     const tone = TONE[this.tone];
-    return v.map((c) => (Number.isFinite(c) ? 255 * Math.min(Math.max(tone(c * k), 0), 1) : 0));
+    // +Inf (past the half floats' range) is white, NaN black.
+    return v.map((c) => (Number.isNaN(c) ? 0 : c === Infinity ? 255 : 255 * Math.min(Math.max(tone(c * k), 0), 1)));
   }
 
   draw() {
@@ -189,7 +197,8 @@ class Viewer {
   }
 
   showReadout(cx, cy) {
-    const p = this.pixelAt(cx, cy);
+    // The pixel drawn at this canvas pixel (draw samples its centre).
+    const p = this.pixelAt(Math.floor(cx) + 0.5, Math.floor(cy) + 0.5);
     if (!p) {
       this.readout.textContent = "";
       return;
@@ -220,6 +229,7 @@ class Viewer {
       return [((e.clientX - r.left) * c.width) / r.width, ((e.clientY - r.top) * c.height) / r.height];
     };
     c.addEventListener("wheel", (e) => {
+      if (e.deltaY === 0) return;
       e.preventDefault();
       const [cx, cy] = local(e);
       this.zoom(e.deltaY < 0 ? 2 : 0.5, cx, cy);
@@ -231,6 +241,8 @@ class Viewer {
       c.setPointerCapture(e.pointerId);
     });
     c.addEventListener("pointerup", () => (drag = null));
+    c.addEventListener("pointercancel", () => (drag = null));
+    c.style.touchAction = "none";
     c.addEventListener("pointermove", (e) => {
       const [cx, cy] = local(e);
       if (drag) {
@@ -247,7 +259,7 @@ class Viewer {
     });
     const q = (sel) => this.root.querySelector(sel);
     const sel = (s, names, value, set) => {
-      s.innerHTML = names.map((n) => `<option${n === value ? " selected" : ""}>${n}</option>`).join("");
+      s.replaceChildren(...names.map((n) => new Option(n, n, false, n === value)));
       s.addEventListener("change", () => {
         set(s.value);
         this.draw();
@@ -281,6 +293,7 @@ class Viewer {
     });
     this.root.tabIndex = 0;
     this.root.addEventListener("keydown", (e) => {
+      if (e.ctrlKey || e.metaKey || e.altKey) return;
       if (e.key === "f" || e.key === "F") this.flip();
       else if (e.key === "e") exposure.stepUp(), exposure.dispatchEvent(new Event("input"));
       else if (e.key === "E") exposure.stepDown(), exposure.dispatchEvent(new Event("input"));

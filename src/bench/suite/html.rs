@@ -28,16 +28,34 @@ pub fn exr_of(png: &str) -> String {
     }
 }
 
-/// `image` as half-float RGB, little-endian, in base64.
+/// `image` as half-float RGB, little-endian, in base64. Finite values past the half floats'
+/// range are clamped to its largest (65504), so a firefly stays a bright finite pixel.
 pub fn half_base64(image: &Image) -> String {
     let mut bytes = Vec::with_capacity(6 * image.pixels.len());
+    let most = f32::from(half::f16::MAX);
     for p in &image.pixels {
         for c in p {
-            bytes.extend_from_slice(&half::f16::from_f32(*c).to_bits().to_le_bytes());
+            let v = if c.is_finite() {
+                c.clamp(-most, most)
+            } else {
+                *c
+            };
+            bytes.extend_from_slice(&half::f16::from_f32(v).to_bits().to_le_bytes());
         }
     }
     base64(&bytes)
 }
+
+/// `s` as a JSON string safe inside a `<script>` element (no `<`, so no `</script>`).
+fn json_string(s: &str) -> String {
+    serde_json::to_string(s)
+        .expect("a string serializes")
+        .replace('<', "\\u003c")
+}
+
+/// The most base64 one scene's images may take in the page; past it they are embedded
+/// box-filtered down by the smallest integer factor that fits (the viewer says so).
+const SCENE_BYTES: usize = 24 << 20;
 
 /// Standard base64 with padding.
 pub fn base64(bytes: &[u8]) -> String {
@@ -85,18 +103,30 @@ pub fn page(out: &Path, results: &SuiteResults) -> Result<String> {
             .iter()
             .filter(|r| &r.scene == scene && r.status == Status::Ok && r.image.is_some())
             .collect();
-        // The viewer's images: the reference first (the default B), then each run's.
+        // The viewer's images: the reference first (the default B), then each run's. One that
+        // cannot be read (a merged shard's, an older run's) is left out with a warning.
         let mut images: Vec<(String, Image)> = Vec::new();
+        let mut wanted: Vec<(String, String)> = Vec::new();
         if let Some(r) = results.references.get(scene) {
-            let path = out.join(exr_of(&r.image));
-            if path.is_file() {
-                images.push(("reference".into(), read(&path)?));
-            }
+            wanted.push(("reference".into(), exr_of(&r.image)));
         }
         for r in &runs {
-            let path = out.join(exr_of(r.image.as_deref().expect("filtered")));
-            if path.is_file() {
-                images.push((format!("{} {}", r.label, r.budget), read(&path)?));
+            let exr = exr_of(r.image.as_deref().expect("filtered"));
+            wanted.push((format!("{} {}", r.label, r.budget), exr));
+        }
+        for (name, exr) in wanted {
+            match read(&out.join(&exr)) {
+                Ok(im) => images.push((name, im)),
+                Err(e) => log::warn!("report.html leaves out {name}: {e:#}"),
+            }
+        }
+        let pixels: usize = images.iter().map(|(_, im)| im.pixels.len()).sum();
+        let factor = (1..)
+            .find(|f: &usize| 8 * pixels / (f * f) <= SCENE_BYTES)
+            .expect("some factor fits");
+        if factor > 1 {
+            for (_, im) in images.iter_mut() {
+                *im = crate::image::preview::downscale(im, factor as u32);
             }
         }
         let _ = write!(
@@ -108,8 +138,9 @@ pub fn page(out: &Path, results: &SuiteResults) -> Result<String> {
         for (i, (name, im)) in images.iter().enumerate() {
             let _ = write!(
                 data,
-                "{}{name:?}:{{\"width\":{},\"height\":{},\"rgb\":\"{}\"}}",
+                "{}{}:{{\"width\":{},\"height\":{},\"rgb\":\"{}\"}}",
                 if i > 0 { "," } else { "" },
+                json_string(name),
                 im.width,
                 im.height,
                 half_base64(im)
@@ -124,6 +155,15 @@ pub fn page(out: &Path, results: &SuiteResults) -> Result<String> {
             chart(results, scene).to_svg()
         );
         body += &table(&runs);
+        if factor > 1 {
+            let _ = writeln!(
+                body,
+                "<p class=\"note\">The viewer's images are averaged over {factor}x{factor} \
+                 pixel blocks, so that the page stays under {} MB for this scene; the EXRs \
+                 in images/ are full size.</p>",
+                SCENE_BYTES >> 20
+            );
+        }
         if !images.is_empty() {
             body += VIEWER_MARKUP;
         }
@@ -204,7 +244,8 @@ for (const section of document.querySelectorAll("section.scene")) {
   const images = {};
   const raw = IRAD_DATA[section.id] || {};
   for (const name of Object.keys(raw)) {
-    images[name] = IradViewer.decodeImage(raw[name].rgb, raw[name].width, raw[name].height);
+    // Decoded when first shown.
+    images[name] = () => IradViewer.decodeImage(raw[name].rgb, raw[name].width, raw[name].height);
   }
   const root = section.querySelector(".viewer");
   const names = Object.keys(images);
@@ -215,6 +256,7 @@ for (const section of document.querySelectorAll("section.scene")) {
   }
   const show = (name) => {
     if (!viewer || !images[name]) return;
+    root.focus();
     viewer.a = name;
     root.querySelector("select.a").value = name;
     viewer.draw();
@@ -233,16 +275,18 @@ for (const section of document.querySelectorAll("section.scene")) {
   section.querySelectorAll("table.runs th").forEach((th, col) => {
     th.addEventListener("click", () => {
       const numeric = th.hasAttribute("data-numeric");
-      const key = (tr) => {
-        const t = tr.children[col].textContent;
-        return numeric ? (t === "-" ? Infinity : parseFloat(t)) : t;
-      };
+      const text = (tr) => tr.children[col].textContent;
+      const number = (tr) => (text(tr) === "-" ? Infinity : parseFloat(text(tr)));
+      // Numbers by value; text with its digits as numbers (spp=4 before spp=16).
+      const order = numeric
+        ? (a, b) => number(a) - number(b)
+        : (a, b) => text(a).localeCompare(text(b), undefined, { numeric: true });
       const up = th.dataset.sorted !== "up";
       th.parentElement.querySelectorAll("th").forEach((h) => delete h.dataset.sorted);
       th.dataset.sorted = up ? "up" : "down";
       const body = th.closest("table").querySelector("tbody");
       [...body.children]
-        .sort((a, b) => (key(a) < key(b) ? -1 : key(a) > key(b) ? 1 : 0) * (up ? 1 : -1))
+        .sort((a, b) => (order(a, b) || 0) * (up ? 1 : -1))
         .forEach((tr) => body.appendChild(tr));
     });
   });
@@ -295,6 +339,28 @@ mod tests {
         assert!(a < b, "the reference first");
         assert!(page.contains("IradViewer"));
         std::fs::remove_dir_all(&out).unwrap();
+    }
+
+    /// A run's name cannot end the page's script, and a firefly past the half floats' range
+    /// stays finite.
+    #[test]
+    fn names_and_values_are_embedded_safely() {
+        let key = json_string("spp=4 </script><b>\"x\"");
+        assert!(!key.contains('<'), "{key}");
+        assert_eq!(
+            serde_json::from_str::<String>(&key).unwrap(),
+            "spp=4 </script><b>\"x\""
+        );
+        let firefly = Image {
+            width: 1,
+            height: 1,
+            pixels: vec![[1e6, f32::NAN, -1e6]],
+        };
+        // 65504 = 0x7bff, NaN stays NaN (0x7e00), -65504 = 0xfbff.
+        assert_eq!(
+            half_base64(&firefly),
+            base64(&[0xff, 0x7b, 0x00, 0x7e, 0xff, 0xfb])
+        );
     }
 
     #[test]

@@ -201,7 +201,12 @@ pub fn write(out: &Path, results: &SuiteResults) -> Result<()> {
     // The page reads every run's image, so it is written once the suite is complete (each
     // write of an incomplete suite would read them all again).
     if results.complete {
-        atomic_write(&out.join("report.html"), &super::html::page(out, results)?)?;
+        // The page is a view of what is written above: a failure to make it is said, not
+        // fatal to the suite (or to a merge) whose results are on disk.
+        match super::html::page(out, results) {
+            Ok(page) => atomic_write(&out.join("report.html"), &page)?,
+            Err(e) => log::warn!("report.html not written: {e:#}"),
+        }
     }
     Ok(())
 }
