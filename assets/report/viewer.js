@@ -1,4 +1,5 @@
-// irad's image viewer for report.html (issue 47 item 1; work in progress on wip/html-report).
+// irad's image viewer for report.html (src/bench/suite/html.rs; docs/DESIGN.md "Benchmarks"
+// on why half floats and one canvas).
 // No library: images arrive as half-float RGB in base64 (IRAD_DATA, written by the Rust side),
 // are decoded once into Float32Arrays, and drawn into a canvas with nearest-neighbour zoom, so
 // one screen pixel shows one image pixel's exact value at any zoom.

@@ -1,5 +1,5 @@
-//! report.html: the suite's report as one self-contained page (issue 47 item 1, work in
-//! progress): per scene its chart (the SVG of charts/, whose points' tooltips hold run, time and
+//! report.html: the suite's report as one self-contained page (docs/DESIGN.md "Benchmarks"):
+//! per scene its chart (the SVG of charts/, whose points' tooltips hold run, time and
 //! relMSE; a click opens the run in the viewer), its runs' table (sortable by any column) and an
 //! image viewer (assets/report/viewer.js) comparing any run with the reference or another run.
 //!

@@ -7,7 +7,9 @@ use std::fmt::Write as _;
 use crate::image::preview::{ERROR_MAP_MAX, ERROR_MAP_MIN};
 
 use super::output::{animated, chart_path, frames_chart_path};
-use super::results::{RunRecord, Status, SuiteResults, STAR_MAX_BIAS, STAR_MAX_OUTLIERS};
+use super::results::{
+    plausible, RunRecord, Status, SuiteResults, STAR_MAX_BIAS, STAR_MAX_OUTLIERS,
+};
 
 /// The mark of a Pareto-optimal run in the report's tables.
 pub const PARETO_MARK: &str = "★";
@@ -276,12 +278,7 @@ pub const HOME_MARK: &str = "⌂";
 /// so over 1 the run reaches lower error in the same time. Empty without time budgets.
 fn equal_time_table(runs: &[&RunRecord]) -> String {
     // A frame-time budget (an animated scene's) is a time budget per frame.
-    let mut budgets: Vec<f64> = runs
-        .iter()
-        .filter_map(|r| r.time_ms.or(r.frame_ms))
-        .collect();
-    budgets.sort_by(f64::total_cmp);
-    budgets.dedup();
+    let budgets = time_budgets(runs);
     if budgets.is_empty() {
         return String::new();
     }
@@ -361,17 +358,21 @@ fn equal_time_table(runs: &[&RunRecord]) -> String {
     md
 }
 
+/// The runs' time budgets (a frame-time budget is a time budget per frame), ascending, each once.
+fn time_budgets(runs: &[&RunRecord]) -> Vec<f64> {
+    let mut budgets: Vec<f64> = runs
+        .iter()
+        .filter_map(|r| r.time_ms.or(r.frame_ms))
+        .collect();
+    budgets.sort_by(f64::total_cmp);
+    budgets.dedup();
+    budgets
+}
+
 /// The scene's one-line verdict: at each time budget, the run with the lowest net relMSE x GPU
 /// time among those plausibly right (the star's thresholds) and how far ahead of the next
 /// method it is; without time budgets, the starred runs.
 fn summary(runs: &[&RunRecord]) -> String {
-    let plausible = |r: &RunRecord| {
-        r.status == Status::Ok
-            && r.nonfinite_estimates == 0
-            && r.metrics.is_some_and(|m| {
-                m.nan_inf == 0 && m.bias <= STAR_MAX_BIAS && m.outliers <= STAR_MAX_OUTLIERS
-            })
-    };
     // Net relMSE where the reference's noise leaves one, else the relMSE itself (a run within
     // the reference's noise is among the best, not out); GPU time, else wall time.
     let cost = |r: &RunRecord| -> Option<f64> {
@@ -380,12 +381,7 @@ fn summary(runs: &[&RunRecord]) -> String {
         let e = net * r.gpu_ms.or(r.wall_ms)?;
         (plausible(r) && e.is_finite() && e > 0.0).then_some(e)
     };
-    let mut budgets: Vec<f64> = runs
-        .iter()
-        .filter_map(|r| r.time_ms.or(r.frame_ms))
-        .collect();
-    budgets.sort_by(f64::total_cmp);
-    budgets.dedup();
+    let budgets = time_budgets(runs);
     let mut parts = Vec::new();
     for budget in &budgets {
         let mut ranked: Vec<(f64, &RunRecord)> = runs

@@ -292,8 +292,15 @@ pub const STAR_MAX_BIAS: f64 = 0.10;
 /// or one of fireflies can be fast and "least wrong" among broken runs; it is never the best.
 pub const STAR_MAX_OUTLIERS: f64 = 0.01;
 
-fn plausible(m: &Metrics) -> bool {
-    m.bias <= STAR_MAX_BIAS && m.outliers <= STAR_MAX_OUTLIERS
+/// Whether `r` ran and its image is plausibly right: no NaN or Inf (in its images or dropped
+/// as estimates), its bias and outlier share within the star's thresholds. Only such runs are
+/// starred or named in a report's summary.
+pub fn plausible(r: &RunRecord) -> bool {
+    r.status == Status::Ok
+        && r.nonfinite_estimates == 0
+        && r.metrics.is_some_and(|m| {
+            m.nan_inf == 0 && m.bias <= STAR_MAX_BIAS && m.outliers <= STAR_MAX_OUTLIERS
+        })
 }
 
 impl SuiteResults {
@@ -321,11 +328,8 @@ impl SuiteResults {
     pub fn mark_pareto(&mut self) {
         let point = |r: &RunRecord| -> Option<(f64, f64)> {
             let t = r.gpu_ms?;
-            let m = r.metrics?;
-            let e = m.rel_mse;
-            let finite = m.nan_inf == 0 && r.nonfinite_estimates == 0;
-            (r.status == Status::Ok && finite && t.is_finite() && e.is_finite() && plausible(&m))
-                .then_some((t, e))
+            let e = r.metrics?.rel_mse;
+            (plausible(r) && t.is_finite() && e.is_finite()).then_some((t, e))
         };
         let points: Vec<Option<(f64, f64)>> = self.runs.iter().map(point).collect();
         for i in 0..self.runs.len() {
@@ -689,24 +693,7 @@ pub(super) mod tests {
         let mut declined = run("a", "gpu", 0.1, 0.001);
         declined.status = Status::Declined;
         runs.push(declined);
-        let mut results = SuiteResults {
-            suite: "s".into(),
-            suite_file: String::new(),
-            suite_hash: String::new(),
-            description: String::new(),
-            shard: None,
-            runs_in_suite: runs.len(),
-            runs_planned: runs.len(),
-            complete: true,
-            device: "gpu".into(),
-            driver: String::new(),
-            irad_version: String::new(),
-            references: BTreeMap::new(),
-            runs,
-            suite_text: String::new(),
-            scene_files: Vec::new(),
-            uploads: BTreeMap::new(),
-        };
+        let mut results = suite_results(runs);
         results.mark_pareto();
         let marks: Vec<bool> = results.runs.iter().map(|r| r.pareto).collect();
         assert_eq!(

@@ -429,24 +429,13 @@ mod tests {
         });
         SuiteResults {
             suite: "scale".into(),
-            suite_file: String::new(),
-            suite_hash: String::new(),
-            description: String::new(),
-            shard: None,
-            runs_in_suite: runs.len(),
-            runs_planned: runs.len(),
-            complete: true,
             device: "lavapipe".into(),
-            driver: String::new(),
-            irad_version: String::new(),
-            references: BTreeMap::new(),
-            runs,
-            suite_text: String::new(),
             scene_files,
             uploads: counts
                 .iter()
                 .map(|&l| (format!("many-lights-{l}"), upload(l, l == 16384)))
                 .collect(),
+            ..super::super::results::tests::suite_results(runs)
         }
     }
 
