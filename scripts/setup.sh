@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # Installs the system packages irad needs when they are missing (idempotent; Debian/Ubuntu):
 # the Vulkan loader, lavapipe (Mesa's CPU Vulkan driver), glslang, SPIRV-Tools and the Khronos
-# validation layer. Needs root or sudo only when something is missing.
+# validation layer; with --browser also Chromium and its ChromeDriver, which the browser test of
+# the HTML viewer drives (tests/browser.rs; scripts/test.sh asks for them). Needs root or sudo
+# only when something is missing.
 set -euo pipefail
 
 missing=()
@@ -10,6 +12,10 @@ ls /usr/share/vulkan/icd.d/lvp_icd*.json >/dev/null 2>&1 || missing+=(mesa-vulka
 command -v glslangValidator >/dev/null 2>&1 || missing+=(glslang-tools)
 command -v spirv-val >/dev/null 2>&1 || missing+=(spirv-tools)
 ls /usr/share/vulkan/explicit_layer.d/VkLayer_khronos_validation.json >/dev/null 2>&1 || missing+=(vulkan-validationlayers)
+if [ "${1:-}" = "--browser" ]; then
+  [ -x /usr/lib/chromium/chromium ] || command -v chromium >/dev/null 2>&1 || missing+=(chromium)
+  command -v chromedriver >/dev/null 2>&1 || missing+=(chromium-driver)
+fi
 
 if ((${#missing[@]})); then
   echo "irad setup: installing ${missing[*]}" >&2

@@ -61,7 +61,7 @@ second_pass_tests() {
 
 set -euo pipefail
 cd "$(dirname "$0")/.."
-bash scripts/setup.sh
+bash scripts/setup.sh --browser
 if [ "${1:-}" = "--statistical" ]; then
   shift
   mapfile -t names < <(statistical_tests)

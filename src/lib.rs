@@ -42,6 +42,7 @@ pub mod bench;
 pub mod bvh;
 pub mod export;
 pub mod gpu;
+pub mod html;
 pub mod image;
 pub mod lock;
 pub mod methods;

@@ -8,6 +8,7 @@ mod common;
 
 mod bench_suite;
 mod bir;
+mod browser;
 mod buffers;
 mod bundles;
 mod bvh;

@@ -1,16 +1,20 @@
-// irad's image viewer for report.html (src/bench/suite/html.rs; docs/DESIGN.md "Benchmarks"
-// on why half floats and one canvas).
-// No library: images arrive as half-float RGB in base64 (IRAD_DATA, written by the Rust side),
-// are decoded once into Float32Arrays, and drawn into a canvas with nearest-neighbour zoom, so
-// one screen pixel shows one image pixel's exact value at any zoom.
+// irad's image viewer (src/html/viewer.rs writes its data; docs/DESIGN.md "Looking at results"
+// on why half floats and one canvas). report.html, `irad render --html` and `irad compare
+// --html` embed it.
+// No library: images arrive as half-float RGB in base64, are decoded when first shown into
+// Float32Arrays, and drawn into a canvas with nearest-neighbour zoom, so one screen pixel shows
+// one image pixel's exact value at any zoom.
 //
 // A viewer compares image A (a run) with image B (the reference or another run):
-//   split  - A left of the slider, B right of it;
-//   flip   - A or B, toggled with F (or the flip button);
-//   relmse - per-pixel relMSE of A against B, log scale 1e-4 (black) .. 10 (white);
-//   signed - (Y(A) - Y(B)) / sqrt(Y(B)^2 + 0.01), blue -1 .. black 0 .. red +1.
+//   split   - A left of the slider, B right of it;
+//   flip    - A or B, toggled with F (or the flip button);
+//   relmse  - per-pixel relMSE of A against B, log scale 1e-4 (black) .. 10 (white);
+//   signed  - (Y(A) - Y(B)) / sqrt(Y(B)^2 + 0.01), blue -1 .. black 0 .. red +1;
+//   flipmap - A's HDR-FLIP map against the reference (computed by irad), 0 (black) .. 1 (white).
 // Exposure (stops) and the tone curve apply to split and flip. Wheel zooms about the cursor,
 // drag pans; A and B always share the view (one canvas). The readout shows both pixels' values.
+// A viewer of several frames adds play/pause (space), a scrubber, steps (arrow keys) and, where
+// there is a reference, the per-frame relMSE plot with the current frame marked.
 "use strict";
 
 const HALF = (() => {
@@ -38,6 +42,14 @@ function decodeImage(b64, width, height) {
   const out = new Float32Array(halves.length);
   for (let i = 0; i < halves.length; i++) out[i] = HALF[halves[i]];
   return { width, height, rgb: out };
+}
+
+// base64 bytes (a FLIP map: round(255 v) a pixel) into a Float32Array of v.
+function decodeBytes(b64) {
+  const text = atob(b64);
+  const out = new Float32Array(text.length);
+  for (let i = 0; i < text.length; i++) out[i] = text.charCodeAt(i) / 255;
+  return out;
 }
 
 const TONE = {
@@ -72,31 +84,61 @@ function diverging(t) {
   return s < 0 ? [64 * -s, 140 * -s, 255 * -s] : [255 * s, 51 * s, 26 * s];
 }
 
+const MODES = [
+  ["split", "split"],
+  ["flip", "flip"],
+  ["relmse", "relMSE"],
+  ["signed", "signed error"],
+  ["flipmap", "FLIP"],
+];
+
 class Viewer {
-  constructor(root, images, options) {
+  // `data`: { names, reference (a name or null), fps, factor, frames: [{ number, relmse,
+  // images: { name: { width, height, rgb, flip? } } }] } as src/html/viewer.rs writes it.
+  constructor(root, data, options = {}) {
     this.root = root;
-    // name -> decoded image, or a function that decodes it (on first use: a page of many
-    // large images would otherwise decode them all when it loads).
-    this.images = images;
-    this.names = Object.keys(images);
-    this.a = options.a || this.names[0];
-    this.b = options.b || this.names[this.names.length - 1];
+    this.data = data;
+    this.names = data.names;
+    this.reference = data.reference;
+    this.frame = 0; // index into data.frames
+    const other = this.names.find((n) => n !== this.reference) || this.names[0];
+    this.a = options.a || other;
+    this.b = options.b || this.reference || this.names[this.names.length > 1 ? 1 : 0];
     this.mode = "split";
     this.showB = false; // flip mode: which one is shown
     this.exposure = 0;
     this.tone = "srgb";
     this.split = 0.5; // the slider's place, a fraction of the canvas width
+    this.playing = null;
     this.canvas = root.querySelector("canvas.view");
     this.bar = root.querySelector("canvas.bar");
     this.readout = root.querySelector(".readout");
+    this.note = root.querySelector(".note");
+    this.hasFlip = data.frames.some((f) => Object.values(f.images).some((im) => im.flip));
     this.fit();
     this.bind();
+    if (data.frames.length > 1) this.bindSequence();
     this.draw();
   }
 
+  entry(name) {
+    return this.data.frames[this.frame].images[name];
+  }
+
+  // The decoded image `name` of the current frame.
   image(name) {
-    if (typeof this.images[name] === "function") this.images[name] = this.images[name]();
-    return this.images[name];
+    const e = this.entry(name);
+    if (!e.decoded) e.decoded = decodeImage(e.rgb, e.width, e.height);
+    return e.decoded;
+  }
+
+  // A's FLIP map against the reference, or null where there is none (B is not the reference,
+  // or irad computed none).
+  flipMap() {
+    const e = this.entry(this.a);
+    if (this.b !== this.reference || !e.flip) return null;
+    if (!e.flipDecoded) e.flipDecoded = decodeBytes(e.flip);
+    return e.flipDecoded;
   }
 
   // The whole image in the canvas, at an integer zoom where it fits.
@@ -124,9 +166,12 @@ class Viewer {
     return [im.rgb[i], im.rgb[i + 1], im.rgb[i + 2]];
   }
 
-  colour(cx, x, y) {
+  colour(cx, x, y, map) {
     const A = this.value(this.a, x, y);
     const B = this.value(this.b, x, y);
+    if (this.mode === "flipmap") {
+      return map ? heat(map[y * this.image(this.a).width + x]) : [64, 64, 64];
+    }
     if (this.mode === "relmse") {
       if (!A.every(Number.isFinite) || !B.every(Number.isFinite)) return [255, 0, 255];
       let e = 0;
@@ -151,11 +196,12 @@ class Viewer {
     const ctx = this.canvas.getContext("2d");
     const { width, height } = this.canvas;
     const out = ctx.createImageData(width, height);
+    const map = this.mode === "flipmap" ? this.flipMap() : null;
     for (let cy = 0; cy < height; cy++) {
       for (let cx = 0; cx < width; cx++) {
         const p = this.pixelAt(cx + 0.5, cy + 0.5);
         const o = 4 * (cy * width + cx);
-        const rgb = p ? this.colour(cx, p[0], p[1]) : [32, 32, 32];
+        const rgb = p ? this.colour(cx, p[0], p[1], map) : [32, 32, 32];
         out.data[o] = rgb[0];
         out.data[o + 1] = rgb[1];
         out.data[o + 2] = rgb[2];
@@ -172,24 +218,37 @@ class Viewer {
       ctx.stroke();
     }
     this.drawBar();
+    let note = "";
+    if (this.mode === "flipmap" && !map) {
+      note = this.reference
+        ? `FLIP maps are of each image against ${this.reference}: choose it as B (and another image as A)`
+        : "no FLIP maps: there is no reference";
+    }
+    this.note.textContent = note;
     this.root.dataset.mode = this.mode;
     this.root.dataset.shown = this.mode === "flip" ? (this.showB ? this.b : this.a) : "";
+    this.root.dataset.frame = this.data.frames[this.frame].number;
+    if (this.plot) this.drawPlot();
   }
 
   drawBar() {
     const ctx = this.bar.getContext("2d");
     const { width, height } = this.bar;
     ctx.clearRect(0, 0, width, height);
-    if (this.mode !== "relmse" && this.mode !== "signed") return;
+    if (this.mode !== "relmse" && this.mode !== "signed" && this.mode !== "flipmap") return;
     for (let x = 0; x < width; x++) {
       const t = x / (width - 1);
-      const rgb = this.mode === "relmse" ? heat(t) : diverging(t);
+      const rgb = this.mode === "signed" ? diverging(t) : heat(t);
       ctx.fillStyle = `rgb(${rgb[0]},${rgb[1]},${rgb[2]})`;
       ctx.fillRect(x, 0, 1, height - 14);
     }
     ctx.fillStyle = "#222";
     ctx.font = "11px sans-serif";
-    const labels = this.mode === "relmse" ? ["1e-4", "1e-3", "0.01", "0.1", "1", "10"] : ["-1", "-0.5", "0", "0.5", "1"];
+    const labels = {
+      relmse: ["1e-4", "1e-3", "0.01", "0.1", "1", "10"],
+      signed: ["-1", "-0.5", "0", "0.5", "1"],
+      flipmap: ["0", "0.25", "0.5", "0.75", "1"],
+    }[this.mode];
     labels.forEach((l, i) => {
       const x = (i / (labels.length - 1)) * (width - 1);
       ctx.textAlign = i === 0 ? "left" : i === labels.length - 1 ? "right" : "center";
@@ -211,7 +270,9 @@ class Viewer {
     this.readout.dataset.y = p[1];
     this.readout.dataset.a = A.join(",");
     this.readout.dataset.b = B.join(",");
-    this.readout.textContent = `(${p[0]}, ${p[1]})  ${this.a}: ${fmt(A)}  |  ${this.b}: ${fmt(B)}`;
+    const map = this.flipMap();
+    const flip = map ? `  FLIP ${map[p[1] * this.image(this.a).width + p[0]].toFixed(3)}` : "";
+    this.readout.textContent = `(${p[0]}, ${p[1]})  ${this.a}: ${fmt(A)}  |  ${this.b}: ${fmt(B)}${flip}`;
   }
 
   // Zoom by `factor` about canvas point (cx, cy), keeping the image pixel under it in place.
@@ -220,6 +281,12 @@ class Viewer {
     this.ox = cx - ((cx - this.ox) * scale) / this.scale;
     this.oy = cy - ((cy - this.oy) * scale) / this.scale;
     this.scale = scale;
+    this.draw();
+  }
+
+  setA(name) {
+    this.a = name;
+    this.root.querySelector("select.a").value = name;
     this.draw();
   }
 
@@ -260,18 +327,18 @@ class Viewer {
     });
     const q = (sel) => this.root.querySelector(sel);
     const sel = (s, names, value, set) => {
-      s.replaceChildren(...names.map((n) => new Option(n, n, false, n === value)));
+      s.replaceChildren(...names.map(([v, label]) => new Option(label, v, false, v === value)));
       s.addEventListener("change", () => {
         set(s.value);
         this.draw();
       });
     };
-    sel(q("select.a"), this.names, this.a, (v) => (this.a = v));
-    sel(q("select.b"), this.names, this.b, (v) => (this.b = v));
-    q("select.mode").addEventListener("change", (e) => {
-      this.mode = e.target.value;
-      this.draw();
-    });
+    const named = this.names.map((n) => [n, n]);
+    sel(q("select.a"), named, this.a, (v) => (this.a = v));
+    sel(q("select.b"), named, this.b, (v) => (this.b = v));
+    // One image: nothing to compare it with.
+    const modes = MODES.filter(([m]) => (m === "split" || this.names.length > 1) && (m !== "flipmap" || this.hasFlip));
+    sel(q("select.mode"), modes, this.mode, (v) => (this.mode = v));
     q("select.tone").addEventListener("change", (e) => {
       this.tone = e.target.value;
       this.draw();
@@ -293,17 +360,133 @@ class Viewer {
       this.draw();
     });
     this.root.tabIndex = 0;
+    const sequence = this.data.frames.length > 1;
     this.root.addEventListener("keydown", (e) => {
       if (e.ctrlKey || e.metaKey || e.altKey) return;
+      if (e.target.tagName === "SELECT" || e.target.tagName === "INPUT") return;
       if (e.key === "f" || e.key === "F") this.flip();
       else if (e.key === "e") exposure.stepUp(), exposure.dispatchEvent(new Event("input"));
       else if (e.key === "E") exposure.stepDown(), exposure.dispatchEvent(new Event("input"));
+      else if (sequence && e.key === " ") this.togglePlay();
+      else if (sequence && e.key === "ArrowRight") this.step(1);
+      else if (sequence && e.key === "ArrowLeft") this.step(-1);
       else return;
       e.preventDefault();
     });
   }
 
+  // The sequence's controls, below the canvases: play/pause, steps, the scrubber, the frame's
+  // number and the per-frame error plot (where there is a reference).
+  bindSequence() {
+    const n = this.data.frames.length;
+    const div = document.createElement("div");
+    div.className = "sequence";
+    div.innerHTML =
+      '<button class="play">play</button> <button class="prev">&#9664;</button>' +
+      ` <input class="scrubber" type="range" min="0" max="${n - 1}" value="0" step="1">` +
+      ' <button class="next">&#9654;</button> <span class="frame-label"></span>';
+    this.canvas.before(div);
+    const q = (sel) => div.querySelector(sel);
+    this.scrubber = q("input.scrubber");
+    this.frameLabel = q(".frame-label");
+    this.playButton = q("button.play");
+    this.scrubber.addEventListener("input", () => this.setFrame(Number(this.scrubber.value)));
+    q("button.prev").addEventListener("click", () => this.step(-1));
+    q("button.next").addEventListener("click", () => this.step(1));
+    this.playButton.addEventListener("click", () => this.togglePlay());
+    this.plot = null;
+    if (this.data.frames.some((f) => f.relmse !== null && f.relmse > 0)) {
+      this.plot = document.createElement("canvas");
+      this.plot.className = "plot";
+      this.plot.width = this.canvas.width;
+      this.plot.height = 120;
+      div.after(this.plot);
+      this.plot.addEventListener("click", (e) => {
+        const r = this.plot.getBoundingClientRect();
+        const x = ((e.clientX - r.left) * this.plot.width) / r.width;
+        this.setFrame(Math.round(((x - 40) / (this.plot.width - 50)) * (n - 1)));
+      });
+    }
+    this.root.dataset.playing = "false";
+    this.frameLabel.textContent = `frame ${this.data.frames[0].number} (1 of ${n})`;
+  }
+
+  setFrame(i) {
+    const n = this.data.frames.length;
+    this.frame = Math.min(Math.max(i, 0), n - 1);
+    if (this.scrubber) this.scrubber.value = this.frame;
+    if (this.frameLabel) this.frameLabel.textContent = `frame ${this.data.frames[this.frame].number} (${this.frame + 1} of ${n})`;
+    this.draw();
+  }
+
+  step(d) {
+    const n = this.data.frames.length;
+    this.setFrame((this.frame + d + n) % n);
+  }
+
+  togglePlay() {
+    if (this.playing) {
+      clearInterval(this.playing);
+      this.playing = null;
+    } else {
+      this.playing = setInterval(() => this.step(1), 1000 / this.data.fps);
+    }
+    this.playButton.textContent = this.playing ? "pause" : "play";
+    this.root.dataset.playing = this.playing ? "true" : "false";
+  }
+
+  // log10 relMSE per frame, the current frame marked by a vertical line and a dot.
+  drawPlot() {
+    const ctx = this.plot.getContext("2d");
+    const { width, height } = this.plot;
+    ctx.clearRect(0, 0, width, height);
+    const frames = this.data.frames;
+    const n = frames.length;
+    const logs = frames.map((f) => (f.relmse !== null && f.relmse > 0 ? Math.log10(f.relmse) : null));
+    const known = logs.filter((v) => v !== null);
+    let lo = Math.floor(Math.min(...known));
+    let hi = Math.ceil(Math.max(...known));
+    if (hi === lo) hi = lo + 1;
+    const X = (i) => 40 + (n > 1 ? (i / (n - 1)) * (width - 50) : 0);
+    const Y = (v) => 8 + (1 - (v - lo) / (hi - lo)) * (height - 26);
+    ctx.strokeStyle = "#ccc";
+    ctx.fillStyle = "#444";
+    ctx.font = "10px sans-serif";
+    ctx.textAlign = "right";
+    for (let e = lo; e <= hi; e++) {
+      ctx.beginPath();
+      ctx.moveTo(40, Y(e) + 0.5);
+      ctx.lineTo(width - 10, Y(e) + 0.5);
+      ctx.stroke();
+      ctx.fillText(`1e${e}`, 36, Y(e) + 3);
+    }
+    ctx.textAlign = "center";
+    ctx.fillText(`relMSE per frame (frames ${frames[0].number}..${frames[n - 1].number})`, width / 2, height - 4);
+    ctx.strokeStyle = "#2060c0";
+    ctx.beginPath();
+    let started = false;
+    logs.forEach((v, i) => {
+      if (v === null) return (started = false);
+      if (started) ctx.lineTo(X(i), Y(v));
+      else ctx.moveTo(X(i), Y(v)), (started = true);
+    });
+    ctx.stroke();
+    const x = Math.round(X(this.frame)) + 0.5;
+    ctx.strokeStyle = "#d03020";
+    ctx.beginPath();
+    ctx.moveTo(x, 4);
+    ctx.lineTo(x, height - 16);
+    ctx.stroke();
+    if (logs[this.frame] !== null) {
+      ctx.fillStyle = "#d03020";
+      ctx.beginPath();
+      ctx.arc(x, Y(logs[this.frame]), 3.5, 0, 2 * Math.PI);
+      ctx.fill();
+    }
+  }
+
   flip() {
+    if (this.names.length < 2) return;
     if (this.mode !== "flip") {
       this.mode = "flip";
       this.root.querySelector("select.mode").value = "flip";
@@ -314,4 +497,4 @@ class Viewer {
   }
 }
 
-window.IradViewer = { Viewer, decodeImage, HALF };
+window.IradViewer = { Viewer, decodeImage, decodeBytes, HALF };

@@ -7,6 +7,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{bail, Context as _, Result};
 use serde::Serialize;
 
+use irad::html::viewer::{FlipMap, ViewerData};
 use irad::image::error_maps::{self, Rgb8};
 use irad::image::flip::{self, DEFAULT_PIXELS_PER_DEGREE};
 use irad::image::metrics::{self, Metrics, SequenceMetrics, SequenceScore};
@@ -29,6 +30,11 @@ pub struct CompareArgs {
     /// Leave HDR-FLIP out (it costs about a second per megapixel on this CPU).
     #[arg(long)]
     no_flip: bool,
+    /// Also write the interactive viewer (docs/commands.md "Looking at images"): OUT.html for
+    /// two EXRs, OUT/compare.html for two folders (a player over the frames with their error
+    /// plot). One self-contained page; it opens from file:// with no network.
+    #[arg(long, requires = "out")]
+    html: bool,
 }
 
 /// What compare.json (or OUT.json) holds.
@@ -147,6 +153,52 @@ fn write_maps(stem: &Path, x: &Image, r: &Image, flip: Option<&flip::FlipResult>
     Ok(())
 }
 
+fn flip_map(f: flip::FlipResult) -> FlipMap {
+    FlipMap {
+        width: f.width,
+        height: f.height,
+        values: f.error_map,
+    }
+}
+
+/// The viewer page of the test against the reference at `path`: each frame `(number, [test,
+/// reference], their FLIP maps)`, under the figures' line.
+fn write_page(
+    args: &CompareArgs,
+    path: &Path,
+    frames: Vec<(u32, Vec<Image>, Vec<Option<FlipMap>>)>,
+    figures: &str,
+) -> Result<()> {
+    let name = |p: &Path| {
+        p.file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_else(|| p.display().to_string())
+    };
+    let (mut a, mut b) = (name(&args.test), name(&args.reference));
+    if a == b {
+        (a, b) = (format!("test {a}"), format!("reference {b}"));
+    }
+    let (numbers, images): (Vec<(u32, Vec<Option<FlipMap>>)>, Vec<(u32, Vec<Image>)>) = frames
+        .into_iter()
+        .map(|(n, images, flips)| ((n, flips), (n, images)))
+        .unzip();
+    // FLIP maps are the ones compare computed (none under --no-flip), not a second time.
+    let mut data = ViewerData::new(vec![a, b], Some(1), 10.0, images, false)?;
+    for (frame, (_, flips)) in data.frames.iter_mut().zip(numbers) {
+        frame.flip = flips;
+    }
+    let intro = format!(
+        "<p>{} against the reference {}</p><pre>{}</pre>",
+        irad::html::escape(&irad::image::sidecar::absolute(&args.test)),
+        irad::html::escape(&irad::image::sidecar::absolute(&args.reference)),
+        irad::html::escape(figures)
+    );
+    let html = irad::html::viewer::page("irad compare", &intro, &data);
+    fs::write(path, html).with_context(|| format!("writing {}", path.display()))?;
+    println!("wrote {}", path.display());
+    Ok(())
+}
+
 fn compare_images(args: &CompareArgs) -> Result<Record> {
     let (x, r) = (read(&args.test)?, read(&args.reference)?);
     let (m, flip) = score(&x, &r, !args.no_flip).with_context(|| {
@@ -162,6 +214,15 @@ fn compare_images(args: &CompareArgs) -> Result<Record> {
             fs::create_dir_all(parent).with_context(|| format!("creating {}", parent.display()))?;
         }
         write_maps(out, &x, &r, flip.as_ref())?;
+        if args.html {
+            let flips = vec![flip.map(flip_map), None];
+            write_page(
+                args,
+                &with_suffix(out, ".html"),
+                vec![(0, vec![x, r], flips)],
+                &line(&m),
+            )?;
+        }
     }
     Ok(Record {
         test: irad::image::sidecar::absolute(&args.test),
@@ -240,6 +301,8 @@ fn compare_folders(args: &CompareArgs) -> Result<Record> {
     }
     let mut sequence = SequenceScore::default();
     let mut records = Vec::new();
+    // The viewer's frames, where --html asks for them.
+    let mut pages = Vec::new();
     let mut previous: Option<u32> = None;
     for (n, path) in &tests {
         if previous.is_some_and(|p| p + 1 != *n) {
@@ -254,6 +317,13 @@ fn compare_folders(args: &CompareArgs) -> Result<Record> {
             write_maps(&out.join(format!("frame_{n:04}")), &x, &r, flip.as_ref())?;
         }
         let flip_mean = m.flip;
+        if args.html {
+            pages.push((
+                *n,
+                vec![x.clone(), r.clone()],
+                vec![flip.map(flip_map), None],
+            ));
+        }
         m = sequence.push(x, r)?;
         m.flip = flip_mean;
         println!("frame {n:4}  {}", line(&m));
@@ -269,13 +339,17 @@ fn compare_folders(args: &CompareArgs) -> Result<Record> {
         summary.mean.flip = Some(flips.iter().sum::<f64>() / flips.len() as f64);
     }
     let worst = records[summary.worst_frame].frame;
-    println!(
+    let figures = format!(
         "{} frames: mean {}\nworst frame {worst} (relMSE {:.4e}), flicker {:.4}",
         records.len(),
         line(&summary.mean),
         summary.worst_rel_mse,
         summary.flicker
     );
+    println!("{figures}");
+    if let (true, Some(out)) = (args.html, &args.out) {
+        write_page(args, &out.join("compare.html"), pages, &figures)?;
+    }
     Ok(Record {
         test: irad::image::sidecar::absolute(&args.test),
         reference: irad::image::sidecar::absolute(&args.reference),

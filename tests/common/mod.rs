@@ -3,6 +3,7 @@
 #![allow(dead_code)]
 
 pub mod shapes;
+pub mod webdriver;
 
 use irad::gpu::{validation_layer_available, Context, ContextOptions, Validation};
 

@@ -3,22 +3,19 @@
 //! relMSE; a click opens the run in the viewer), its runs' table (sortable by any column) and an
 //! image viewer (assets/report/viewer.js) comparing any run with the reference or another run.
 //!
-//! The images reach the page as half floats (RGB, little-endian, base64) read from the EXRs the
-//! runner writes beside each thumbnail (`exr_of`): lossless enough for exposure (11 bits of
-//! mantissa, a range to 65504), a third of the bytes of f32 and decoded by a lookup table in
-//! the page, where an EXR decoder in JavaScript would need a library and its licence.
+//! The viewer and its images' encoding: crate::html::viewer.
 
 use std::fmt::Write as _;
 use std::path::Path;
 
 use anyhow::{Context as _, Result};
 
+use crate::html::viewer::{self, ViewerData};
+use crate::html::{escape, json_string};
 use crate::image::{exr, Image};
 
 use super::output::chart;
 use super::results::{RunRecord, Status, SuiteResults};
-
-const VIEWER_JS: &str = include_str!("../../../assets/report/viewer.js");
 
 /// The EXR the runner writes beside a thumbnail `images/NAME.png`: `images/NAME.exr`.
 pub fn exr_of(png: &str) -> String {
@@ -26,64 +23,6 @@ pub fn exr_of(png: &str) -> String {
         Some(stem) => format!("{stem}.exr"),
         None => format!("{png}.exr"),
     }
-}
-
-/// `image` as half-float RGB, little-endian, in base64. Finite values past the half floats'
-/// range are clamped to its largest (65504), so a firefly stays a bright finite pixel.
-pub fn half_base64(image: &Image) -> String {
-    let mut bytes = Vec::with_capacity(6 * image.pixels.len());
-    let most = f32::from(half::f16::MAX);
-    for p in &image.pixels {
-        for c in p {
-            let v = if c.is_finite() {
-                c.clamp(-most, most)
-            } else {
-                *c
-            };
-            bytes.extend_from_slice(&half::f16::from_f32(v).to_bits().to_le_bytes());
-        }
-    }
-    base64(&bytes)
-}
-
-/// `s` as a JSON string safe inside a `<script>` element (no `<`, so no `</script>`).
-fn json_string(s: &str) -> String {
-    serde_json::to_string(s)
-        .expect("a string serializes")
-        .replace('<', "\\u003c")
-}
-
-/// The most base64 one scene's images may take in the page; past it they are embedded
-/// box-filtered down by the smallest integer factor that fits (the viewer says so).
-const SCENE_BYTES: usize = 24 << 20;
-
-/// Standard base64 with padding.
-pub fn base64(bytes: &[u8]) -> String {
-    const ALPHABET: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    let mut out = String::with_capacity(bytes.len().div_ceil(3) * 4);
-    for chunk in bytes.chunks(3) {
-        let b = [
-            chunk[0],
-            chunk.get(1).copied().unwrap_or(0),
-            chunk.get(2).copied().unwrap_or(0),
-        ];
-        let n = (u32::from(b[0]) << 16) | (u32::from(b[1]) << 8) | u32::from(b[2]);
-        for k in 0..4 {
-            if k <= chunk.len() {
-                out.push(ALPHABET[(n >> (18 - 6 * k) & 63) as usize] as char);
-            } else {
-                out.push('=');
-            }
-        }
-    }
-    out
-}
-
-fn escape(s: &str) -> String {
-    s.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
-        .replace('"', "&quot;")
 }
 
 fn figure(v: Option<f64>, digits: usize) -> String {
@@ -120,33 +59,18 @@ pub fn page(out: &Path, results: &SuiteResults) -> Result<String> {
                 Err(e) => log::warn!("report.html leaves out {name}: {e:#}"),
             }
         }
-        let pixels: usize = images.iter().map(|(_, im)| im.pixels.len()).sum();
-        let factor = (1..)
-            .find(|f: &usize| 8 * pixels / (f * f) <= SCENE_BYTES)
-            .expect("some factor fits");
-        if factor > 1 {
-            for (_, im) in images.iter_mut() {
-                *im = crate::image::preview::downscale(im, factor as u32);
-            }
-        }
+        let reference = results.references.contains_key(scene)
+            && images.first().is_some_and(|(n, _)| n == "reference");
+        let (names, images): (Vec<String>, Vec<Image>) = images.into_iter().unzip();
+        let viewer = ViewerData::new(names, reference.then_some(0), 10.0, vec![(0, images)], true)?;
+        let factor = viewer.factor();
         let _ = write!(
             data,
-            "{}{:?}:{{",
+            "{}{}:{}",
             if k > 0 { "," } else { "" },
-            format!("scene{k}")
+            json_string(&format!("scene{k}")),
+            viewer.json(factor)
         );
-        for (i, (name, im)) in images.iter().enumerate() {
-            let _ = write!(
-                data,
-                "{}{}:{{\"width\":{},\"height\":{},\"rgb\":\"{}\"}}",
-                if i > 0 { "," } else { "" },
-                json_string(name),
-                im.width,
-                im.height,
-                half_base64(im)
-            );
-        }
-        data.push('}');
         let _ = writeln!(body, "<section class=\"scene\" id=\"scene{k}\">");
         let _ = writeln!(body, "<h2>{}</h2>", escape(scene));
         let _ = writeln!(
@@ -161,23 +85,25 @@ pub fn page(out: &Path, results: &SuiteResults) -> Result<String> {
                 "<p class=\"note\">The viewer's images are averaged over {factor}x{factor} \
                  pixel blocks, so that the page stays under {} MB for this scene; the EXRs \
                  in images/ are full size.</p>",
-                SCENE_BYTES >> 20
+                viewer::VIEWER_BYTES >> 20
             );
         }
-        if !images.is_empty() {
-            body += VIEWER_MARKUP;
+        if !viewer.names.is_empty() {
+            body += viewer::MARKUP;
         }
         body += "</section>\n";
     }
     data.push('}');
     Ok(format!(
         "<!doctype html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\
-         <title>{title}</title><style>{STYLE}</style></head><body>\n\
+         <title>{title}</title><style>{style}{STYLE}</style></head><body>\n\
          <h1>{title}</h1>\n<p>{description}</p>\n{body}\
-         <script>{VIEWER_JS}</script>\n<script>const IRAD_DATA = {data};\n{PAGE_JS}</script>\n\
+         <script>{script}</script>\n<script>const IRAD_DATA = {data};\n{PAGE_JS}</script>\n\
          </body></html>\n",
         title = escape(&format!("Benchmark suite {}", results.suite)),
         description = escape(results.description.trim()),
+        style = viewer::STYLE,
+        script = viewer::VIEWER_JS,
     ))
 }
 
@@ -217,60 +143,55 @@ fn table(runs: &[&RunRecord]) -> String {
     t + "</tbody></table>\n"
 }
 
-const VIEWER_MARKUP: &str = r#"<div class="viewer">
- <div class="controls">A <select class="a"></select> B <select class="b"></select>
- <select class="mode"><option value="split">split</option><option value="flip">flip</option><option value="relmse">relMSE</option><option value="signed">signed error</option></select>
- exposure <input class="exposure" type="range" min="-8" max="8" step="0.5" value="0"><span class="exposure-value">+0.0 stops</span>
- tone <select class="tone"><option value="srgb">sRGB</option><option value="gamma22">gamma 2.2</option><option value="aces">ACES</option><option value="linear">linear</option></select>
- split <input class="split" type="range" min="0" max="100" value="50"> <button class="flip">flip (F)</button> <button class="fit">fit</button></div>
- <canvas class="view" width="640" height="480"></canvas><br><canvas class="bar" width="640" height="30"></canvas>
- <div class="readout"></div>
-</div>
-"#;
-
-const STYLE: &str = "body{font-family:sans-serif;margin:1em 2em}\
-table.runs{border-collapse:collapse;margin:1em 0}\
+const STYLE: &str = "table.runs{border-collapse:collapse;margin:1em 0}\
 table.runs td,table.runs th{border:1px solid #ccc;padding:2px 6px;text-align:right}\
 table.runs th{cursor:pointer;background:#f4f4f4}\
 table.runs tr.selected{background:#ffe9a8}\
-canvas.view{border:1px solid #888;cursor:crosshair}\
-.readout{font-family:monospace;font-size:12px;min-height:1.2em}\
-circle.point{cursor:pointer}";
+circle.point{cursor:pointer}\
+.hover-tip{position:absolute;background:#fffbe6;border:1px solid #aa9;padding:3px 6px;font-size:12px;pointer-events:none}";
 
 /// Wires each scene's viewer, table and chart: a click on a run's row or chart point shows it
 /// as A; a click on a header sorts the table by that column.
 const PAGE_JS: &str = r#"
 for (const section of document.querySelectorAll("section.scene")) {
-  const images = {};
-  const raw = IRAD_DATA[section.id] || {};
-  for (const name of Object.keys(raw)) {
-    // Decoded when first shown.
-    images[name] = () => IradViewer.decodeImage(raw[name].rgb, raw[name].width, raw[name].height);
-  }
+  const data = IRAD_DATA[section.id];
   const root = section.querySelector(".viewer");
-  const names = Object.keys(images);
+  const names = data ? data.names : [];
   let viewer = null;
   if (root && names.length > 0) {
-    viewer = new IradViewer.Viewer(root, images, { a: names[names.length > 1 ? 1 : 0], b: names[0] });
-    section.viewer = viewer;
+    // A: the first run; B: the reference (first).
+    viewer = new IradViewer.Viewer(root, data, { a: names[names.length > 1 ? 1 : 0], b: names[0] });
+    root.viewer = viewer;
   }
   const show = (name) => {
-    if (!viewer || !images[name]) return;
+    if (!viewer || !names.includes(name)) return;
     root.focus();
-    viewer.a = name;
-    root.querySelector("select.a").value = name;
-    viewer.draw();
+    viewer.setA(name);
     for (const tr of section.querySelectorAll("tr[data-image]")) {
       tr.classList.toggle("selected", tr.dataset.image === name);
     }
   };
   const rows = [...section.querySelectorAll("tbody tr")];
   for (const tr of rows) tr.addEventListener("click", () => show(tr.dataset.image));
+  // Hover: the run's figures from its row (relMSE with its spread over the seeds, GPU time).
+  const tip = document.createElement("div");
+  tip.className = "hover-tip";
+  tip.hidden = true;
+  document.body.appendChild(tip);
   for (const circle of section.querySelectorAll("circle.point")) {
+    const tr = rows.find((r) => r.dataset.run === circle.dataset.run);
     circle.addEventListener("click", () => {
-      const tr = rows.find((r) => r.dataset.run === circle.dataset.run);
       if (tr) show(tr.dataset.image);
     });
+    circle.addEventListener("mouseenter", (e) => {
+      if (!tr) return;
+      const c = [...tr.children].map((td) => td.textContent);
+      tip.textContent = `${c[1]} ${c[2]}: relMSE ${c[4]} (${c[5]} .. ${c[6]} over ${c[7]} seeds), ${c[3]} ms GPU${c[0] ? ", best at its time" : ""}`;
+      tip.style.left = `${e.pageX + 12}px`;
+      tip.style.top = `${e.pageY + 12}px`;
+      tip.hidden = false;
+    });
+    circle.addEventListener("mouseleave", () => (tip.hidden = true));
   }
   section.querySelectorAll("table.runs th").forEach((th, col) => {
     th.addEventListener("click", () => {
@@ -296,6 +217,7 @@ for (const section of document.querySelectorAll("section.scene")) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::html::half_base64;
 
     /// The page holds each scene's chart, its runs' table and, for the viewer, the reference's
     /// and each run's image as half floats, the reference first.
@@ -329,7 +251,7 @@ mod tests {
             half_base64(&image(1.0))
         );
         let run_image = format!(
-            "\"ir vpls=64\":{{\"width\":3,\"height\":2,\"rgb\":\"{}\"}}",
+            "\"ir vpls=64\":{{\"width\":3,\"height\":2,\"rgb\":\"{}\",\"flip\":\"",
             half_base64(&image(0.5))
         );
         let (a, b) = (
@@ -338,51 +260,15 @@ mod tests {
         );
         assert!(a < b, "the reference first");
         assert!(page.contains("IradViewer"));
+        assert!(
+            page.contains("\"reference\":\"reference\""),
+            "FLIP's reference"
+        );
         std::fs::remove_dir_all(&out).unwrap();
     }
 
-    /// A run's name cannot end the page's script, and a firefly past the half floats' range
-    /// stays finite.
     #[test]
-    fn names_and_values_are_embedded_safely() {
-        let key = json_string("spp=4 </script><b>\"x\"");
-        assert!(!key.contains('<'), "{key}");
-        assert_eq!(
-            serde_json::from_str::<String>(&key).unwrap(),
-            "spp=4 </script><b>\"x\""
-        );
-        let firefly = Image {
-            width: 1,
-            height: 1,
-            pixels: vec![[1e6, f32::NAN, -1e6]],
-        };
-        // 65504 = 0x7bff, NaN stays NaN (0x7e00), -65504 = 0xfbff.
-        assert_eq!(
-            half_base64(&firefly),
-            base64(&[0xff, 0x7b, 0x00, 0x7e, 0xff, 0xfb])
-        );
-    }
-
-    #[test]
-    fn base64_matches_the_standard_alphabet_and_padding() {
-        assert_eq!(base64(b""), "");
-        assert_eq!(base64(b"f"), "Zg==");
-        assert_eq!(base64(b"fo"), "Zm8=");
-        assert_eq!(base64(b"foo"), "Zm9v");
-        assert_eq!(base64(b"foobar"), "Zm9vYmFy");
-        assert_eq!(base64(&[0xff, 0xfe, 0xfd]), "//79");
-    }
-
-    #[test]
-    fn half_floats_keep_exposure_precision() {
-        let im = Image {
-            width: 1,
-            height: 1,
-            pixels: vec![[1.0, 0.5, 1000.25]],
-        };
-        // 1.0 = 0x3c00, 0.5 = 0x3800, 1000.25 rounds to 1000 (0x63d0): 11 bits of mantissa.
-        let b64 = half_base64(&im);
-        assert_eq!(b64, base64(&[0x00, 0x3c, 0x00, 0x38, 0xd0, 0x63]));
+    fn the_exr_sits_beside_its_thumbnail() {
         assert_eq!(exr_of("images/a-b.png"), "images/a-b.exr");
     }
 }
