@@ -231,6 +231,8 @@ fn quick_suite_writes_every_output_and_charts_the_csv_figures() {
         html.matches("<div class=\"viewer\">").count(),
         results.scenes().len()
     );
+    // ...and the page in a real browser (tests/browser.rs).
+    crate::browser::check_report(&out.join("report.html"), results.scenes().len());
     // Every reference knows its own error (from its halves), and the report says it.
     let report = fs::read_to_string(out.join("report.md")).unwrap();
     for (scene, r) in &results.references {

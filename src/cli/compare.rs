@@ -161,12 +161,15 @@ fn flip_map(f: flip::FlipResult) -> FlipMap {
     }
 }
 
+/// A frame for the page: its number, [test, reference] and their FLIP maps.
+type PageFrame = (u32, Vec<Image>, Vec<Option<FlipMap>>);
+
 /// The viewer page of the test against the reference at `path`: each frame `(number, [test,
 /// reference], their FLIP maps)`, under the figures' line.
 fn write_page(
     args: &CompareArgs,
     path: &Path,
-    frames: Vec<(u32, Vec<Image>, Vec<Option<FlipMap>>)>,
+    frames: Vec<PageFrame>,
     figures: &str,
 ) -> Result<()> {
     let name = |p: &Path| {
@@ -178,14 +181,16 @@ fn write_page(
     if a == b {
         (a, b) = (format!("test {a}"), format!("reference {b}"));
     }
-    let (numbers, images): (Vec<(u32, Vec<Option<FlipMap>>)>, Vec<(u32, Vec<Image>)>) = frames
-        .into_iter()
-        .map(|(n, images, flips)| ((n, flips), (n, images)))
-        .unzip();
+    let mut flips = Vec::with_capacity(frames.len());
+    let mut images = Vec::with_capacity(frames.len());
+    for (n, frame_images, frame_flips) in frames {
+        images.push((n, frame_images));
+        flips.push(frame_flips);
+    }
     // FLIP maps are the ones compare computed (none under --no-flip), not a second time.
     let mut data = ViewerData::new(vec![a, b], Some(1), 10.0, images, false)?;
-    for (frame, (_, flips)) in data.frames.iter_mut().zip(numbers) {
-        frame.flip = flips;
+    for (frame, f) in data.frames.iter_mut().zip(flips) {
+        frame.flip = f;
     }
     let intro = format!(
         "<p>{} against the reference {}</p><pre>{}</pre>",

@@ -248,10 +248,15 @@ impl Browser {
         )
     }
 
-    /// `element`'s rectangle in CSS pixels: x, y, width, height.
+    /// `element`'s rectangle in CSS pixels of the viewport (where pointer actions and the
+    /// screenshot's pixels are; WebDriver's own element rect is in the document's): x, y,
+    /// width, height.
     pub fn rect(&self, element: &str) -> [f64; 4] {
-        let v = self.cmd("GET", &format!("/element/{element}/rect"), json!({}));
-        ["x", "y", "width", "height"].map(|k| v[k].as_f64().expect("a number"))
+        let v = self.js(
+            "const r = arguments[0].getBoundingClientRect(); return [r.x, r.y, r.width, r.height];",
+            json!([{ ELEMENT: element }]),
+        );
+        [0, 1, 2, 3].map(|i| v[i].as_f64().expect("a number"))
     }
 
     /// Input actions (W3C `actions` sources), then their release.

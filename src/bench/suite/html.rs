@@ -153,6 +153,10 @@ circle.point{cursor:pointer}\
 /// Wires each scene's viewer, table and chart: a click on a run's row or chart point shows it
 /// as A; a click on a header sorts the table by that column.
 const PAGE_JS: &str = r#"
+const tip = document.createElement("div");
+tip.className = "hover-tip";
+tip.hidden = true;
+document.body.appendChild(tip);
 for (const section of document.querySelectorAll("section.scene")) {
   const data = IRAD_DATA[section.id];
   const root = section.querySelector(".viewer");
@@ -174,10 +178,6 @@ for (const section of document.querySelectorAll("section.scene")) {
   const rows = [...section.querySelectorAll("tbody tr")];
   for (const tr of rows) tr.addEventListener("click", () => show(tr.dataset.image));
   // Hover: the run's figures from its row (relMSE with its spread over the seeds, GPU time).
-  const tip = document.createElement("div");
-  tip.className = "hover-tip";
-  tip.hidden = true;
-  document.body.appendChild(tip);
   for (const circle of section.querySelectorAll("circle.point")) {
     const tr = rows.find((r) => r.dataset.run === circle.dataset.run);
     circle.addEventListener("click", () => {
