@@ -421,6 +421,79 @@ fn a_sequence_resumed_at_another_resolution_is_refused() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// `--html` writes the viewer's page: OUT/sequence.html with every frame, the reference's
+/// frames, per-frame relMSE and FLIP maps; OUT.html beside a still's EXR.
+#[test]
+fn renders_write_their_viewer_pages() {
+    let dir = temp_dir("html");
+    let scene = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/scenes/cornell-circling/scene.toml"
+    );
+    let sequence = |out: &str, extra: &[&str]| {
+        let out = dir.join(out);
+        let mut args = vec![
+            "render",
+            scene,
+            "--sequence=0..2",
+            "--samples-per-frame",
+            "2",
+            "--resolution",
+            "24x16",
+            "-o",
+            out.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        let o = irad(&args, &[]);
+        assert!(o.status.success(), "{}", stderr(&o));
+    };
+    sequence("ref", &[]);
+    let reference = dir.join("ref");
+    sequence(
+        "seq",
+        &["--html", "--reference", reference.to_str().unwrap()],
+    );
+    let html = std::fs::read_to_string(dir.join("seq/sequence.html")).unwrap();
+    for needle in [
+        "\"names\":[\"render\",\"reference\"]",
+        "\"reference\":\"reference\"",
+        "\"number\":0,\"relmse\":",
+        "\"number\":1,\"relmse\":",
+        "\"flip\":\"",
+        "IradViewer",
+    ] {
+        assert!(html.contains(needle), "sequence.html lacks {needle}");
+    }
+    assert!(
+        !html.contains("\"relmse\":null"),
+        "every frame has its error"
+    );
+    // A still: frame 1 as a still against the reference's frame 1.
+    let still = dir.join("still");
+    let o = irad(
+        &[
+            "render",
+            scene,
+            "--frame",
+            "1",
+            "--spp",
+            "2",
+            "--resolution",
+            "24x16",
+            "-o",
+            still.to_str().unwrap(),
+            "--reference",
+            reference.join("frame_0001.exr").to_str().unwrap(),
+            "--html",
+        ],
+        &[],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let html = std::fs::read_to_string(dir.join("still.html")).unwrap();
+    assert!(html.contains("\"names\":[\"render\",\"reference\"]") && html.contains("\"flip\":\""));
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 #[test]
 fn render_errors_name_the_file() {
     let o = irad(&["render", "no/such/scene.toml"], &[]);

@@ -1,11 +1,12 @@
 //! `irad render`: one scene, one method, its image, record and summary.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
-use anyhow::{bail, Result};
+use anyhow::{bail, Context as _, Result};
 use clap::builder::{PossibleValue, PossibleValuesParser};
 
 use irad::gpu::{Context, ContextOptions};
+use irad::html::viewer::ViewerData;
 use irad::render::{self, RenderJob};
 use irad::scene;
 
@@ -62,6 +63,12 @@ pub struct RenderArgs {
     /// reference, up to 5 times that).
     #[arg(long, requires = "reference", requires = "sequence")]
     no_flip: bool,
+    /// Also write the interactive viewer (docs/commands.md "Looking at images"): OUT.html
+    /// beside OUT.exr, the render against --reference where given (split, flip, error maps,
+    /// HDR-FLIP); with --sequence OUT/sequence.html, a player over the frames with their error
+    /// plot against the reference frames. One self-contained page; it opens from file://.
+    #[arg(long)]
+    html: bool,
     #[command(flatten)]
     settings: MethodFlags,
 }
@@ -145,6 +152,7 @@ pub fn run(options: &ContextOptions, args: RenderArgs) -> Result<()> {
             args.exposure,
             args.reference,
             !args.no_flip,
+            args.html,
         );
     }
     let (scene, frame) = match (&scene.animation, args.frame) {
@@ -177,6 +185,7 @@ pub fn run(options: &ContextOptions, args: RenderArgs) -> Result<()> {
     let out = args
         .out
         .unwrap_or_else(|| PathBuf::from("out").join(&scene.name));
+    let reference = args.reference.clone();
     let job = RenderJob {
         scene: &scene,
         method,
@@ -248,6 +257,38 @@ pub fn run(options: &ContextOptions, args: RenderArgs) -> Result<()> {
         .collect();
     let (json, images) = files.split_last().expect("a render writes files");
     println!("wrote {} and {json}", images.join(", "));
+    if args.html {
+        let path = report.files.exr.with_extension("html");
+        let mut names = vec!["render".to_string()];
+        let mut frame_images = vec![report.image];
+        if let Some(r) = &reference {
+            names.push("reference".into());
+            frame_images.push(irad::image::exr::read(r)?);
+        }
+        let with_reference = reference.is_some().then_some(1);
+        let data = ViewerData::new(names, with_reference, 10.0, vec![(0, frame_images)], true)?;
+        let intro = format!(
+            "<p>{} with {}{}</p>",
+            irad::html::escape(&render::scene_label(&scene)),
+            irad::html::escape(&r.method),
+            match &reference {
+                Some(p) => format!(
+                    ", against {}",
+                    irad::html::escape(&irad::image::sidecar::absolute(p))
+                ),
+                None => String::new(),
+            }
+        );
+        write_page(&path, "irad render", &intro, &data)?;
+    }
+    Ok(())
+}
+
+/// Writes a viewer page and says so.
+pub fn write_page(path: &Path, title: &str, intro: &str, data: &ViewerData) -> Result<()> {
+    let html = irad::html::viewer::page(title, intro, data);
+    std::fs::write(path, html).with_context(|| format!("writing {}", path.display()))?;
+    println!("wrote {}", path.display());
     Ok(())
 }
 

@@ -4,9 +4,11 @@
 use std::ops::Range;
 use std::path::PathBuf;
 
-use anyhow::{bail, Result};
+use anyhow::{bail, Context as _, Result};
 
 use irad::gpu::{Context, ContextOptions};
+use irad::html::viewer::ViewerData;
+use irad::image::exr;
 use irad::methods::Method;
 use irad::render;
 use irad::scene::Scene;
@@ -55,6 +57,7 @@ pub fn run(
     exposure: f32,
     reference: Option<PathBuf>,
     flip: bool,
+    html: bool,
 ) -> Result<()> {
     let Some(animation) = &scene.animation else {
         bail!(
@@ -158,7 +161,56 @@ pub fn run(
         previews.join(", "),
         job.out.display()
     );
+    if html {
+        write_page(&job, &report.record, flip)?;
+    }
     Ok(())
+}
+
+/// OUT/sequence.html: the frames (and the reference's) in the viewer's player.
+fn write_page(job: &SequenceJob, record: &sequence::SequenceRecord, flip: bool) -> Result<()> {
+    let mut names = vec!["render".to_string()];
+    if job.reference.is_some() {
+        names.push("reference".into());
+    }
+    let mut frames = Vec::with_capacity(record.rendered.len());
+    for f in &record.rendered {
+        let path = sequence::frame_stem(&job.out, f.frame).with_extension("exr");
+        let mut images =
+            vec![exr::read(&path).with_context(|| format!("reading {}", path.display()))?];
+        if let Some(dir) = &job.reference {
+            let path = dir.join(format!("frame_{:04}.exr", f.frame));
+            images.push(exr::read(&path).with_context(|| format!("reading {}", path.display()))?);
+        }
+        frames.push((f.frame, images));
+    }
+    let data = ViewerData::new(
+        names,
+        job.reference.as_ref().map(|_| 1),
+        record.fps,
+        frames,
+        flip && job.reference.is_some(),
+    )?;
+    let intro = format!(
+        "<p>{} with {}, frames {}..{}{}</p>",
+        irad::html::escape(&record.scene),
+        irad::html::escape(&record.method),
+        record.frames[0],
+        record.frames[1],
+        match &job.reference {
+            Some(p) => format!(
+                ", against the frames in {}",
+                irad::html::escape(&irad::image::sidecar::absolute(p))
+            ),
+            None => String::new(),
+        }
+    );
+    super::render::write_page(
+        &job.out.join("sequence.html"),
+        "irad render --sequence",
+        &intro,
+        &data,
+    )
 }
 
 #[cfg(test)]
