@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Installs the system packages irad needs when they are missing (idempotent; Debian/Ubuntu):
+# Installs the system packages irad needs when they are missing (idempotent; Debian):
 # the Vulkan loader, lavapipe (Mesa's CPU Vulkan driver), glslang, SPIRV-Tools and the Khronos
 # validation layer; with --browser also Chromium and its ChromeDriver, which the browser test of
 # the HTML viewer drives (tests/browser.rs; scripts/test.sh asks for them). Needs root or sudo

@@ -62,6 +62,8 @@ second_pass_tests() {
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh --browser
+# The browser tests (tests/browser.rs) fail rather than skip when chromium is missing.
+export IRAD_REQUIRE_BROWSER=1
 if [ "${1:-}" = "--statistical" ]; then
   shift
   mapfile -t names < <(statistical_tests)

@@ -219,13 +219,31 @@ fn quick_suite_writes_every_output_and_charts_the_csv_figures() {
     assert!(results.runs.iter().any(|r| r.pareto));
     // report.html: every scored run's row and image, each scene's viewer.
     let html = fs::read_to_string(out.join("report.html")).unwrap();
-    for r in results.runs.iter().filter(|r| r.status == Status::Ok) {
-        let name = format!("{} {}", r.label, r.budget);
-        assert!(html.contains(&format!("data-image=\"{name}\"")), "{name}");
-        assert!(
-            html.contains(&format!("{name:?}:{{\"width\":")),
-            "{name}'s image"
+    let start = html.find("const IRAD_DATA = ").unwrap() + 18;
+    let end = start + html[start..].find(";\n").unwrap();
+    let data: serde_json::Value = serde_json::from_str(&html[start..end]).unwrap();
+    for (k, scene) in results.scenes().iter().enumerate() {
+        let viewer = &data[format!("scene{k}")];
+        let names: Vec<&str> = viewer["names"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|n| n.as_str().unwrap())
+            .collect();
+        assert_eq!(names[0], "reference", "{scene}");
+        assert_eq!(
+            viewer["frames"][0]["images"].as_array().unwrap().len(),
+            names.len()
         );
+        for r in results
+            .runs
+            .iter()
+            .filter(|r| &r.scene == scene && r.status == Status::Ok)
+        {
+            let name = format!("{} {}", r.label, r.budget);
+            assert!(html.contains(&format!("data-image=\"{name}\"")), "{name}");
+            assert!(names.contains(&name.as_str()), "{name}'s image");
+        }
     }
     assert_eq!(
         html.matches("<div class=\"viewer\">").count(),

@@ -95,6 +95,7 @@ fn readout_matches(b: &Browser, root: &str, key: &str, want: [f32; 3]) {
         .split(',')
         .map(|v| v.parse().unwrap())
         .collect();
+    assert_eq!(got.len(), 3, "readout {key}: {text}");
     for (g, w) in got.iter().zip(want) {
         assert!(
             (g - w).abs() <= w.abs() * 2f32.powi(-11),
@@ -162,7 +163,9 @@ fn the_viewer_compares_two_exrs_in_chromium() {
         stem.to_str().unwrap(),
         "--html",
     ]);
-    let b = Browser::start(1000, 1000);
+    let Some(b) = Browser::start(1000, 1000) else {
+        return;
+    };
     b.open(&dir.join("cmp.html"));
     assert_no_console_errors(&b, "loading the page");
     let root = "#viewer0 .viewer";
@@ -401,7 +404,9 @@ fn the_viewer_plays_a_sequence_in_chromium() {
         "--html",
         "--no-flip",
     ]);
-    let b = Browser::start(1000, 1000);
+    let Some(b) = Browser::start(1000, 1000) else {
+        return;
+    };
     b.open(&out.join("compare.html"));
     assert_no_console_errors(&b, "loading the sequence");
     let root = "#viewer0 .viewer";
@@ -430,10 +435,9 @@ fn the_viewer_plays_a_sequence_in_chromium() {
     let x0 = marker(&first);
     let (px, py) = (c[0] + 1.0 + 40.0 * 3.5, c[1] + 1.0 + 40.0 * 5.5);
     b.click_at(px, py);
-    // Step with the arrow key, then the next button.
+    // Step with the arrow key, then the next button; the readout follows the frame.
     b.keys("\u{E014}");
     assert_eq!(data(&b, root, "frame"), "1");
-    b.move_to(px + 1.0, py);
     readout_matches(&b, root, "a", pixel(&frames[1].0, 3, 5));
     readout_matches(&b, root, "b", pixel(&frames[1].1, 3, 5));
     b.click(&b.find(&format!("{root} .sequence button.next")));
@@ -476,7 +480,9 @@ fn the_viewer_plays_a_sequence_in_chromium() {
 /// and viewer in order; a hover on a chart point shows its run's figures, a click shows its
 /// image as A and marks its row; a header sorts the table; no console errors.
 pub fn check_report(report: &Path, scenes: usize) {
-    let b = Browser::start(1200, 1000);
+    let Some(b) = Browser::start(1200, 1000) else {
+        return;
+    };
     b.open(report);
     assert_no_console_errors(&b, "loading report.html");
     let count = b
@@ -504,14 +510,33 @@ pub fn check_report(report: &Path, scenes: usize) {
         );
         let point = b.find(&format!("{section} circle.point"));
         let p = b.rect(&point);
+        b.js(
+            "document.querySelector('.hover-tip').hidden = true;",
+            json!([]),
+        );
         b.move_to(p[0] + p[2] / 2.0, p[1] + p[3] / 2.0);
         let tip = b.js(
             "const t = document.querySelector('.hover-tip'); return t.hidden ? '' : t.textContent;",
             json!([]),
         );
         let tip = tip.as_str().unwrap_or_default().to_string();
+        // The point's own run: its row's method and budget, relMSE, spread, seeds and time.
+        let cells = b.js(
+            "const r = [...document.querySelectorAll(arguments[0] + ' tbody tr')].find(r => r.dataset.run === arguments[1].dataset.run); return [r.children[1].textContent, r.children[2].textContent, r.children[7].textContent];",
+            json!([section, {crate::common::webdriver::ELEMENT: point}]),
+        );
+        let expected = format!(
+            "{} {}: relMSE",
+            cells[0].as_str().unwrap(),
+            cells[1].as_str().unwrap()
+        );
         assert!(
-            tip.contains("relMSE") && tip.contains("seeds") && tip.contains("ms GPU"),
+            tip.starts_with(&expected),
+            "hover: {tip:?}, expected {expected:?}"
+        );
+        let seeds = format!("over {} seeds", cells[2].as_str().unwrap());
+        assert!(
+            tip.contains(&seeds) && tip.contains("ms GPU"),
             "hover: {tip:?}"
         );
         b.click_at(p[0] + p[2] / 2.0, p[1] + p[3] / 2.0);
@@ -546,26 +571,35 @@ pub fn check_report(report: &Path, scenes: usize) {
             );
         }
     }
-    // A header sorts its table: relMSE ascending.
+    // A header sorts its table: relMSE ascending, then descending.
     let header = b.find("#scene0 table.runs th:nth-child(5)");
     b.js(
         "arguments[0].scrollIntoView();",
         json!([{crate::common::webdriver::ELEMENT: header}]),
     );
+    let column = || -> Vec<f64> {
+        let values = b.js(
+            "return [...document.querySelectorAll('#scene0 table.runs tbody tr')].map(r => parseFloat(r.children[4].textContent));",
+            json!([]),
+        );
+        values
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_f64().unwrap_or(f64::INFINITY))
+            .collect()
+    };
     b.click(&header);
-    let values = b.js(
-        "return [...document.querySelectorAll('#scene0 table.runs tbody tr')].map(r => parseFloat(r.children[4].textContent));",
-        json!([]),
-    );
-    let values: Vec<f64> = values
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|v| v.as_f64().unwrap_or(f64::INFINITY))
-        .collect();
+    let up = column();
     assert!(
-        values.windows(2).all(|w| w[0] <= w[1]),
-        "sorted by relMSE: {values:?}"
+        up.windows(2).all(|w| w[0] <= w[1]),
+        "sorted by relMSE: {up:?}"
+    );
+    b.click(&header);
+    let down = column();
+    assert!(
+        down.windows(2).all(|w| w[0] >= w[1]),
+        "sorted by relMSE, descending: {down:?}"
     );
     assert_no_console_errors(&b, "using report.html");
 }

@@ -430,14 +430,14 @@ fn renders_write_their_viewer_pages() {
         env!("CARGO_MANIFEST_DIR"),
         "/scenes/cornell-circling/scene.toml"
     );
-    let sequence = |out: &str, extra: &[&str]| {
+    let sequence = |out: &str, samples: &str, extra: &[&str]| {
         let out = dir.join(out);
         let mut args = vec![
             "render",
             scene,
             "--sequence=0..2",
             "--samples-per-frame",
-            "2",
+            samples,
             "--resolution",
             "24x16",
             "-o",
@@ -447,27 +447,36 @@ fn renders_write_their_viewer_pages() {
         let o = irad(&args, &[]);
         assert!(o.status.success(), "{}", stderr(&o));
     };
-    sequence("ref", &[]);
+    // The reference with more samples, so that each frame has an error of its own.
+    sequence("ref", "8", &[]);
     let reference = dir.join("ref");
     sequence(
         "seq",
+        "2",
         &["--html", "--reference", reference.to_str().unwrap()],
     );
     let html = std::fs::read_to_string(dir.join("seq/sequence.html")).unwrap();
-    for needle in [
-        "\"names\":[\"render\",\"reference\"]",
-        "\"reference\":\"reference\"",
-        "\"number\":0,\"relmse\":",
-        "\"number\":1,\"relmse\":",
-        "\"flip\":\"",
-        "IradViewer",
-    ] {
-        assert!(html.contains(needle), "sequence.html lacks {needle}");
+    let data = viewer_data(&html);
+    assert_eq!(data["names"], serde_json::json!(["render", "reference"]));
+    assert_eq!(data["reference"], "reference");
+    // Each frame's relMSE is the one sequence.json scored it with (the frames paired right).
+    let record: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("seq/sequence.json")).unwrap())
+            .unwrap();
+    let frames = data["frames"].as_array().unwrap();
+    assert_eq!(frames.len(), 2);
+    for (k, frame) in frames.iter().enumerate() {
+        assert_eq!(frame["number"], k);
+        let scored = record["rendered"][k]["metrics"]["rel_mse"]
+            .as_f64()
+            .unwrap();
+        let shown = frame["relmse"].as_f64().unwrap();
+        assert!(
+            scored > 0.0 && (shown - scored).abs() <= 1e-9 * scored,
+            "frame {k}: {shown} against {scored}"
+        );
+        assert!(frame["images"][0]["flip"].is_string() && frame["images"][1].get("flip").is_none());
     }
-    assert!(
-        !html.contains("\"relmse\":null"),
-        "every frame has its error"
-    );
     // A still: frame 1 as a still against the reference's frame 1.
     let still = dir.join("still");
     let o = irad(
@@ -489,9 +498,17 @@ fn renders_write_their_viewer_pages() {
         &[],
     );
     assert!(o.status.success(), "{}", stderr(&o));
-    let html = std::fs::read_to_string(dir.join("still.html")).unwrap();
-    assert!(html.contains("\"names\":[\"render\",\"reference\"]") && html.contains("\"flip\":\""));
+    let data = viewer_data(&std::fs::read_to_string(dir.join("still.html")).unwrap());
+    assert_eq!(data["names"], serde_json::json!(["render", "reference"]));
+    assert!(data["frames"][0]["images"][0]["flip"].is_string());
     std::fs::remove_dir_all(&dir).ok();
+}
+
+/// The viewer's data in a page irad wrote.
+fn viewer_data(html: &str) -> serde_json::Value {
+    let start = html.find("const IRAD_DATA = ").expect("the viewer's data") + 18;
+    let end = start + html[start..].find(";\n").expect("its end");
+    serde_json::from_str(&html[start..end]).expect("JSON")
 }
 
 #[test]

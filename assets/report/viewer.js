@@ -94,11 +94,13 @@ const MODES = [
 
 class Viewer {
   // `data`: { names, reference (a name or null), fps, factor, frames: [{ number, relmse,
-  // images: { name: { width, height, rgb, flip? } } }] } as src/html/viewer.rs writes it.
+  // images: [{ width, height, rgb, flip? }, in the order of names] }] } as src/html/viewer.rs
+  // writes it.
   constructor(root, data, options = {}) {
     this.root = root;
     this.data = data;
     this.names = data.names;
+    this.index = new Map(this.names.map((n, i) => [n, i]));
     this.reference = data.reference;
     this.frame = 0; // index into data.frames
     const other = this.names.find((n) => n !== this.reference) || this.names[0];
@@ -114,7 +116,8 @@ class Viewer {
     this.bar = root.querySelector("canvas.bar");
     this.readout = root.querySelector(".readout");
     this.note = root.querySelector(".note");
-    this.hasFlip = data.frames.some((f) => Object.values(f.images).some((im) => im.flip));
+    this.hasFlip = data.frames.some((f) => f.images.some((im) => im.flip));
+    this.cursor = null; // the last canvas point under the pointer, for the readout
     this.fit();
     this.bind();
     if (data.frames.length > 1) this.bindSequence();
@@ -122,7 +125,7 @@ class Viewer {
   }
 
   entry(name) {
-    return this.data.frames[this.frame].images[name];
+    return this.data.frames[this.frame].images[this.index.get(name)];
   }
 
   // The decoded image `name` of the current frame.
@@ -162,6 +165,7 @@ class Viewer {
 
   value(name, x, y) {
     const im = this.image(name);
+    if (x >= im.width || y >= im.height) return [NaN, NaN, NaN];
     const i = 3 * (y * im.width + x);
     return [im.rgb[i], im.rgb[i + 1], im.rgb[i + 2]];
   }
@@ -220,15 +224,17 @@ class Viewer {
     this.drawBar();
     let note = "";
     if (this.mode === "flipmap" && !map) {
-      note = this.reference
-        ? `FLIP maps are of each image against ${this.reference}: choose it as B (and another image as A)`
-        : "no FLIP maps: there is no reference";
+      if (!this.reference) note = "no FLIP maps: there is no reference";
+      else if (this.b !== this.reference) note = `FLIP maps are of each image against ${this.reference}: choose it as B`;
+      else if (this.a === this.reference) note = "A is the reference: choose another image as A";
+      else note = "no FLIP map for A: irad computes none for an image with NaN or Inf values";
     }
     this.note.textContent = note;
     this.root.dataset.mode = this.mode;
     this.root.dataset.shown = this.mode === "flip" ? (this.showB ? this.b : this.a) : "";
     this.root.dataset.frame = this.data.frames[this.frame].number;
     if (this.plot) this.drawPlot();
+    if (this.cursor) this.showReadout(...this.cursor);
   }
 
   drawBar() {
@@ -264,6 +270,11 @@ class Viewer {
       return;
     }
     const fmt = (v) => v.map((c) => c.toPrecision(5)).join(", ");
+    // Box-filtered images: a pixel here is the mean of f x f of the EXR's.
+    const f = this.data.factor || 1;
+    const where = f > 1
+      ? `(${p[0] * f}..${p[0] * f + f - 1}, ${p[1] * f}..${p[1] * f + f - 1}) mean of ${f}x${f}`
+      : `(${p[0]}, ${p[1]})`;
     const A = this.value(this.a, p[0], p[1]);
     const B = this.value(this.b, p[0], p[1]);
     this.readout.dataset.x = p[0];
@@ -272,7 +283,7 @@ class Viewer {
     this.readout.dataset.b = B.join(",");
     const map = this.flipMap();
     const flip = map ? `  FLIP ${map[p[1] * this.image(this.a).width + p[0]].toFixed(3)}` : "";
-    this.readout.textContent = `(${p[0]}, ${p[1]})  ${this.a}: ${fmt(A)}  |  ${this.b}: ${fmt(B)}${flip}`;
+    this.readout.textContent = `${where}  ${this.a}: ${fmt(A)}  |  ${this.b}: ${fmt(B)}${flip}`;
   }
 
   // Zoom by `factor` about canvas point (cx, cy), keeping the image pixel under it in place.
@@ -292,16 +303,20 @@ class Viewer {
 
   bind() {
     const c = this.canvas;
+    // Client point -> canvas pixel, inside the canvas's border.
     const local = (e) => {
       const r = c.getBoundingClientRect();
-      return [((e.clientX - r.left) * c.width) / r.width, ((e.clientY - r.top) * c.height) / r.height];
+      return [
+        ((e.clientX - r.left - c.clientLeft) * c.width) / c.clientWidth,
+        ((e.clientY - r.top - c.clientTop) * c.height) / c.clientHeight,
+      ];
     };
     c.addEventListener("wheel", (e) => {
       if (e.deltaY === 0) return;
       e.preventDefault();
       const [cx, cy] = local(e);
+      this.cursor = [cx, cy];
       this.zoom(e.deltaY < 0 ? 2 : 0.5, cx, cy);
-      this.showReadout(cx, cy);
     });
     let drag = null;
     c.addEventListener("pointerdown", (e) => {
@@ -309,13 +324,16 @@ class Viewer {
       c.setPointerCapture(e.pointerId);
     });
     c.addEventListener("pointerup", () => (drag = null));
+    c.addEventListener("pointerleave", () => (this.cursor = null));
     c.addEventListener("pointercancel", () => (drag = null));
     c.style.touchAction = "none";
     c.addEventListener("pointermove", (e) => {
       const [cx, cy] = local(e);
+      this.cursor = [cx, cy];
       if (drag) {
         if (this.mode === "split" && e.shiftKey) {
-          this.split = cx / c.width;
+          this.split = Math.min(Math.max(cx / c.width, 0), 1);
+          this.root.querySelector("input.split").value = Math.round(100 * this.split);
         } else {
           this.ox += cx - drag[0];
           this.oy += cy - drag[1];
@@ -379,6 +397,7 @@ class Viewer {
   // number and the per-frame error plot (where there is a reference).
   bindSequence() {
     const n = this.data.frames.length;
+    // Above the image, so that the controls stay in place while it zooms.
     const div = document.createElement("div");
     div.className = "sequence";
     div.innerHTML =
@@ -395,7 +414,7 @@ class Viewer {
     q("button.next").addEventListener("click", () => this.step(1));
     this.playButton.addEventListener("click", () => this.togglePlay());
     this.plot = null;
-    if (this.data.frames.some((f) => f.relmse !== null && f.relmse > 0)) {
+    if (this.data.frames.some((f) => f.relmse !== null)) {
       this.plot = document.createElement("canvas");
       this.plot.className = "plot";
       this.plot.width = this.canvas.width;
@@ -403,7 +422,7 @@ class Viewer {
       div.after(this.plot);
       this.plot.addEventListener("click", (e) => {
         const r = this.plot.getBoundingClientRect();
-        const x = ((e.clientX - r.left) * this.plot.width) / r.width;
+        const x = ((e.clientX - r.left - this.plot.clientLeft) * this.plot.width) / this.plot.clientWidth;
         this.setFrame(Math.round(((x - 40) / (this.plot.width - 50)) * (n - 1)));
       });
     }
@@ -435,18 +454,19 @@ class Viewer {
     this.root.dataset.playing = this.playing ? "true" : "false";
   }
 
-  // log10 relMSE per frame, the current frame marked by a vertical line and a dot.
+  // log10 relMSE per frame, the current frame marked by a vertical line and a dot; a frame
+  // equal to the reference (relMSE 0) sits on the axis's floor.
   drawPlot() {
     const ctx = this.plot.getContext("2d");
     const { width, height } = this.plot;
     ctx.clearRect(0, 0, width, height);
     const frames = this.data.frames;
     const n = frames.length;
-    const logs = frames.map((f) => (f.relmse !== null && f.relmse > 0 ? Math.log10(f.relmse) : null));
-    const known = logs.filter((v) => v !== null);
-    let lo = Math.floor(Math.min(...known));
-    let hi = Math.ceil(Math.max(...known));
+    const positive = frames.filter((f) => f.relmse > 0).map((f) => Math.log10(f.relmse));
+    let lo = positive.length ? Math.floor(Math.min(...positive)) : -1;
+    let hi = positive.length ? Math.ceil(Math.max(...positive)) : 0;
     if (hi === lo) hi = lo + 1;
+    const logs = frames.map((f) => (f.relmse === null ? null : f.relmse > 0 ? Math.log10(f.relmse) : lo));
     const X = (i) => 40 + (n > 1 ? (i / (n - 1)) * (width - 50) : 0);
     const Y = (v) => 8 + (1 - (v - lo) / (hi - lo)) * (height - 26);
     ctx.strokeStyle = "#ccc";
@@ -461,7 +481,8 @@ class Viewer {
       ctx.fillText(`1e${e}`, 36, Y(e) + 3);
     }
     ctx.textAlign = "center";
-    ctx.fillText(`relMSE per frame (frames ${frames[0].number}..${frames[n - 1].number})`, width / 2, height - 4);
+    const caption = positive.length ? "relMSE per frame" : "relMSE per frame: 0, every frame equal to the reference";
+    ctx.fillText(`${caption} (frames ${frames[0].number}..${frames[n - 1].number})`, width / 2, height - 4);
     ctx.strokeStyle = "#2060c0";
     ctx.beginPath();
     let started = false;

@@ -161,17 +161,10 @@ fn flip_map(f: flip::FlipResult) -> FlipMap {
     }
 }
 
-/// A frame for the page: its number, [test, reference] and their FLIP maps.
-type PageFrame = (u32, Vec<Image>, Vec<Option<FlipMap>>);
-
-/// The viewer page of the test against the reference at `path`: each frame `(number, [test,
-/// reference], their FLIP maps)`, under the figures' line.
-fn write_page(
-    args: &CompareArgs,
-    path: &Path,
-    frames: Vec<PageFrame>,
-    figures: &str,
-) -> Result<()> {
+/// The viewer of the test against the reference, for `frames` frames of `size`: the two
+/// named by their files (or "test ..." and "reference ..." where the names are the same), at
+/// the frame rate of the test folder's sequence.json where there is one.
+fn viewer(args: &CompareArgs, frames: usize, size: (u32, u32)) -> Result<ViewerData> {
     let name = |p: &Path| {
         p.file_name()
             .map(|n| n.to_string_lossy().into_owned())
@@ -181,24 +174,25 @@ fn write_page(
     if a == b {
         (a, b) = (format!("test {a}"), format!("reference {b}"));
     }
-    let mut flips = Vec::with_capacity(frames.len());
-    let mut images = Vec::with_capacity(frames.len());
-    for (n, frame_images, frame_flips) in frames {
-        images.push((n, frame_images));
-        flips.push(frame_flips);
-    }
-    // FLIP maps are the ones compare computed (none under --no-flip), not a second time.
-    let mut data = ViewerData::new(vec![a, b], Some(1), 10.0, images, false)?;
-    for (frame, f) in data.frames.iter_mut().zip(flips) {
-        frame.flip = f;
-    }
+    let fps = fs::read_to_string(args.test.join("sequence.json"))
+        .ok()
+        .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
+        .and_then(|v| v["fps"].as_f64())
+        .unwrap_or(10.0) as f32;
+    // FLIP maps are the ones compare computes (none under --no-flip), not a second time; the
+    // page's size is reckoned with them.
+    ViewerData::new(vec![a, b], Some(1), fps, frames, size, !args.no_flip)
+}
+
+/// The viewer page at `path`, under the figures' line.
+fn write_page(args: &CompareArgs, path: &Path, data: &ViewerData, figures: &str) -> Result<()> {
     let intro = format!(
         "<p>{} against the reference {}</p><pre>{}</pre>",
         irad::html::escape(&irad::image::sidecar::absolute(&args.test)),
         irad::html::escape(&irad::image::sidecar::absolute(&args.reference)),
         irad::html::escape(figures)
     );
-    let html = irad::html::viewer::page("irad compare", &intro, &data);
+    let html = irad::html::viewer::page("irad compare", &intro, data);
     fs::write(path, html).with_context(|| format!("writing {}", path.display()))?;
     println!("wrote {}", path.display());
     Ok(())
@@ -220,13 +214,9 @@ fn compare_images(args: &CompareArgs) -> Result<Record> {
         }
         write_maps(out, &x, &r, flip.as_ref())?;
         if args.html {
-            let flips = vec![flip.map(flip_map), None];
-            write_page(
-                args,
-                &with_suffix(out, ".html"),
-                vec![(0, vec![x, r], flips)],
-                &line(&m),
-            )?;
+            let mut data = viewer(args, 1, (x.width, x.height))?;
+            data.push_with_flips(0, vec![x, r], vec![flip.map(flip_map), None])?;
+            write_page(args, &with_suffix(out, ".html"), &data, &line(&m))?;
         }
     }
     Ok(Record {
@@ -307,7 +297,7 @@ fn compare_folders(args: &CompareArgs) -> Result<Record> {
     let mut sequence = SequenceScore::default();
     let mut records = Vec::new();
     // The viewer's frames, where --html asks for them.
-    let mut pages = Vec::new();
+    let mut page: Option<ViewerData> = None;
     let mut previous: Option<u32> = None;
     for (n, path) in &tests {
         if previous.is_some_and(|p| p + 1 != *n) {
@@ -323,11 +313,13 @@ fn compare_folders(args: &CompareArgs) -> Result<Record> {
         }
         let flip_mean = m.flip;
         if args.html {
-            pages.push((
-                *n,
-                vec![x.clone(), r.clone()],
-                vec![flip.map(flip_map), None],
-            ));
+            if page.is_none() {
+                page = Some(viewer(args, tests.len(), (x.width, x.height))?);
+            }
+            let flips = vec![flip.map(flip_map), None];
+            page.as_mut()
+                .expect("made")
+                .push_with_flips(*n, vec![x.clone(), r.clone()], flips)?;
         }
         m = sequence.push(x, r)?;
         m.flip = flip_mean;
@@ -352,8 +344,8 @@ fn compare_folders(args: &CompareArgs) -> Result<Record> {
         summary.flicker
     );
     println!("{figures}");
-    if let (true, Some(out)) = (args.html, &args.out) {
-        write_page(args, &out.join("compare.html"), pages, &figures)?;
+    if let (Some(data), Some(out)) = (&page, &args.out) {
+        write_page(args, &out.join("compare.html"), data, &figures)?;
     }
     Ok(Record {
         test: irad::image::sidecar::absolute(&args.test),

@@ -259,14 +259,12 @@ pub fn run(options: &ContextOptions, args: RenderArgs) -> Result<()> {
     println!("wrote {} and {json}", images.join(", "));
     if args.html {
         let path = report.files.exr.with_extension("html");
-        let mut names = vec!["render".to_string()];
-        let mut frame_images = vec![report.image];
+        let mut images = vec![("render".to_string(), report.image)];
         if let Some(r) = &reference {
-            names.push("reference".into());
-            frame_images.push(irad::image::exr::read(r)?);
+            images.push(("reference".into(), irad::image::exr::read(r)?));
         }
         let with_reference = reference.is_some().then_some(1);
-        let data = ViewerData::new(names, with_reference, 10.0, vec![(0, frame_images)], true)?;
+        let data = ViewerData::still(images, with_reference, true)?;
         let intro = format!(
             "<p>{} with {}{}</p>",
             irad::html::escape(&render::scene_label(&scene)),

@@ -167,30 +167,40 @@ pub fn run(
     Ok(())
 }
 
-/// OUT/sequence.html: the frames (and the reference's) in the viewer's player.
+/// OUT/sequence.html: the frames of this run's range (and the reference's) in the viewer's
+/// player, each box-filtered as it is read.
 fn write_page(job: &SequenceJob, record: &sequence::SequenceRecord, flip: bool) -> Result<()> {
     let mut names = vec!["render".to_string()];
     if job.reference.is_some() {
         names.push("reference".into());
     }
-    let mut frames = Vec::with_capacity(record.rendered.len());
-    for f in &record.rendered {
-        let path = sequence::frame_stem(&job.out, f.frame).with_extension("exr");
-        let mut images =
-            vec![exr::read(&path).with_context(|| format!("reading {}", path.display()))?];
-        if let Some(dir) = &job.reference {
-            let path = dir.join(format!("frame_{:04}.exr", f.frame));
-            images.push(exr::read(&path).with_context(|| format!("reading {}", path.display()))?);
-        }
-        frames.push((f.frame, images));
-    }
-    let data = ViewerData::new(
+    // The folder may hold frames of an earlier run outside this range: they are not shown.
+    let frames: Vec<u32> = record
+        .rendered
+        .iter()
+        .map(|f| f.frame)
+        .filter(|f| job.frames.contains(f))
+        .collect();
+    let read =
+        |path: PathBuf| exr::read(&path).with_context(|| format!("reading {}", path.display()));
+    let size = (job.scene.camera.width, job.scene.camera.height);
+    let mut data = ViewerData::new(
         names,
         job.reference.as_ref().map(|_| 1),
         record.fps,
-        frames,
+        frames.len(),
+        size,
         flip && job.reference.is_some(),
     )?;
+    for &f in &frames {
+        let mut images = vec![read(
+            sequence::frame_stem(&job.out, f).with_extension("exr"),
+        )?];
+        if let Some(dir) = &job.reference {
+            images.push(read(sequence::frame_stem(dir, f).with_extension("exr"))?);
+        }
+        data.push(f, images)?;
+    }
     let intro = format!(
         "<p>{} with {}, frames {}..{}{}</p>",
         irad::html::escape(&record.scene),

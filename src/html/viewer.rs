@@ -10,7 +10,7 @@
 
 use std::fmt::Write as _;
 
-use anyhow::Result;
+use anyhow::{bail, Result};
 
 use crate::image::flip::{self, DEFAULT_PIXELS_PER_DEGREE};
 use crate::image::{metrics, preview, Image};
@@ -32,17 +32,18 @@ pub struct FlipMap {
     pub values: Vec<f32>,
 }
 
-/// One frame of a viewer (a still has one).
+/// One frame of a viewer (a still has one), its images box-filtered by the viewer's factor.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ViewerFrame {
     /// The frame's number, as the scrubber shows it (0 for a still).
     pub number: u32,
     /// One image per name of the viewer, in its order.
     pub images: Vec<Image>,
-    /// Each image's HDR-FLIP map against the reference, where one was computed.
+    /// Each image's HDR-FLIP map against the reference (computed at full size), where there
+    /// is one.
     pub flip: Vec<Option<FlipMap>>,
-    /// The relMSE of the first image that is not the reference against it: the sequence's
-    /// per-frame error plot.
+    /// The relMSE (at full size) of the first image that is not the reference against it: the
+    /// sequence's per-frame error plot.
     pub rel_mse: Option<f64>,
 }
 
@@ -55,99 +56,171 @@ pub struct ViewerData {
     pub reference: Option<usize>,
     /// Playback's frames a second.
     pub fps: f32,
+    /// The box filter's size: the frames' images are stored filtered by it, so that a long
+    /// sequence of large frames never sits in memory at full size.
+    pub factor: u32,
+    /// The full-size images' width and height.
+    pub size: (u32, u32),
+    /// Whether `push` computes FLIP maps.
+    pub with_flip: bool,
     pub frames: Vec<ViewerFrame>,
 }
 
 impl ViewerData {
-    /// A viewer of frames (each `(number, images in the order of names)`), with each image's
-    /// FLIP map against the reference where `with_flip` and the relMSE of the first other image
-    /// against it.
+    /// A viewer of up to `frames` frames of `names`' images, each `size` pixels, with FLIP maps
+    /// against the reference where `with_flip`. The box filter that keeps the page under
+    /// VIEWER_BYTES is chosen here, from those counts.
     pub fn new(
         names: Vec<String>,
         reference: Option<usize>,
         fps: f32,
-        frames: Vec<(u32, Vec<Image>)>,
+        frames: usize,
+        size: (u32, u32),
         with_flip: bool,
     ) -> Result<ViewerData> {
-        let test = (0..names.len()).find(|&i| Some(i) != reference);
-        let mut out = Vec::with_capacity(frames.len());
-        for (number, images) in frames {
-            assert_eq!(images.len(), names.len(), "an image per name");
-            let mut flips = vec![None; images.len()];
-            let mut rel_mse = None;
-            if let Some(r) = reference {
-                let reference_image = &images[r];
-                for (i, image) in images.iter().enumerate() {
-                    if i == r
-                        || (image.width, image.height)
-                            != (reference_image.width, reference_image.height)
-                    {
-                        continue;
-                    }
-                    if Some(i) == test {
-                        rel_mse = metrics::compare(image, reference_image)
-                            .ok()
-                            .map(|m| m.rel_mse);
-                    }
-                    if with_flip {
-                        // A non-finite image has no FLIP map (its NaN/Inf count says why).
-                        if let Ok(f) =
-                            flip::hdr_flip(reference_image, image, DEFAULT_PIXELS_PER_DEGREE)
-                        {
-                            flips[i] = Some(FlipMap {
-                                width: f.width,
-                                height: f.height,
-                                values: f.error_map,
-                            });
-                        }
-                    }
-                }
-            }
-            out.push(ViewerFrame {
-                number,
-                images,
-                flip: flips,
-                rel_mse,
-            });
+        if let Some(r) = reference.filter(|&r| r >= names.len()) {
+            bail!("the viewer's reference is image {r} of {}", names.len());
         }
+        let pixels = size.0 as usize * size.1 as usize;
+        // 8 base64 bytes a pixel for half RGB, 4/3 for a FLIP byte.
+        let maps = match (with_flip, reference) {
+            (true, Some(_)) => names.len() - 1,
+            _ => 0,
+        };
+        let bytes = frames.max(1) * pixels * (8 * names.len() + maps * 4 / 3 + 1);
+        let factor = (1..)
+            .find(|f: &usize| bytes / (f * f) <= VIEWER_BYTES)
+            .expect("some factor fits") as u32;
         Ok(ViewerData {
             names,
             reference,
             fps,
-            frames: out,
+            factor,
+            size,
+            with_flip,
+            frames: Vec::with_capacity(frames),
         })
     }
 
-    /// The smallest integer factor whose box filter brings the embedded images under
-    /// VIEWER_BYTES (1 where they fit).
-    pub fn factor(&self) -> u32 {
-        // 8 base64 bytes a pixel for half RGB, 4/3 for a FLIP byte.
-        let bytes: usize = self
-            .frames
-            .iter()
-            .map(|f| {
-                f.images.iter().map(|im| 8 * im.pixels.len()).sum::<usize>()
-                    + f.flip
-                        .iter()
-                        .flatten()
-                        .map(|m| m.values.len() * 4 / 3)
-                        .sum::<usize>()
-            })
-            .sum();
-        (1..)
-            .find(|f: &usize| bytes / (f * f) <= VIEWER_BYTES)
-            .expect("some factor fits") as u32
+    /// A still: one frame of `images` (named), FLIP maps computed where `with_flip`.
+    pub fn still(
+        images: Vec<(String, Image)>,
+        reference: Option<usize>,
+        with_flip: bool,
+    ) -> Result<ViewerData> {
+        let size = images
+            .first()
+            .map(|(_, im)| (im.width, im.height))
+            .unwrap_or((0, 0));
+        let (names, images): (Vec<String>, Vec<Image>) = images.into_iter().unzip();
+        let mut data = ViewerData::new(names, reference, 10.0, 1, size, with_flip)?;
+        data.push(0, images)?;
+        Ok(data)
     }
 
-    /// The viewer's data as the JSON object viewer.js reads, images box-filtered by `factor`.
-    pub fn json(&self, factor: u32) -> String {
+    /// Adds frame `number`: its images in the order of the names. Their relMSE against the
+    /// reference and (where the viewer computes them) FLIP maps are taken at full size, then
+    /// the images are box-filtered.
+    pub fn push(&mut self, number: u32, images: Vec<Image>) -> Result<()> {
+        let mut flips = vec![None; images.len()];
+        if let (true, Some(r)) = (self.with_flip, self.reference) {
+            self.check(number, &images)?;
+            for (i, image) in images.iter().enumerate() {
+                if i == r {
+                    continue;
+                }
+                // A non-finite image has no FLIP map (its NaN/Inf count says why).
+                if let Ok(f) = flip::hdr_flip(&images[r], image, DEFAULT_PIXELS_PER_DEGREE) {
+                    flips[i] = Some(FlipMap {
+                        width: f.width,
+                        height: f.height,
+                        values: f.error_map,
+                    });
+                }
+            }
+        }
+        self.push_with_flips(number, images, flips)
+    }
+
+    /// Adds frame `number` with FLIP maps computed elsewhere (one per image, None for the
+    /// reference's).
+    pub fn push_with_flips(
+        &mut self,
+        number: u32,
+        images: Vec<Image>,
+        flips: Vec<Option<FlipMap>>,
+    ) -> Result<()> {
+        self.check(number, &images)?;
+        if flips.len() != images.len() {
+            bail!(
+                "frame {number}: {} FLIP maps for {} images",
+                flips.len(),
+                images.len()
+            );
+        }
+        let rel_mse = match (
+            self.reference,
+            (0..self.names.len()).find(|&i| Some(i) != self.reference),
+        ) {
+            (Some(r), Some(t)) => metrics::compare(&images[t], &images[r])
+                .ok()
+                .map(|m| m.rel_mse),
+            _ => None,
+        };
+        let factor = self.factor;
+        let flips = flips
+            .into_iter()
+            .map(|m| m.map(|m| scaled_map(m, factor)))
+            .collect();
+        let images = images
+            .into_iter()
+            .map(|im| match factor {
+                1 => im,
+                f => preview::downscale(&im, f),
+            })
+            .collect();
+        self.frames.push(ViewerFrame {
+            number,
+            images,
+            flip: flips,
+            rel_mse,
+        });
+        Ok(())
+    }
+
+    /// One image per name, each of the viewer's size.
+    fn check(&self, number: u32, images: &[Image]) -> Result<()> {
+        if images.len() != self.names.len() {
+            bail!(
+                "frame {number}: {} images for the viewer's {} names",
+                images.len(),
+                self.names.len()
+            );
+        }
+        for (name, im) in self.names.iter().zip(images) {
+            if (im.width, im.height) != self.size {
+                bail!(
+                    "frame {number}: {name} is {}x{}, the viewer's images {}x{}",
+                    im.width,
+                    im.height,
+                    self.size.0,
+                    self.size.1
+                );
+            }
+        }
+        Ok(())
+    }
+
+    /// The viewer's data as the JSON object viewer.js reads: each frame's images as an array
+    /// in the order of `names`.
+    pub fn json(&self) -> String {
         let mut s = String::from("{\"names\":[");
         for (i, n) in self.names.iter().enumerate() {
             let _ = write!(s, "{}{}", if i > 0 { "," } else { "" }, json_string(n));
         }
         let _ = write!(
             s,
-            "],\"reference\":{},\"fps\":{},\"factor\":{factor},\"frames\":[",
+            "],\"reference\":{},\"fps\":{},\"factor\":{},\"frames\":[",
             match self.reference {
                 Some(r) => json_string(&self.names[r]),
                 None => "null".into(),
@@ -156,7 +229,8 @@ impl ViewerData {
                 self.fps
             } else {
                 10.0
-            }
+            },
+            self.factor
         );
         for (k, frame) in self.frames.iter().enumerate() {
             let rel_mse = match frame.rel_mse {
@@ -165,51 +239,54 @@ impl ViewerData {
             };
             let _ = write!(
                 s,
-                "{}{{\"number\":{},\"relmse\":{rel_mse},\"images\":{{",
+                "{}{{\"number\":{},\"relmse\":{rel_mse},\"images\":[",
                 if k > 0 { "," } else { "" },
                 frame.number
             );
-            for (i, (name, image)) in self.names.iter().zip(&frame.images).enumerate() {
-                let image = scaled(image, factor);
+            for (i, image) in frame.images.iter().enumerate() {
                 let _ = write!(
                     s,
-                    "{}{}:{{\"width\":{},\"height\":{},\"rgb\":\"{}\"",
+                    "{}{{\"width\":{},\"height\":{},\"rgb\":\"{}\"",
                     if i > 0 { "," } else { "" },
-                    json_string(name),
                     image.width,
                     image.height,
-                    half_base64(&image)
+                    half_base64(image)
                 );
                 if let Some(map) = &frame.flip[i] {
-                    let _ = write!(s, ",\"flip\":\"{}\"", flip_base64(map, factor));
+                    let _ = write!(s, ",\"flip\":\"{}\"", flip_base64(map));
                 }
                 s.push('}');
             }
-            s.push_str("}}");
+            s.push_str("]}");
         }
         s + "]}"
     }
 }
 
-fn scaled(image: &Image, factor: u32) -> std::borrow::Cow<'_, Image> {
-    match factor {
-        0 | 1 => std::borrow::Cow::Borrowed(image),
-        f => std::borrow::Cow::Owned(preview::downscale(image, f)),
+/// A FLIP map box-filtered by `factor`.
+fn scaled_map(map: FlipMap, factor: u32) -> FlipMap {
+    if factor <= 1 {
+        return map;
     }
-}
-
-/// A FLIP map as one byte a pixel (round(255 v)), box-filtered by `factor`, in base64.
-pub fn flip_base64(map: &FlipMap, factor: u32) -> String {
     let image = Image {
         width: map.width,
         height: map.height,
         pixels: map.values.iter().map(|&v| [v; 3]).collect(),
     };
-    let image = scaled(&image, factor);
-    let bytes: Vec<u8> = image
-        .pixels
+    let image = preview::downscale(&image, factor);
+    FlipMap {
+        width: image.width,
+        height: image.height,
+        values: image.pixels.iter().map(|p| p[0]).collect(),
+    }
+}
+
+/// A FLIP map as one byte a pixel (round(255 v)), in base64.
+pub fn flip_base64(map: &FlipMap) -> String {
+    let bytes: Vec<u8> = map
+        .values
         .iter()
-        .map(|p| (p[0].clamp(0.0, 1.0) * 255.0).round() as u8)
+        .map(|v| (v.clamp(0.0, 1.0) * 255.0).round() as u8)
         .collect();
     base64(&bytes)
 }
@@ -240,7 +317,7 @@ canvas.plot{border:1px solid #ccc;cursor:pointer;display:block}\
 /// A page of one viewer: `title`, `intro` (HTML) and the viewer of `data`, which shows the
 /// image named `a` against the reference (or the second image) first.
 pub fn page(title: &str, intro: &str, data: &ViewerData) -> String {
-    let factor = data.factor();
+    let factor = data.factor;
     let note = if factor > 1 {
         format!(
             "<p class=\"scaled\">The images are averaged over {factor}x{factor} pixel blocks, so \
@@ -258,7 +335,7 @@ pub fn page(title: &str, intro: &str, data: &ViewerData) -> String {
          const root = document.querySelector(\"#viewer0 .viewer\");\n\
          root.viewer = new IradViewer.Viewer(root, IRAD_DATA);</script>\n</body></html>\n",
         title = escape(title),
-        data = data.json(factor),
+        data = data.json(),
     )
 }
 
@@ -279,11 +356,9 @@ mod tests {
     #[test]
     fn frames_carry_their_numbers_errors_and_flip_maps() {
         let names = vec!["render".to_string(), "reference".to_string()];
-        let frames = vec![
-            (3, vec![image(1.5), image(1.0)]),
-            (4, vec![image(1.0), image(1.0)]),
-        ];
-        let data = ViewerData::new(names, Some(1), 24.0, frames, true).unwrap();
+        let mut data = ViewerData::new(names, Some(1), 24.0, 2, (4, 2), true).unwrap();
+        data.push(3, vec![image(1.5), image(1.0)]).unwrap();
+        data.push(4, vec![image(1.0), image(1.0)]).unwrap();
         assert_eq!(
             data.frames[0].rel_mse.map(|e| (e * 1e4).round()),
             Some((0.25f64 / 1.01 * 1e4).round())
@@ -296,26 +371,27 @@ mod tests {
             .values
             .iter()
             .all(|&v| v == 0.0));
-        let json: serde_json::Value = serde_json::from_str(&data.json(1)).unwrap();
+        let json: serde_json::Value = serde_json::from_str(&data.json()).unwrap();
         assert_eq!(json["reference"], "reference");
         assert_eq!(json["fps"], 24.0);
         assert_eq!(json["frames"][1]["number"], 4);
         assert_eq!(json["frames"][1]["relmse"], 0.0);
         assert_eq!(
-            json["frames"][0]["images"]["reference"]["rgb"],
+            json["frames"][0]["images"][1]["rgb"],
             half_base64(&image(1.0))
         );
-        assert!(json["frames"][0]["images"]["reference"]
-            .get("flip")
-            .is_none());
+        assert!(json["frames"][0]["images"][1].get("flip").is_none());
         // FLIP of equal images: eight zero bytes.
-        assert_eq!(
-            json["frames"][1]["images"]["render"]["flip"],
-            base64(&[0; 8])
-        );
+        assert_eq!(json["frames"][1]["images"][0]["flip"], base64(&[0; 8]));
+        // A frame of another size, or with an image missing, is refused by name.
+        let e = data
+            .push(5, vec![image(1.0), Image::new(3, 2)])
+            .unwrap_err();
+        assert!(e.to_string().contains("frame 5: reference is 3x2"), "{e}");
+        assert!(data.push(6, vec![image(1.0)]).is_err());
     }
 
-    /// Past the byte cap the images are embedded box-filtered, and the page says so.
+    /// Past the byte cap the images are stored box-filtered, and the page says so.
     #[test]
     fn large_viewers_are_box_filtered_under_the_cap() {
         let big = Image {
@@ -323,18 +399,28 @@ mod tests {
             height: 1024,
             pixels: vec![[0.5; 3]; 2048 * 1024],
         };
-        let data = ViewerData::new(
-            vec!["a".into(), "b".into()],
+        let data = ViewerData::still(
+            vec![("a".into(), big.clone()), ("b".into(), big)],
             None,
-            10.0,
-            vec![(0, vec![big.clone(), big])],
             false,
         )
         .unwrap();
         // 2 x 2 Mpx x 8 bytes = 32 MiB: halved each way.
-        assert_eq!(data.factor(), 2);
+        assert_eq!(data.factor, 2);
+        assert_eq!(data.frames[0].images[0].width, 1024);
         let html = page("t", "", &data);
         assert!(html.contains("averaged over 2x2 pixel blocks"));
         assert!(html.contains("\"width\":1024,\"height\":512"));
+        // 240 frames of 1280x720: filtered as they come, by the factor the counts call for.
+        let long = ViewerData::new(
+            vec!["a".into(), "b".into()],
+            Some(1),
+            24.0,
+            240,
+            (1280, 720),
+            true,
+        )
+        .unwrap();
+        assert!(long.factor >= 10, "{}", long.factor);
     }
 }

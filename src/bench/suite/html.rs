@@ -59,24 +59,50 @@ pub fn page(out: &Path, results: &SuiteResults) -> Result<String> {
                 Err(e) => log::warn!("report.html leaves out {name}: {e:#}"),
             }
         }
+        // One size per viewer: the first image's (the reference's where there is one).
+        if let Some((_, first)) = images.first() {
+            let size = (first.width, first.height);
+            images.retain(|(name, im)| {
+                let same = (im.width, im.height) == size;
+                if !same {
+                    log::warn!(
+                        "report.html leaves out {name}: {}x{}, the scene's images {}x{}",
+                        im.width,
+                        im.height,
+                        size.0,
+                        size.1
+                    );
+                }
+                same
+            });
+        }
         let reference = results.references.contains_key(scene)
             && images.first().is_some_and(|(n, _)| n == "reference");
-        let (names, images): (Vec<String>, Vec<Image>) = images.into_iter().unzip();
-        let viewer = ViewerData::new(names, reference.then_some(0), 10.0, vec![(0, images)], true)?;
-        let factor = viewer.factor();
+        if reference && images.len() > 1 {
+            log::info!(
+                "report.html: HDR-FLIP of {} runs on {scene}",
+                images.len() - 1
+            );
+        }
+        let viewer = ViewerData::still(images, reference.then_some(0), true)?;
+        let factor = viewer.factor;
         let _ = write!(
             data,
             "{}{}:{}",
             if k > 0 { "," } else { "" },
             json_string(&format!("scene{k}")),
-            viewer.json(factor)
+            viewer.json()
         );
         let _ = writeln!(body, "<section class=\"scene\" id=\"scene{k}\">");
         let _ = writeln!(body, "<h2>{}</h2>", escape(scene));
         let _ = writeln!(
             body,
             "<div class=\"chart\">{}</div>",
-            chart(results, scene).to_svg()
+            // Each chart's plot group has an id of its own in the page (the SVG files' is
+            // `plot`, which src/bench/chart/read.rs finds them by).
+            chart(results, scene)
+                .to_svg()
+                .replace("<g id=\"plot\"", &format!("<g id=\"scene{k}-plot\""))
         );
         body += &table(&runs);
         if factor > 1 {
@@ -245,13 +271,14 @@ mod tests {
         let page = page(&out, &results).unwrap();
         assert!(page.contains("<section class=\"scene\" id=\"scene0\">"));
         assert!(page.contains("<svg"), "the chart");
+        assert!(page.contains("<g id=\"scene0-plot\"") && !page.contains("id=\"plot\""));
         assert!(page.contains("<tr data-run=\"s/10/0.1\" data-image=\"ir vpls=64\">"));
         let reference = format!(
-            "\"reference\":{{\"width\":3,\"height\":2,\"rgb\":\"{}\"}}",
+            "{{\"width\":3,\"height\":2,\"rgb\":\"{}\"}}",
             half_base64(&image(1.0))
         );
         let run_image = format!(
-            "\"ir vpls=64\":{{\"width\":3,\"height\":2,\"rgb\":\"{}\",\"flip\":\"",
+            "{{\"width\":3,\"height\":2,\"rgb\":\"{}\",\"flip\":\"",
             half_base64(&image(0.5))
         );
         let (a, b) = (
@@ -259,6 +286,7 @@ mod tests {
             page.find(&run_image).unwrap(),
         );
         assert!(a < b, "the reference first");
+        assert!(page.contains("\"names\":[\"reference\",\"ir vpls=64\"]"));
         assert!(page.contains("IradViewer"));
         assert!(
             page.contains("\"reference\":\"reference\""),
