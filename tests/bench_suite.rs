@@ -249,6 +249,9 @@ fn quick_suite_writes_every_output_and_charts_the_csv_figures() {
         html.matches("<div class=\"viewer\">").count(),
         results.scenes().len()
     );
+    // The declined run is listed with its reason.
+    assert!(html.contains("Runs with no image:"));
+    assert!(html.contains("<li>ir ") && html.contains(": declined, "));
     // ...and the page in a real browser (tests/browser.rs).
     crate::browser::check_report(&out.join("report.html"), results.scenes().len());
     // Every reference knows its own error (from its halves), and the report says it.

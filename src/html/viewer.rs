@@ -125,18 +125,33 @@ impl ViewerData {
         let mut flips = vec![None; images.len()];
         if let (true, Some(r)) = (self.with_flip, self.reference) {
             self.check(number, &images)?;
-            for (i, image) in images.iter().enumerate() {
-                if i == r {
-                    continue;
-                }
-                // A non-finite image has no FLIP map (its NaN/Inf count says why).
-                if let Ok(f) = flip::hdr_flip(&images[r], image, DEFAULT_PIXELS_PER_DEGREE) {
-                    flips[i] = Some(FlipMap {
-                        width: f.width,
-                        height: f.height,
-                        values: f.error_map,
-                    });
-                }
+            // One image per core at a time: the port is single-threaded, about a second a
+            // megapixel, and a suite's scene has a map per run.
+            let targets: Vec<usize> = (0..images.len()).filter(|&i| i != r).collect();
+            let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+            for chunk in targets.chunks(cores) {
+                std::thread::scope(|scope| {
+                    let images = &images;
+                    let running: Vec<_> = chunk
+                        .iter()
+                        .map(|&i| {
+                            let job = move || {
+                                flip::hdr_flip(&images[r], &images[i], DEFAULT_PIXELS_PER_DEGREE)
+                            };
+                            (i, scope.spawn(job))
+                        })
+                        .collect();
+                    for (i, handle) in running {
+                        // A non-finite image has no FLIP map (its NaN/Inf count says why).
+                        if let Ok(Ok(f)) = handle.join() {
+                            flips[i] = Some(FlipMap {
+                                width: f.width,
+                                height: f.height,
+                                values: f.error_map,
+                            });
+                        }
+                    }
+                });
             }
         }
         self.push_with_flips(number, images, flips)

@@ -105,6 +105,32 @@ pub fn page(out: &Path, results: &SuiteResults) -> Result<String> {
                 .replace("<g id=\"plot\"", &format!("<g id=\"scene{k}-plot\""))
         );
         body += &table(&runs);
+        // The runs with no image, and why (report.md has them in its table too).
+        let absent: Vec<String> = results
+            .runs
+            .iter()
+            .filter(|r| &r.scene == scene && !(r.status == Status::Ok && r.image.is_some()))
+            .map(|r| {
+                format!(
+                    "<li>{} {}: {}{}</li>",
+                    escape(&r.label),
+                    escape(&r.budget),
+                    format!("{:?}", r.status).to_lowercase(),
+                    if r.note.is_empty() {
+                        String::new()
+                    } else {
+                        format!(", {}", escape(&r.note))
+                    }
+                )
+            })
+            .collect();
+        if !absent.is_empty() {
+            let _ = writeln!(
+                body,
+                "<p class=\"absent\">Runs with no image:</p><ul class=\"absent\">{}</ul>",
+                absent.concat()
+            );
+        }
         if factor > 1 {
             let _ = writeln!(
                 body,
