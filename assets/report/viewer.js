@@ -227,7 +227,7 @@ class Viewer {
       if (!this.reference) note = "no FLIP maps: there is no reference";
       else if (this.b !== this.reference) note = `FLIP maps are of each image against ${this.reference}: choose it as B`;
       else if (this.a === this.reference) note = "A is the reference: choose another image as A";
-      else note = "no FLIP map for A: irad computes none for an image with NaN or Inf values";
+      else note = "no FLIP map for A: irad computes none where A or the reference has NaN or Inf values";
     }
     this.note.textContent = note;
     this.root.dataset.mode = this.mode;
@@ -272,8 +272,11 @@ class Viewer {
     const fmt = (v) => v.map((c) => c.toPrecision(5)).join(", ");
     // Box-filtered images: a pixel here is the mean of f x f of the EXR's.
     const f = this.data.factor || 1;
+    const [w, h] = this.data.size || [Infinity, Infinity];
+    const x1 = Math.min(p[0] * f + f, w) - 1;
+    const y1 = Math.min(p[1] * f + f, h) - 1;
     const where = f > 1
-      ? `(${p[0] * f}..${p[0] * f + f - 1}, ${p[1] * f}..${p[1] * f + f - 1}) mean of ${f}x${f}`
+      ? `(${p[0] * f}..${x1}, ${p[1] * f}..${y1}) mean of ${x1 - p[0] * f + 1}x${y1 - p[1] * f + 1}`
       : `(${p[0]}, ${p[1]})`;
     const A = this.value(this.a, p[0], p[1]);
     const B = this.value(this.b, p[0], p[1]);
@@ -324,7 +327,10 @@ class Viewer {
       c.setPointerCapture(e.pointerId);
     });
     c.addEventListener("pointerup", () => (drag = null));
-    c.addEventListener("pointerleave", () => (this.cursor = null));
+    c.addEventListener("pointerleave", () => {
+      this.cursor = null;
+      this.readout.textContent = "";
+    });
     c.addEventListener("pointercancel", () => (drag = null));
     c.style.touchAction = "none";
     c.addEventListener("pointermove", (e) => {
@@ -393,8 +399,8 @@ class Viewer {
     });
   }
 
-  // The sequence's controls, below the canvases: play/pause, steps, the scrubber, the frame's
-  // number and the per-frame error plot (where there is a reference).
+  // The sequence's controls above the image: play/pause, steps, the scrubber, the frame's
+  // number, then the per-frame error plot (where there is a reference).
   bindSequence() {
     const n = this.data.frames.length;
     // Above the image, so that the controls stay in place while it zooms.

@@ -81,15 +81,23 @@ impl ViewerData {
         if let Some(r) = reference.filter(|&r| r >= names.len()) {
             bail!("the viewer's reference is image {r} of {}", names.len());
         }
-        let pixels = size.0 as usize * size.1 as usize;
-        // 8 base64 bytes a pixel for half RGB, 4/3 for a FLIP byte.
+        for (i, n) in names.iter().enumerate() {
+            if names[..i].contains(n) {
+                bail!("two of the viewer's images are named {n:?}");
+            }
+        }
+        // 8 base64 bytes a pixel for half RGB, 4/3 for a FLIP byte (and 1 for the JSON's
+        // rounding), over the filtered images' pixels (each side rounded up).
         let maps = match (with_flip, reference) {
             (true, Some(_)) => names.len() - 1,
             _ => 0,
         };
-        let bytes = frames.max(1) * pixels * (8 * names.len() + maps * 4 / 3 + 1);
+        let per_pixel = 8 * names.len() + maps * 4 / 3 + 1;
         let factor = (1..)
-            .find(|f: &usize| bytes / (f * f) <= VIEWER_BYTES)
+            .find(|&f: &usize| {
+                let pixels = (size.0 as usize).div_ceil(f) * (size.1 as usize).div_ceil(f);
+                frames.max(1) * pixels * per_pixel <= VIEWER_BYTES
+            })
             .expect("some factor fits") as u32;
         Ok(ViewerData {
             names,
@@ -128,7 +136,8 @@ impl ViewerData {
             // One image per core at a time: the port is single-threaded, about a second a
             // megapixel, and a suite's scene has a map per run.
             let targets: Vec<usize> = (0..images.len()).filter(|&i| i != r).collect();
-            let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+            // At most 4 at once: each holds full-size buffers of its own.
+            let cores = std::thread::available_parallelism().map_or(1, |n| n.get().min(4));
             for chunk in targets.chunks(cores) {
                 std::thread::scope(|scope| {
                     let images = &images;
@@ -143,12 +152,18 @@ impl ViewerData {
                         .collect();
                     for (i, handle) in running {
                         // A non-finite image has no FLIP map (its NaN/Inf count says why).
-                        if let Ok(Ok(f)) = handle.join() {
-                            flips[i] = Some(FlipMap {
-                                width: f.width,
-                                height: f.height,
-                                values: f.error_map,
-                            });
+                        match handle.join() {
+                            Ok(Ok(f)) => {
+                                flips[i] = Some(FlipMap {
+                                    width: f.width,
+                                    height: f.height,
+                                    values: f.error_map,
+                                })
+                            }
+                            Ok(Err(e)) => log::info!("no FLIP map of {}: {e}", self.names[i]),
+                            Err(_) => {
+                                log::warn!("no FLIP map of {}: its thread panicked", self.names[i])
+                            }
                         }
                     }
                 });
@@ -172,6 +187,15 @@ impl ViewerData {
                 flips.len(),
                 images.len()
             );
+        }
+        for (name, m) in self.names.iter().zip(&flips) {
+            if let Some(m) = m.as_ref().filter(|m| (m.width, m.height) != self.size) {
+                bail!(
+                    "frame {number}: {name}'s FLIP map is {}x{}",
+                    m.width,
+                    m.height
+                );
+            }
         }
         let rel_mse = match (
             self.reference,
@@ -235,7 +259,7 @@ impl ViewerData {
         }
         let _ = write!(
             s,
-            "],\"reference\":{},\"fps\":{},\"factor\":{},\"frames\":[",
+            "],\"reference\":{},\"fps\":{},\"factor\":{},\"size\":[{},{}],\"frames\":[",
             match self.reference {
                 Some(r) => json_string(&self.names[r]),
                 None => "null".into(),
@@ -245,7 +269,9 @@ impl ViewerData {
             } else {
                 10.0
             },
-            self.factor
+            self.factor,
+            self.size.0,
+            self.size.1
         );
         for (k, frame) in self.frames.iter().enumerate() {
             let rel_mse = match frame.rel_mse {

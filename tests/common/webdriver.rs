@@ -22,6 +22,8 @@ pub const ELEMENT: &str = "element-6066-11e4-a52e-4f735466cecf";
 pub struct Browser {
     driver: Child,
     port: u16,
+    /// The driver's URL base (`--url-base`).
+    base: String,
     session: String,
     profile: PathBuf,
 }
@@ -153,7 +155,9 @@ impl Browser {
         let Some(chromium) = found else {
             let install = "chromium or chromedriver not found: `bash scripts/setup.sh --browser` \
                            installs Debian's chromium and chromium-driver";
-            let required = std::env::var_os("IRAD_REQUIRE_BROWSER").is_some() || super::under_ci();
+            let required = std::env::var("IRAD_REQUIRE_BROWSER")
+                .is_ok_and(|v| !v.is_empty() && v != "0")
+                || super::under_ci();
             assert!(!required, "{install}");
             eprintln!("note: {install}; skipping the browser checks");
             return None;
@@ -167,12 +171,16 @@ impl Browser {
     }
 
     /// Chromedriver on `port` (None where it exits first: another took the port), then the
-    /// session.
+    /// session. Its URLs start with a base of this process and port, so that no other
+    /// driver on a reused port can answer for it.
     fn start_on(chromium: &str, port: u16, width: u32, height: u32) -> Option<Browser> {
         use std::os::unix::process::CommandExt as _;
-        // Its own process group, so that Drop ends chromium with it.
-        let driver = Command::new("chromedriver")
+        let base = format!("/irad-{}-{port}", std::process::id());
+        // Its own process group, so that Drop ends chromium with it (an interrupted test run
+        // leaves both running: `pkill chromedriver` ends them).
+        let mut driver = Command::new("chromedriver")
             .arg(format!("--port={port}"))
+            .arg(format!("--url-base={base}"))
             .stdout(Stdio::null())
             .stderr(Stdio::null())
             .process_group(0)
@@ -180,18 +188,14 @@ impl Browser {
             .expect("chromedriver starts");
         let profile =
             std::env::temp_dir().join(format!("irad-chromium-{}-{port}", std::process::id()));
-        let mut browser = Browser {
-            driver,
-            port,
-            session: String::new(),
-            profile,
-        };
         let start = Instant::now();
         loop {
-            if browser.driver.try_wait().ok().flatten().is_some() {
+            // Exited (and reaped): nothing of it to end, so no Browser (whose Drop would
+            // signal a process group that may since be another's).
+            if driver.try_wait().ok().flatten().is_some() {
                 return None;
             }
-            match http(port, "GET", "/status", None) {
+            match http(port, "GET", &format!("{base}/status"), None) {
                 Ok((200, v)) if v["value"]["ready"] == json!(true) => break,
                 _ if start.elapsed() > Duration::from_secs(30) => {
                     panic!("chromedriver on port {port} not ready after 30 s")
@@ -199,6 +203,13 @@ impl Browser {
                 _ => std::thread::sleep(Duration::from_millis(50)),
             }
         }
+        let mut browser = Browser {
+            driver,
+            port,
+            base,
+            session: String::new(),
+            profile,
+        };
         let args = [
             "--headless=new".to_string(),
             "--no-sandbox".into(),
@@ -217,8 +228,13 @@ impl Browser {
             "goog:chromeOptions": {"binary": chromium, "args": args},
             "goog:loggingPrefs": {"browser": "ALL"},
         }}});
-        let (status, v) =
-            http(port, "POST", "/session", Some(&capabilities)).expect("chromedriver answers");
+        let (status, v) = http(
+            port,
+            "POST",
+            &format!("{}/session", browser.base),
+            Some(&capabilities),
+        )
+        .expect("chromedriver answers");
         assert_eq!(status, 200, "new session: {v}");
         browser.session = v["value"]["sessionId"]
             .as_str()
@@ -240,7 +256,7 @@ impl Browser {
             "POST" => Some(&body),
             _ => None,
         };
-        let url = format!("/session/{}{path}", self.session);
+        let url = format!("{}/session/{}{path}", self.base, self.session);
         let (status, v) =
             http(self.port, method, &url, body).unwrap_or_else(|e| panic!("{method} {path}: {e}"));
         assert_eq!(status, 200, "{method} {path}: {v}");
@@ -379,7 +395,7 @@ impl Drop for Browser {
             let _ = http(
                 self.port,
                 "DELETE",
-                &format!("/session/{}", self.session),
+                &format!("{}/session/{}", self.base, self.session),
                 None,
             );
         }

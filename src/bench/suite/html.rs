@@ -53,10 +53,15 @@ pub fn page(out: &Path, results: &SuiteResults) -> Result<String> {
             let exr = exr_of(r.image.as_deref().expect("filtered"));
             wanted.push((format!("{} {}", r.label, r.budget), exr));
         }
+        // Images left out, with why: listed under the table.
+        let mut left_out: Vec<String> = Vec::new();
         for (name, exr) in wanted {
             match read(&out.join(&exr)) {
                 Ok(im) => images.push((name, im)),
-                Err(e) => log::warn!("report.html leaves out {name}: {e:#}"),
+                Err(e) => {
+                    log::warn!("report.html leaves out {name}: {e:#}");
+                    left_out.push(format!("{name}: its image could not be read ({e:#})"));
+                }
             }
         }
         // One size per viewer: the first image's (the reference's where there is one).
@@ -65,13 +70,12 @@ pub fn page(out: &Path, results: &SuiteResults) -> Result<String> {
             images.retain(|(name, im)| {
                 let same = (im.width, im.height) == size;
                 if !same {
-                    log::warn!(
-                        "report.html leaves out {name}: {}x{}, the scene's images {}x{}",
-                        im.width,
-                        im.height,
-                        size.0,
-                        size.1
+                    let why = format!(
+                        "{name}: its image is {}x{}, the scene's {}x{}",
+                        im.width, im.height, size.0, size.1
                     );
+                    log::warn!("report.html leaves out {why}");
+                    left_out.push(why);
                 }
                 same
             });
@@ -106,7 +110,7 @@ pub fn page(out: &Path, results: &SuiteResults) -> Result<String> {
         );
         body += &table(&runs);
         // The runs with no image, and why (report.md has them in its table too).
-        let absent: Vec<String> = results
+        let mut absent: Vec<String> = results
             .runs
             .iter()
             .filter(|r| &r.scene == scene && !(r.status == Status::Ok && r.image.is_some()))
@@ -115,7 +119,7 @@ pub fn page(out: &Path, results: &SuiteResults) -> Result<String> {
                     "<li>{} {}: {}{}</li>",
                     escape(&r.label),
                     escape(&r.budget),
-                    format!("{:?}", r.status).to_lowercase(),
+                    r.status.as_str(),
                     if r.note.is_empty() {
                         String::new()
                     } else {
@@ -124,6 +128,7 @@ pub fn page(out: &Path, results: &SuiteResults) -> Result<String> {
                 )
             })
             .collect();
+        absent.extend(left_out.iter().map(|w| format!("<li>{}</li>", escape(w))));
         if !absent.is_empty() {
             let _ = writeln!(
                 body,
