@@ -25,6 +25,7 @@ mod kernels;
 mod light_bvh;
 mod light_power;
 mod lightfield;
+mod mitsuba_import;
 mod outputs;
 mod pixel_hashes;
 mod prefix_sum;

@@ -19,6 +19,12 @@ pub const DEGENERATE_AREA: f64 = 1e-12;
 
 /// Loads the scene file at `path`; files it names are relative to its folder.
 pub fn load(path: &Path) -> Result<Scene, SceneError> {
+    if super::mitsuba::is_mitsuba(path) {
+        let mut scene = super::mitsuba::load(path)?;
+        scene.name = scene_name(path);
+        log_warnings(&scene);
+        return Ok(scene);
+    }
     let display = path.display().to_string();
     let bytes = std::fs::read(path).map_err(|error| SceneError::Read {
         path: display.clone(),

@@ -141,6 +141,7 @@ pub mod hash;
 mod lights;
 mod load;
 pub mod luminaire;
+pub mod mitsuba;
 mod mtl;
 mod obj;
 mod power;

@@ -1,0 +1,236 @@
+//! Mitsuba BSDFs as irad's Lambert plus one normalized Phong lobe (docs/scenes.md "Mitsuba
+//! scenes" states each fit and its error):
+//! - `diffuse`: Kd = reflectance, exact.
+//! - `twosided`: its BSDF (irad's reflect on both sides), exact.
+//! - `roughconductor` (beckmann or ggx): Ks = specular_reflectance, Ns = (1 / alpha^2 - 1) / 2,
+//!   the inverse of the export's alpha = 1 / sqrt(2 Ns + 1) (src/export/mitsuba/bsdf.rs): the
+//!   same lobe width and albedo at normal incidence. A `material` or `eta`/`k` (Fresnel) is
+//!   left out: the reflectance is specular_reflectance's, with a warning. Anisotropic alphas
+//!   are averaged with a warning.
+//! - `conductor` (smooth): a mirror, as Ns = MIRROR_NS with a warning.
+//! - `blendbsdf` of a diffuse and a (rough)conductor, the export's form: Kd = (1 - w) Kd',
+//!   Ks = w Ks'.
+//! - `plastic` / `roughplastic`: Kd = diffuse_reflectance (1 - F0), Ks =
+//!   specular_reflectance F0 with F0 = ((eta - 1) / (eta + 1))^2 for int_ior / ext_ior
+//!   (1.49 / 1.000277: F0 0.039), Ns from alpha (roughplastic, 0.1 by default) or MIRROR_NS
+//!   (plastic): the albedos at normal incidence; the Fresnel rise towards grazing angles and
+//!   the internal scattering of the coat are not modelled (a warning says so).
+//! - `phong` (Mitsuba 0.6's, the normalized modified Phong irad uses): exact.
+//!   Anything else: grey Lambert (Kd 0.5) with a warning naming the element.
+
+use glam::Vec3;
+use roxmltree::Node;
+
+use super::props::Context;
+use super::textures;
+use crate::scene::SceneError;
+
+/// Ns standing in for a smooth (mirror) lobe: a lobe of half-width about 1 degree.
+pub const MIRROR_NS: f32 = 10000.0;
+
+/// irad's material parts from a Mitsuba BSDF.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Fit {
+    pub kd: Vec3,
+    pub ks: Vec3,
+    pub ns: f32,
+}
+
+/// The Phong exponent of a Beckmann roughness (the export's inverse).
+pub fn ns_of_alpha(alpha: f64) -> f32 {
+    let a = alpha.clamp(1e-4, 1.0);
+    (((1.0 / (a * a)) - 1.0) / 2.0) as f32
+}
+
+/// The named child property of `node`.
+fn property<'a, 'i>(node: Node<'a, 'i>, name: &str) -> Option<Node<'a, 'i>> {
+    node.children()
+        .find(|c| c.is_element() && c.attribute("name") == Some(name))
+}
+
+/// A colour property (or a bitmap texture's mean) named `name`, else `default`.
+fn colour(
+    ctx: &Context,
+    node: Node,
+    name: &str,
+    default: Vec3,
+    warnings: &mut Vec<String>,
+) -> Result<Vec3, SceneError> {
+    match property(node, name) {
+        None => Ok(default),
+        Some(p) if p.tag_name().name() == "texture" => textures::mean(ctx, p, warnings),
+        Some(p) => ctx.colour(p),
+    }
+}
+
+fn float(ctx: &Context, node: Node, name: &str, default: f64) -> Result<f64, SceneError> {
+    match property(node, name) {
+        None => Ok(default),
+        Some(p) => ctx.float_attr(p, "value"),
+    }
+}
+
+/// Beckmann/GGX `alpha` (or the mean of `alpha_u` and `alpha_v`, with a warning).
+fn alpha(
+    ctx: &Context,
+    node: Node,
+    default: f64,
+    warnings: &mut Vec<String>,
+) -> Result<f64, SceneError> {
+    if property(node, "alpha").is_some() {
+        return float(ctx, node, "alpha", default);
+    }
+    if property(node, "alpha_u").is_some() || property(node, "alpha_v").is_some() {
+        let (u, v) = (
+            float(ctx, node, "alpha_u", default)?,
+            float(ctx, node, "alpha_v", default)?,
+        );
+        warnings.push(format!(
+            "{}: {} anisotropic roughness ({u}, {v}) as its mean {}",
+            ctx.file,
+            ctx.at(node),
+            0.5 * (u + v)
+        ));
+        return Ok(0.5 * (u + v));
+    }
+    Ok(default)
+}
+
+/// irad's material parts for the `<bsdf>` element `node`; approximations are added to
+/// `warnings`. `resolve` finds a `<ref id>`'s BSDF.
+pub fn fit<'a, 'i>(
+    ctx: &Context,
+    node: Node<'a, 'i>,
+    resolve: &dyn Fn(&str) -> Option<Node<'a, 'i>>,
+    warnings: &mut Vec<String>,
+) -> Result<Fit, SceneError> {
+    let kind = ctx.attr(node, "type").unwrap_or_default();
+    let nested = || -> Vec<Node<'a, 'i>> {
+        node.children()
+            .filter(|c| c.is_element())
+            .filter_map(|c| match c.tag_name().name() {
+                "bsdf" => Some(c),
+                "ref" => c.attribute("id").and_then(resolve),
+                _ => None,
+            })
+            .collect()
+    };
+    let at = ctx.at(node);
+    let zero = Vec3::ZERO;
+    Ok(match kind.as_str() {
+        "diffuse" => Fit {
+            kd: colour(ctx, node, "reflectance", Vec3::splat(0.5), warnings)?,
+            ks: zero,
+            ns: 0.0,
+        },
+        "twosided" => match nested().first() {
+            Some(inner) => fit(ctx, *inner, resolve, warnings)?,
+            None => return Err(ctx.invalid(node, "twosided", "needs a nested <bsdf>")),
+        },
+        "roughconductor" | "conductor" => {
+            let ks = colour(ctx, node, "specular_reflectance", Vec3::ONE, warnings)?;
+            if property(node, "material")
+                .is_some_and(|m| ctx.attr(m, "value").as_deref() != Some("none"))
+                || property(node, "eta").is_some()
+            {
+                warnings.push(format!(
+                    "{}: {at}: the conductor's Fresnel term (its material or eta, k) is left \
+                     out: irad's lobe reflects specular_reflectance {ks}",
+                    ctx.file
+                ));
+            }
+            let ns = if kind == "conductor" {
+                warnings.push(format!(
+                    "{}: {at}: a smooth mirror as a Phong lobe of Ns {MIRROR_NS}",
+                    ctx.file
+                ));
+                MIRROR_NS
+            } else {
+                let distribution = property(node, "distribution")
+                    .and_then(|d| ctx.attr(d, "value"))
+                    .unwrap_or_else(|| "beckmann".into());
+                if distribution != "beckmann" {
+                    warnings.push(format!(
+                        "{}: {at}: the {distribution} distribution fitted as Beckmann's (the \
+                         same alpha): its longer tails are not modelled",
+                        ctx.file
+                    ));
+                }
+                ns_of_alpha(alpha(ctx, node, 0.1, warnings)?)
+            };
+            Fit { kd: zero, ks, ns }
+        }
+        "blendbsdf" => {
+            let w = float(ctx, node, "weight", 0.5)?.clamp(0.0, 1.0) as f32;
+            let parts = nested();
+            if parts.len() != 2 {
+                return Err(ctx.invalid(node, "blendbsdf", "needs two nested BSDFs"));
+            }
+            let (a, b) = (
+                fit(ctx, parts[0], resolve, warnings)?,
+                fit(ctx, parts[1], resolve, warnings)?,
+            );
+            if a.ks.max_element() > 0.0 && b.ks.max_element() > 0.0 && a.ns != b.ns {
+                warnings.push(format!(
+                    "{}: {at}: two glossy lobes (Ns {} and {}) as one of Ns {}",
+                    ctx.file,
+                    a.ns,
+                    b.ns,
+                    a.ns.max(b.ns)
+                ));
+            }
+            Fit {
+                kd: (1.0 - w) * a.kd + w * b.kd,
+                ks: (1.0 - w) * a.ks + w * b.ks,
+                ns: if b.ks.max_element() > 0.0 { b.ns } else { a.ns },
+            }
+        }
+        "plastic" | "roughplastic" => {
+            let int_ior = float(ctx, node, "int_ior", 1.49)?;
+            let ext_ior = float(ctx, node, "ext_ior", 1.000277)?;
+            let eta = int_ior / ext_ior;
+            let f0 = (((eta - 1.0) / (eta + 1.0)).powi(2)) as f32;
+            let kd = colour(ctx, node, "diffuse_reflectance", Vec3::splat(0.5), warnings)?;
+            let ks = colour(ctx, node, "specular_reflectance", Vec3::ONE, warnings)?;
+            let ns = if kind == "plastic" {
+                MIRROR_NS
+            } else {
+                ns_of_alpha(alpha(ctx, node, 0.1, warnings)?)
+            };
+            warnings.push(format!(
+                "{}: {at}: {kind} as Kd = diffuse_reflectance (1 - F0), Ks = specular_reflectance \
+                 F0 (F0 = {f0:.4} for eta {eta:.4}), Ns {ns}: albedos at normal incidence; the \
+                 Fresnel rise towards grazing angles and the coat's internal scattering are not \
+                 modelled",
+                ctx.file
+            ));
+            Fit {
+                kd: kd * (1.0 - f0),
+                ks: ks * f0,
+                ns,
+            }
+        }
+        "phong" => Fit {
+            kd: colour(ctx, node, "diffuse_reflectance", Vec3::splat(0.5), warnings)?,
+            ks: colour(
+                ctx,
+                node,
+                "specular_reflectance",
+                Vec3::splat(0.2),
+                warnings,
+            )?,
+            ns: float(ctx, node, "exponent", 30.0)? as f32,
+        },
+        other => {
+            warnings.push(format!(
+                "{}: {at}: BSDF `{other}` is not modelled: rendered as grey Lambert (Kd 0.5)",
+                ctx.file
+            ));
+            Fit {
+                kd: Vec3::splat(0.5),
+                ks: zero,
+                ns: 0.0,
+            }
+        }
+    })
+}

@@ -1,0 +1,655 @@
+//! Mitsuba 3 XML scenes (docs/scenes.md "Mitsuba scenes"): `irad render scene.xml` reads the
+//! subset `irad export mitsuba` writes and the common research subset, each element irad does
+//! not model exactly approximated with a warning that names it and what was done, or refused.
+//!
+//! Read: `<default>` values (`$name`); `sensor` perspective (fov and fov_axis, or
+//! focal_length; `to_world`; `hdrfilm` width and height); shapes ply, obj, rectangle, cube,
+//! disk, sphere (tessellated: `<integer name="tessellation">` segments, 64 by default), each
+//! with `to_world`, `flip_normals`, `face_normals`, a nested or referenced BSDF (bsdf.rs) and
+//! an `area` emitter; emitters point, spot, envmap (EXR) and constant. Ignored without a word:
+//! `integrator`, `sampler`, `rfilter`, a film's formats (irad has its own). Refused: other
+//! emitters and shapes, `include`, a second sensor is ignored with a warning.
+
+mod bsdf;
+mod props;
+mod shapes;
+mod textures;
+
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+
+use glam::{DMat4, DVec3, Vec3};
+use roxmltree::{Document, Node};
+
+use super::hash::Fnv1a64;
+use super::{environment, power};
+use super::{Camera, Environment, Light, Material, Scene, SceneError, Triangle};
+use props::Context;
+use shapes::RawTriangle;
+
+pub use bsdf::{ns_of_alpha, MIRROR_NS};
+
+/// Whether `path` names a Mitsuba XML scene (by its extension).
+pub fn is_mitsuba(path: &Path) -> bool {
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("xml"))
+}
+
+/// Loads the Mitsuba scene at `path`; the files it names are relative to its folder.
+pub fn load(path: &Path) -> Result<Scene, SceneError> {
+    let file = path.display().to_string();
+    let bytes = std::fs::read(path).map_err(|error| SceneError::Read {
+        path: file.clone(),
+        referenced_by: "the scene file".into(),
+        error,
+    })?;
+    let text = String::from_utf8(bytes).map_err(|e| SceneError::File {
+        file: file.clone(),
+        message: format!("not UTF-8 text: {e}"),
+    })?;
+    let doc = Document::parse(&text).map_err(|e| SceneError::File {
+        file: file.clone(),
+        message: format!("not well-formed XML: {e}"),
+    })?;
+    let root = doc.root_element();
+    if root.tag_name().name() != "scene" {
+        return Err(SceneError::File {
+            file,
+            message: format!(
+                "the root element is <{}>, not <scene>",
+                root.tag_name().name()
+            ),
+        });
+    }
+    let mut hash = Fnv1a64::default();
+    hash.write(text.as_bytes());
+    let mut ctx = Context {
+        file: &file,
+        text: &text,
+        base: path.parent().unwrap_or(Path::new("")).to_path_buf(),
+        defaults: HashMap::new(),
+        hash: std::cell::RefCell::new(hash),
+    };
+    for d in root.children().filter(|c| c.has_tag_name("default")) {
+        let name = d.attribute("name").unwrap_or_default().to_string();
+        let value = d.attribute("value").unwrap_or_default().to_string();
+        ctx.defaults.insert(name, value);
+    }
+    let mut builder = Builder::default();
+    let ids: HashMap<String, Node> = root
+        .descendants()
+        .filter(|n| n.is_element() && !n.has_tag_name("ref"))
+        .filter_map(|n| n.attribute("id").map(|id| (id.to_string(), n)))
+        .collect();
+    let resolve = |id: &str| ids.get(id).copied();
+    for (k, node) in root.children().filter(|c| c.is_element()).enumerate() {
+        match node.tag_name().name() {
+            "default" | "integrator" | "sampler" | "bsdf" | "texture" => {}
+            "sensor" => {
+                if builder.camera.is_some() {
+                    builder.warnings.push(format!(
+                        "{file}: {}: a second sensor is ignored",
+                        ctx.at(node)
+                    ));
+                } else {
+                    builder.camera = Some(sensor(&ctx, node)?);
+                }
+            }
+            "shape" => builder.shape(&ctx, node, k, &resolve)?,
+            "emitter" => builder.emitter(&ctx, node)?,
+            "include" => {
+                return Err(SceneError::Unsupported {
+                    file: file.clone(),
+                    field: ctx.at(node),
+                    value: ctx.attr(node, "filename").unwrap_or_default(),
+                    what: "included files".into(),
+                })
+            }
+            other => builder
+                .warnings
+                .push(format!("{file}: {}: <{other}> is not read", ctx.at(node))),
+        }
+    }
+    builder.finish(&ctx, path)
+}
+
+#[derive(Default)]
+struct Builder {
+    camera: Option<Camera>,
+    triangles: Vec<Triangle>,
+    materials: Vec<Material>,
+    /// Material index by its key (BSDF id or shape, and emitted radiance bits).
+    material_index: HashMap<String, u32>,
+    lights: Vec<Light>,
+    environment: Option<(Environment, f32, String)>,
+    warnings: Vec<String>,
+    dropped: usize,
+}
+
+/// The named child property of `node`.
+fn property<'a, 'i>(node: Node<'a, 'i>, name: &str) -> Option<Node<'a, 'i>> {
+    node.children()
+        .find(|c| c.is_element() && c.attribute("name") == Some(name))
+}
+
+fn float_property(ctx: &Context, node: Node, name: &str, default: f64) -> Result<f64, SceneError> {
+    match property(node, name) {
+        Some(p) => ctx.float_attr(p, "value"),
+        None => Ok(default),
+    }
+}
+
+fn bool_property(ctx: &Context, node: Node, name: &str) -> bool {
+    property(node, name)
+        .and_then(|p| ctx.attr(p, "value"))
+        .is_some_and(|v| v == "true")
+}
+
+fn to_world(ctx: &Context, node: Node) -> Result<DMat4, SceneError> {
+    match node
+        .children()
+        .find(|c| c.has_tag_name("transform") && c.attribute("name") == Some("to_world"))
+    {
+        Some(t) => props::transform(ctx, t),
+        None => Ok(DMat4::IDENTITY),
+    }
+}
+
+/// A perspective sensor as irad's camera.
+fn sensor(ctx: &Context, node: Node) -> Result<Camera, SceneError> {
+    let kind = ctx.attr(node, "type").unwrap_or_default();
+    if kind != "perspective" {
+        return Err(SceneError::Unsupported {
+            file: ctx.file.to_string(),
+            field: ctx.at(node),
+            value: kind,
+            what: "sensors other than perspective".into(),
+        });
+    }
+    let film = node.children().find(|c| c.has_tag_name("film"));
+    let (mut width, mut height) = (768u32, 576u32);
+    if let Some(f) = film {
+        for (name, v) in [("width", &mut width), ("height", &mut height)] {
+            if let Some(p) = property(f, name) {
+                let value = ctx.float_attr(p, "value")?;
+                if !(1.0..=super::MAX_RESOLUTION as f64).contains(&value) || value.fract() != 0.0 {
+                    return Err(ctx.invalid(
+                        p,
+                        &value.to_string(),
+                        &format!("must be a whole number in 1..={}", super::MAX_RESOLUTION),
+                    ));
+                }
+                *v = value as u32;
+            }
+        }
+    }
+    let aspect = width as f64 / height as f64;
+    let (fov, axis) = match (property(node, "fov"), property(node, "focal_length")) {
+        (Some(p), _) => (
+            ctx.float_attr(p, "value")?,
+            property(node, "fov_axis")
+                .and_then(|a| ctx.attr(a, "value"))
+                .unwrap_or_else(|| "x".into()),
+        ),
+        (None, Some(p)) => {
+            // A 35 mm equivalent focal length: the field of view over the film's 36 mm width.
+            let v = ctx.required(p, "value")?;
+            let mm: f64 = v
+                .trim_end_matches("mm")
+                .trim()
+                .parse()
+                .ok()
+                .filter(|f: &f64| *f > 0.0)
+                .ok_or_else(|| ctx.invalid(p, &v, "a focal length such as \"50mm\""))?;
+            (2.0 * (18.0 / mm).atan().to_degrees(), "x".to_string())
+        }
+        (None, None) => (2.0 * (18.0f64 / 50.0).atan().to_degrees(), "x".to_string()),
+    };
+    if !(fov > 0.0 && fov < 180.0) {
+        return Err(ctx.invalid(node, &fov.to_string(), "fov must be in (0, 180) degrees"));
+    }
+    // tan(fov_y / 2) from the axis the fov is given over.
+    let t = (fov.to_radians() / 2.0).tan();
+    let diagonal = (1.0 + aspect * aspect).sqrt();
+    let ty = match axis.as_str() {
+        "x" => t / aspect,
+        "y" => t,
+        "diagonal" => t / diagonal,
+        "smaller" => {
+            if aspect >= 1.0 {
+                t
+            } else {
+                t / aspect
+            }
+        }
+        "larger" => {
+            if aspect >= 1.0 {
+                t / aspect
+            } else {
+                t
+            }
+        }
+        other => {
+            return Err(ctx.invalid(node, other, "fov_axis is x, y, diagonal, smaller or larger"))
+        }
+    };
+    let fov_y = (2.0 * ty.atan()).to_degrees() as f32;
+    // A lookat alone is kept as written (bit for bit); any other transform by its axes.
+    let transform = node
+        .children()
+        .find(|c| c.has_tag_name("transform") && c.attribute("name") == Some("to_world"));
+    let ops: Vec<Node> = transform
+        .map(|t| t.children().filter(|c| c.is_element()).collect())
+        .unwrap_or_default();
+    let (position, look_at, up) = if ops.len() == 1 && ops[0].has_tag_name("lookat") {
+        let l = props::lookat(ctx, ops[0])?;
+        (l.origin, l.target, l.up)
+    } else {
+        let m = to_world(ctx, node)?;
+        let p = m.transform_point3(DVec3::ZERO);
+        let forward = m.transform_vector3(DVec3::Z).normalize();
+        (p, p + forward, m.transform_vector3(DVec3::Y).normalize())
+    };
+    Ok(Camera {
+        position: position.as_vec3(),
+        look_at: look_at.as_vec3(),
+        up: up.as_vec3(),
+        fov_y,
+        width,
+        height,
+    })
+}
+
+impl Builder {
+    fn shape<'a, 'i>(
+        &mut self,
+        ctx: &Context,
+        node: Node<'a, 'i>,
+        k: usize,
+        resolve: &dyn Fn(&str) -> Option<Node<'a, 'i>>,
+    ) -> Result<(), SceneError> {
+        let kind = ctx.attr(node, "type").unwrap_or_default();
+        let m = to_world(ctx, node)?;
+        let segments = match property(node, "tessellation") {
+            Some(p) => {
+                let v = ctx.float_attr(p, "value")?;
+                if !(3.0..=4096.0).contains(&v) {
+                    return Err(ctx.invalid(
+                        p,
+                        &v.to_string(),
+                        "tessellation is 3..=4096 segments",
+                    ));
+                }
+                v as u32
+            }
+            None => shapes::DEFAULT_SEGMENTS,
+        };
+        let file_of = |name: &str| -> Result<PathBuf, SceneError> {
+            let p = property(node, name).ok_or_else(|| {
+                ctx.invalid(node, &kind, &format!("needs <string name=\"{name}\">"))
+            })?;
+            Ok(ctx.base.join(ctx.required(p, "value")?))
+        };
+        let local = match kind.as_str() {
+            "ply" | "obj" => {
+                let path = file_of("filename")?;
+                let bytes = std::fs::read(&path).map_err(|error| SceneError::Read {
+                    path: path.display().to_string(),
+                    referenced_by: format!("{}: {}", ctx.file, ctx.at(node)),
+                    error,
+                })?;
+                ctx.hash.borrow_mut().write(&bytes);
+                let read = match kind.as_str() {
+                    "ply" => shapes::read_ply(&bytes),
+                    _ => shapes::read_obj(&path),
+                };
+                read.map_err(|message| SceneError::File {
+                    file: path.display().to_string(),
+                    message: format!(
+                        "{message} (the {kind} shape at {} of {})",
+                        ctx.at(node),
+                        ctx.file
+                    ),
+                })?
+            }
+            "rectangle" => shapes::rectangle(),
+            "cube" => shapes::cube(),
+            "disk" => shapes::disk(segments),
+            "sphere" => {
+                let center = match property(node, "center") {
+                    Some(p) => ctx.vector(p, 0.0)?,
+                    None => DVec3::ZERO,
+                };
+                let radius = float_property(ctx, node, "radius", 1.0)?;
+                if radius <= 0.0 {
+                    return Err(ctx.invalid(
+                        node,
+                        &radius.to_string(),
+                        "a sphere's radius must be positive",
+                    ));
+                }
+                self.warnings.push(format!(
+                    "{}: {}: the sphere tessellated into {} segments and {} rings",
+                    ctx.file,
+                    ctx.at(node),
+                    segments.max(4),
+                    (segments / 2).max(2)
+                ));
+                shapes::sphere(center, radius, segments)
+            }
+            other => {
+                return Err(SceneError::Unsupported {
+                    file: ctx.file.to_string(),
+                    field: ctx.at(node),
+                    value: other.to_string(),
+                    what: format!("Mitsuba `{other}` shapes"),
+                })
+            }
+        };
+        let local = if bool_property(ctx, node, "face_normals") {
+            local.into_iter().map(|(p, _)| (p, None)).collect()
+        } else {
+            local
+        };
+        let raw = shapes::to_world(local, m, bool_property(ctx, node, "flip_normals"));
+        // Its BSDF: nested, referenced, or Mitsuba's default (diffuse 0.5).
+        let mut warnings = Vec::new();
+        let bsdf = node.children().find_map(|c| match c.tag_name().name() {
+            "bsdf" => Some((c, None)),
+            "ref" => c
+                .attribute("id")
+                .and_then(|id| resolve(id).map(|n| (n, Some(id.to_string())))),
+            _ => None,
+        });
+        let (fit, bsdf_name) = match bsdf {
+            Some((b, id)) => (
+                bsdf::fit(ctx, b, resolve, &mut warnings)?,
+                id.or_else(|| b.attribute("id").map(str::to_string)),
+            ),
+            None => (
+                bsdf::Fit {
+                    kd: Vec3::splat(0.5),
+                    ks: Vec3::ZERO,
+                    ns: 0.0,
+                },
+                None,
+            ),
+        };
+        let ke = match node.children().find(|c| c.has_tag_name("emitter")) {
+            Some(e) => {
+                let kind = ctx.attr(e, "type").unwrap_or_default();
+                if kind != "area" {
+                    return Err(ctx.invalid(e, &kind, "a shape's emitter must be `area`"));
+                }
+                match property(e, "radiance") {
+                    Some(r) => ctx.colour(r)?,
+                    None => Vec3::ONE,
+                }
+            }
+            None => Vec3::ZERO,
+        };
+        let name = bsdf_name.unwrap_or_else(|| {
+            node.attribute("id")
+                .map(str::to_string)
+                .unwrap_or_else(|| format!("shape {k} ({kind})"))
+        });
+        let material = self.material(ctx, node, name, fit, ke, warnings)?;
+        for t in raw {
+            if super::load::is_degenerate(t.positions) {
+                self.dropped += 1;
+                continue;
+            }
+            self.triangles.push(triangle(t, material));
+        }
+        Ok(())
+    }
+
+    /// The index of the material `name` with `fit` and emission `ke`, added when new (its
+    /// Kd + Ks brought within 1 per channel, with a warning, as irad requires).
+    fn material(
+        &mut self,
+        ctx: &Context,
+        node: Node,
+        name: String,
+        fit: bsdf::Fit,
+        ke: Vec3,
+        warnings: Vec<String>,
+    ) -> Result<u32, SceneError> {
+        let key = format!("{name}|{:?}|{:?}|{:?}|{:?}", fit.kd, fit.ks, fit.ns, ke);
+        if let Some(&i) = self.material_index.get(&key) {
+            return Ok(i);
+        }
+        self.warnings.extend(warnings);
+        let mut fit = fit;
+        for v in [fit.kd, fit.ks, ke] {
+            if !(v.is_finite() && v.min_element() >= 0.0) {
+                return Err(ctx.invalid(node, &format!("{v}"), "colours must be finite and >= 0"));
+            }
+        }
+        let sum = (fit.kd + fit.ks).max_element();
+        if sum > 1.0 + 1e-5 {
+            self.warnings.push(format!(
+                "{}: {}: Kd {} + Ks {} reflects more than it receives; both scaled by {}",
+                ctx.file,
+                ctx.at(node),
+                fit.kd,
+                fit.ks,
+                1.0 / sum
+            ));
+            fit.kd /= sum;
+            fit.ks /= sum;
+        }
+        let index = self.materials.len() as u32;
+        let emitting = if ke.max_element() > 0.0 && self.materials.iter().any(|m| m.name == name) {
+            format!("{name} (emitting)")
+        } else {
+            name
+        };
+        self.materials.push(Material {
+            name: emitting,
+            kd: fit.kd,
+            ks: fit.ks,
+            ns: fit.ns,
+            ke,
+        });
+        self.material_index.insert(key, index);
+        Ok(index)
+    }
+
+    fn emitter(&mut self, ctx: &Context, node: Node) -> Result<(), SceneError> {
+        let kind = ctx.attr(node, "type").unwrap_or_default();
+        let m = to_world(ctx, node)?;
+        let colour = |name: &str, default: Vec3| -> Result<Vec3, SceneError> {
+            match property(node, name) {
+                Some(p) => ctx.colour(p),
+                None => Ok(default),
+            }
+        };
+        match kind.as_str() {
+            "point" => {
+                let position = match property(node, "position") {
+                    Some(p) => ctx.vector(p, 0.0)?,
+                    None => m.transform_point3(DVec3::ZERO),
+                };
+                self.lights.push(Light::Point {
+                    position: position.as_vec3(),
+                    intensity: colour("intensity", Vec3::ONE)?,
+                });
+            }
+            "spot" => {
+                let cutoff = float_property(ctx, node, "cutoff_angle", 20.0)?;
+                let beam = float_property(ctx, node, "beam_width", cutoff * 0.75)?;
+                if !(beam > 0.0 && beam <= cutoff && cutoff <= 180.0) {
+                    return Err(ctx.invalid(
+                        node,
+                        &format!("beam_width {beam}, cutoff_angle {cutoff}"),
+                        "needs 0 < beam_width <= cutoff_angle <= 180",
+                    ));
+                }
+                self.warnings.push(format!(
+                    "{}: {}: the spot's linear ramp in angle from beam_width {beam} to \
+                     cutoff_angle {cutoff} degrees as irad's smoothstep in cos(theta) between \
+                     the same angles",
+                    ctx.file,
+                    ctx.at(node)
+                ));
+                self.lights.push(Light::Spot {
+                    position: m.transform_point3(DVec3::ZERO).as_vec3(),
+                    intensity: colour("intensity", Vec3::ONE)?,
+                    direction: m.transform_vector3(DVec3::Z).normalize().as_vec3(),
+                    cone_angle: beam as f32,
+                    falloff_angle: cutoff as f32,
+                });
+            }
+            "envmap" | "constant" => {
+                if self.environment.is_some() {
+                    return Err(ctx.invalid(node, &kind, "irad takes one environment emitter"));
+                }
+                if m != DMat4::IDENTITY {
+                    self.warnings.push(format!(
+                        "{}: {}: the environment's to_world is left out (irad's map is in \
+                         world axes)",
+                        ctx.file,
+                        ctx.at(node)
+                    ));
+                }
+                let scale = float_property(ctx, node, "scale", 1.0)? as f32;
+                let (map, source) = if kind == "constant" {
+                    let radiance = colour("radiance", Vec3::ONE)?;
+                    let map = Environment {
+                        width: 8,
+                        height: 4,
+                        texels: vec![radiance * scale; 32],
+                        source: PathBuf::from("constant"),
+                    };
+                    (map, "the constant emitter's radiance".to_string())
+                } else {
+                    let p = property(node, "filename").ok_or_else(|| {
+                        ctx.invalid(node, &kind, "needs <string name=\"filename\">")
+                    })?;
+                    let name = ctx.required(p, "value")?;
+                    if !name.to_ascii_lowercase().ends_with(".exr") {
+                        return Err(SceneError::Unsupported {
+                            file: ctx.file.to_string(),
+                            field: ctx.at(p),
+                            value: name,
+                            what: "environment maps other than OpenEXR".into(),
+                        });
+                    }
+                    let path = ctx.base.join(&name);
+                    let bytes = std::fs::read(&path).map_err(|error| SceneError::Read {
+                        path: path.display().to_string(),
+                        referenced_by: format!("{}: {}", ctx.file, ctx.at(p)),
+                        error,
+                    })?;
+                    ctx.hash.borrow_mut().write(&bytes);
+                    let map = environment::read(&path.display().to_string(), &path, scale)?;
+                    (map, format!("envmap filename {name:?}"))
+                };
+                self.environment = Some((map, scale, source));
+            }
+            other => {
+                return Err(SceneError::Unsupported {
+                    file: ctx.file.to_string(),
+                    field: ctx.at(node),
+                    value: other.to_string(),
+                    what: format!("Mitsuba `{other}` emitters"),
+                })
+            }
+        }
+        Ok(())
+    }
+
+    fn finish(self, ctx: &Context, path: &Path) -> Result<Scene, SceneError> {
+        let file = ctx.file.to_string();
+        let mut warnings = self.warnings;
+        if self.dropped > 0 {
+            warnings.push(format!(
+                "{file}: dropped {} degenerate triangles (area <= {:e} x the square of the \
+                 triangle's longest edge)",
+                self.dropped,
+                super::DEGENERATE_AREA
+            ));
+        }
+        let Some(camera) = self.camera else {
+            return Err(SceneError::File {
+                file,
+                message: "no <sensor type=\"perspective\">: irad needs a camera".into(),
+            });
+        };
+        if self.triangles.is_empty() {
+            return Err(SceneError::Empty {
+                file,
+                detail: " (no <shape> with triangles)".into(),
+            });
+        }
+        let emits = self
+            .triangles
+            .iter()
+            .any(|t| self.materials[t.material as usize].is_emissive())
+            || self.lights.iter().any(|l| match l {
+                Light::Point { intensity, .. } | Light::Spot { intensity, .. } => {
+                    intensity.max_element() > 0.0
+                }
+            })
+            || self
+                .environment
+                .as_ref()
+                .is_some_and(|(e, _, _)| e.texels.iter().any(|t| t.max_element() > 0.0));
+        if !emits {
+            return Err(SceneError::NoLight { file });
+        }
+        let (environment, env_source) = match self.environment {
+            Some((map, scale, source)) => (Some(map), Some((scale, source))),
+            None => (None, None),
+        };
+        let scene = Scene {
+            source: Some(path.to_path_buf()),
+            name: String::new(),
+            content_hash: ctx.hash.borrow().finish(),
+            camera,
+            triangles: self.triangles,
+            materials: self.materials,
+            lights: self.lights,
+            environment,
+            environment_sequence: Vec::new(),
+            luminaires: Vec::new(),
+            failure: None,
+            warnings,
+            animation: None,
+        };
+        let material_files = vec![Some(file.clone()); scene.materials.len()];
+        power::check(
+            &scene,
+            &power::PowerSources {
+                file: &file,
+                material_files: &material_files,
+                environment: env_source,
+            },
+        )?;
+        Ok(scene)
+    }
+}
+
+/// A shape's triangle with unit shading normals (the geometric one where a normal is zero).
+fn triangle(t: RawTriangle, material: u32) -> Triangle {
+    let p = t.positions;
+    let face = (p[1] - p[0]).cross(p[2] - p[0]).normalize_or_zero();
+    Triangle {
+        positions: p,
+        normals: t.normals.map(|n| {
+            // A unit normal (to f32 rounding) keeps its bits.
+            let n = if (n.length_squared() - 1.0).abs() <= 1e-6 {
+                n
+            } else {
+                n.normalize_or_zero()
+            };
+            if n == Vec3::ZERO || !n.is_finite() {
+                face
+            } else {
+                n
+            }
+        }),
+        material,
+    }
+}
