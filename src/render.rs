@@ -210,6 +210,12 @@ pub fn render_checked_with(
         files: OutputFiles::new(&job.out, &names).names(),
         irad_version: image::sidecar::IRAD_VERSION.into(),
         git_commit: image::sidecar::GIT_COMMIT.into(),
+        load: Some(image::sidecar::LoadTimes {
+            parse_ms: job.scene.load_ms,
+            triangle_bvh_ms: gpu_scene.build_ms.triangle_bvh,
+            light_bvh_ms: gpu_scene.build_ms.light_bvh,
+            upload_ms: gpu_scene.build_ms.upload,
+        }),
     };
     let files = image::write_all(&job.out, &output.image, &record, job.exposure, &output.maps)?;
     Ok(RenderReport {

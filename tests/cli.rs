@@ -315,6 +315,16 @@ fn compare_scores_images_and_folders() {
     assert!(record.reference.as_deref().unwrap().ends_with("ref.exr"));
     assert!(std::path::Path::new(record.scene_path.as_deref().unwrap()).is_absolute());
     assert!(!record.git_commit.is_empty());
+    // The scene's way to the device: parsing, the builds and the whole upload, in ms.
+    let load = record.load.expect("load times");
+    assert!(
+        load.parse_ms > 0.0 && load.triangle_bvh_ms > 0.0,
+        "{load:?}"
+    );
+    assert!(
+        load.upload_ms >= load.triangle_bvh_ms + load.light_bvh_ms,
+        "{load:?}"
+    );
     let o = irad(
         &[
             "compare",

@@ -625,6 +625,7 @@ fn record() -> RenderRecord {
         files: vec!["cornell.exr".into(), "cornell.png".into()],
         irad_version: sidecar::IRAD_VERSION.into(),
         git_commit: format!("{}-dirty", "0123456789abcdef0123456789abcdef01234567"),
+        load: None,
     }
 }
 

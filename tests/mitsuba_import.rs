@@ -507,3 +507,78 @@ fn irad_renders_a_mitsuba_scene() {
     );
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// A 35 mm focal length is over the film's diagonal (Mitsuba's sensor.cpp), and PLY meshes
+/// read in every format, smoothed where they have no normals.
+#[test]
+fn focal_lengths_and_ply_formats_read_as_mitsuba_reads_them() {
+    let text = RESEARCH.replace(
+        "<float name=\"fov\" value=\"60\"/>",
+        "<string name=\"focal_length\" value=\"35mm\"/>",
+    );
+    let scene = load_text("focal", &text).unwrap();
+    let t = 43.266_615_305_567_87f64 / 70.0;
+    let want = (2.0 * (t / 5f64.sqrt()).atan()).to_degrees();
+    assert!(
+        (scene.camera.fov_y as f64 - want).abs() < 1e-4,
+        "{} against {want}",
+        scene.camera.fov_y
+    );
+
+    // A fold of two triangles sharing the edge (0, 1): ASCII without normals, and the same
+    // mesh big-endian with them.
+    let dir = temp_dir("ply");
+    let ascii =
+        "ply\r\nformat ascii 1.0\r\nelement vertex 4\r\nproperty float x\r\nproperty float y\r\n\
+                 property float z\r\nelement face 2\r\nproperty list uchar int vertex_indices\r\n\
+                 end_header\r\n0 0 0\n1 0 0\n0 1 0\n0 -1 1\n3 0 1 2\n3 1 0 3\n";
+    std::fs::write(dir.join("fold.ply"), ascii).unwrap();
+    let mut big = b"ply\nformat binary_big_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nproperty float nx\nproperty float ny\nproperty float nz\nelement face 1\nproperty list uchar uint vertex_indices\nend_header\n".to_vec();
+    for v in [
+        [0f32, 0.0, 0.0, 0.0, 0.0, 1.0],
+        [1.0, 0.0, 0.0, 0.0, 0.0, 1.0],
+        [0.0, 1.0, 0.0, 0.0, 0.0, 1.0],
+    ] {
+        for c in v {
+            big.extend_from_slice(&c.to_be_bytes());
+        }
+    }
+    big.push(3);
+    for i in [0u32, 1, 2] {
+        big.extend_from_slice(&i.to_be_bytes());
+    }
+    std::fs::write(dir.join("big.ply"), &big).unwrap();
+    let xml = RESEARCH.replace(
+        "<shape type=\"cube\">",
+        "<shape type=\"ply\"><string name=\"filename\" value=\"fold.ply\"/><ref id=\"white\"/></shape>\
+         <shape type=\"ply\"><string name=\"filename\" value=\"big.ply\"/><ref id=\"phong\"/></shape>\
+         <shape type=\"cube\">",
+    );
+    std::fs::write(dir.join("scene.xml"), xml).unwrap();
+    let scene = irad::scene::load(&dir.join("scene.xml")).unwrap();
+    let fold: Vec<&irad::scene::Triangle> = scene
+        .triangles
+        .iter()
+        .filter(|t| t.positions.contains(&Vec3::new(0.0, -1.0, 1.0)))
+        .collect();
+    assert_eq!(fold.len(), 1);
+    // Vertices 0 and 1 are on both faces: their normal is the area-weighted mean of the faces'
+    // (0, 0, 1) and (0, 1, 1) / sqrt(2), twice the areas 1 and sqrt(2): (0, 1, 2) / sqrt(5).
+    let shared = fold[0].normals[0];
+    assert!(
+        (shared - Vec3::new(0.0, 1.0, 2.0).normalize()).length() < 1e-6,
+        "{shared}"
+    );
+    // Vertex 3 is on the second face only.
+    assert!((fold[0].normals[2] - Vec3::new(0.0, 1.0, 1.0).normalize()).length() < 1e-6);
+    let big: Vec<&irad::scene::Triangle> = scene
+        .triangles
+        .iter()
+        .filter(|t| t.positions == [Vec3::ZERO, Vec3::X, Vec3::Y])
+        .collect();
+    assert!(
+        big.len() >= 2,
+        "the fold's first face and the big-endian triangle"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}

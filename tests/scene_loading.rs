@@ -1321,3 +1321,69 @@ fn bad_tracks_are_refused_naming_the_field_and_value() {
     let unknown = animated(&format!("{MOVING}\nease = 2"), "frames = 30");
     scratch("track-key", &unknown, OBJ, MTL).error(&["ease"]);
 }
+
+/// A gzip-compressed OBJ reads as the plain one, and `[mesh.groups]` gives each `g` group its
+/// material of `mtl`; a group left out is an error naming it, its line and the table.
+#[test]
+fn gzip_meshes_and_group_materials() {
+    use std::io::Write as _;
+    let obj = "v 0 0 0\nv 1 0 0\nv 0 0 -1\nv 2 0 0\nv 2 0 -1\ng left\nf 1 2 3\ng right\nf 2 4 5\n";
+    let mtl = "newmtl red\nKd 0.8 0.1 0.1\nnewmtl blue\nKd 0.1 0.1 0.8\n";
+    let mut gz = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::default());
+    gz.write_all(obj.as_bytes()).unwrap();
+    let gz = gz.finish().unwrap();
+    let toml = |groups: &str| {
+        format!(
+            "{CAMERA}[[mesh]]\nobj = \"g.obj.gz\"\nmtl = \"g.mtl\"\n[mesh.groups]\n{groups}\n{POINT}"
+        )
+    };
+    let s = scratch(
+        "groups",
+        &toml("left = \"red\"\nright = \"blue\""),
+        OBJ,
+        MTL,
+    );
+    std::fs::write(s.path("g.obj.gz"), &gz).unwrap();
+    s.write("g.mtl", mtl);
+    let scene = s.load().unwrap();
+    let names: Vec<&str> = scene
+        .triangles
+        .iter()
+        .map(|t| scene.materials[t.material as usize].name.as_str())
+        .collect();
+    assert_eq!(names, ["red", "blue"]);
+    assert!(scene.load_ms > 0.0);
+    // "*" names the rest.
+    s.write("scene.toml", &toml("left = \"red\"\n\"*\" = \"blue\""));
+    assert_eq!(s.load().unwrap().triangles.len(), 2);
+    s.write("scene.toml", &toml("left = \"red\""));
+    s.error(&["g.obj.gz line 8", "group `right`", "mesh[0].groups"]);
+    s.write(
+        "scene.toml",
+        &format!("{CAMERA}[[mesh]]\nobj = \"g.obj.gz\"\nmtl = \"g.mtl\"\n{POINT}"),
+    );
+    s.error(&["mesh[0]", "`mtl` and `groups` go together"]);
+    std::fs::write(s.path("g.obj.gz"), b"not gzip").unwrap();
+    s.write("scene.toml", &toml("left = \"red\"\nright = \"blue\""));
+    s.error(&["g.obj.gz", "not a readable gzip file"]);
+}
+
+/// Dabrovic's Sponza (scenes/sponza) loads: its 66k faces, a material for every group.
+#[test]
+fn sponza_loads_with_its_group_materials() {
+    let scene = scene::load(&scenes_dir().join("sponza/scene.toml")).unwrap();
+    assert!(scene.triangles.len() > 66_000, "{}", scene.triangles.len());
+    let mut used: Vec<&str> = scene
+        .triangles
+        .iter()
+        .map(|t| scene.materials[t.material as usize].name.as_str())
+        .collect();
+    used.sort();
+    used.dedup();
+    assert_eq!(used, ["ceiling", "floor", "glass", "stone", "wood"]);
+    eprintln!(
+        "sponza: {} triangles loaded in {:.0} ms",
+        scene.triangles.len(),
+        scene.load_ms
+    );
+}

@@ -179,6 +179,18 @@ pub(crate) fn progress(len: u64, what: &str) -> ProgressBar {
     bar
 }
 
+/// Loads the scene file at `path` under a spinner naming it (a large mesh takes seconds).
+pub(crate) fn load_scene(path: &std::path::Path) -> anyhow::Result<irad::scene::Scene> {
+    let spinner = ProgressBar::new_spinner();
+    logger::on_screen(Some(logger::Bars::One(spinner.clone())));
+    spinner.set_message(format!("loading {}", path.display()));
+    spinner.enable_steady_tick(std::time::Duration::from_millis(120));
+    let scene = irad::scene::load(path);
+    spinner.finish_and_clear();
+    logger::on_screen(None);
+    Ok(scene?)
+}
+
 pub(crate) fn device_line(d: &DeviceInfo) -> String {
     format!(
         "{} ({}, Vulkan {}.{}.{}, {})",

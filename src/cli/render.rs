@@ -104,7 +104,7 @@ pub fn run(options: &ContextOptions, args: RenderArgs) -> Result<()> {
                     method_flags::switch_written(&flag, &text)
                 );
             }
-            scene::load(path)?
+            super::load_scene(path)?
         }
         None => scene::default_scene(),
     };
@@ -228,6 +228,13 @@ pub fn run(options: &ContextOptions, args: RenderArgs) -> Result<()> {
     bar.finish_and_clear();
     let r = &report.record;
     println!("per-pass GPU time:\n{}", report.passes);
+    if let Some(l) = &r.load {
+        println!(
+            "scene to the device: {:.0} ms parsing, {:.0} ms building the BVH, {:.0} ms the light \
+             BVH, {:.0} ms the whole upload",
+            l.parse_ms, l.triangle_bvh_ms, l.light_bvh_ms, l.upload_ms
+        );
+    }
     if let Some(gpu_ms) = r.gpu_ms_total {
         let paths = r.samples as f64 * cam.width as f64 * cam.height as f64;
         println!(

@@ -72,6 +72,24 @@ pub struct RenderRecord {
     /// (build.rs; "unknown" outside a git checkout): timings move between commits.
     #[serde(default)]
     pub git_commit: String,
+    /// What getting the scene to the device cost: reading and parsing its files, the BVH
+    /// builds and the whole upload, in wall milliseconds (absent in records written before).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub load: Option<LoadTimes>,
+}
+
+/// Wall milliseconds of a scene's way to the device (`RenderRecord::load`).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct LoadTimes {
+    /// Reading, decompressing, parsing and checking the scene's files (0 for a scene built
+    /// in code).
+    pub parse_ms: f64,
+    /// The triangle BVH's build (obvhs).
+    pub triangle_bvh_ms: f64,
+    /// The light BVH's build.
+    pub light_bvh_ms: f64,
+    /// The whole upload: both builds, the shading data and tables, and the transfers.
+    pub upload_ms: f64,
 }
 
 /// This build's commit (build.rs).

@@ -81,7 +81,16 @@ fn default_up() -> [f32; 3] {
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MeshFile {
+    /// The OBJ file; `.gz` for one stored gzip-compressed (read as a stream).
     pub obj: String,
+    /// An MTL file whose materials `groups` names, for an OBJ without its own (relative to
+    /// the OBJ's folder, as its own `mtllib` lines are).
+    #[serde(default)]
+    pub mtl: Option<String>,
+    /// Each OBJ group (`g NAME`) to a material of `mtl`: every group of the OBJ must be named
+    /// (or `"*"` gives the material of the groups not named).
+    #[serde(default)]
+    pub groups: Option<std::collections::BTreeMap<String, String>>,
 }
 
 #[derive(Clone, Debug, Deserialize)]

@@ -152,6 +152,9 @@ pub struct BuildTimes {
     pub triangle_bvh: f64,
     /// The light BVH over the light table.
     pub light_bvh: f64,
+    /// The whole upload's wall time: the builds, the shading data and tables, and the
+    /// buffers' transfer to the device.
+    pub upload: f64,
 }
 
 pub struct GpuScene {
@@ -590,6 +593,7 @@ impl GpuScene {
     pub fn upload(ctx: &Context, scene: &Scene) -> GpuResult<GpuScene> {
         crate::methods::device_fit::check_scene(scene, ctx.info().max_storage_buffer_range)
             .map_err(GpuError::DoesNotFit)?;
+        let upload_start = std::time::Instant::now();
         let positions: Vec<[Vec3; 3]> = scene.triangles.iter().map(|t| t.positions).collect();
         let start = std::time::Instant::now();
         let bvh = Bvh::build(&positions);
@@ -641,7 +645,7 @@ impl GpuScene {
         );
 
         let cam = &scene.camera;
-        Ok(GpuScene {
+        let mut gpu = GpuScene {
             bvh: GpuBvh::upload(ctx, &bvh)?,
             shading_triangles: Buffer::from_slice(ctx, "ShadingTriangles", &shading)?,
             materials: Buffer::from_slice(ctx, "Materials", &materials)?,
@@ -672,6 +676,7 @@ impl GpuScene {
             build_ms: BuildTimes {
                 triangle_bvh: triangle_bvh_ms,
                 light_bvh: light_bvh_ms,
+                upload: 0.0,
             },
             camera: camera_constants(cam),
             environment_size: (env.size[2] != 0).then_some([env.size[0], env.size[1]]),
@@ -683,7 +688,9 @@ impl GpuScene {
                 delta_lights: !scene.lights.is_empty(),
                 glossy: scene.materials.iter().any(|m| m.ks.max_element() > 0.0),
             },
-        })
+        };
+        gpu.build_ms.upload = upload_start.elapsed().as_secs_f64() * 1e3;
+        Ok(gpu)
     }
 
     /// Device bytes of the light data: the light table, the emissive triangles, the light

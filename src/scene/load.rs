@@ -19,6 +19,13 @@ pub const DEGENERATE_AREA: f64 = 1e-12;
 
 /// Loads the scene file at `path`; files it names are relative to its folder.
 pub fn load(path: &Path) -> Result<Scene, SceneError> {
+    let start = std::time::Instant::now();
+    let mut scene = load_file(path)?;
+    scene.load_ms = start.elapsed().as_secs_f64() * 1e3;
+    Ok(scene)
+}
+
+fn load_file(path: &Path) -> Result<Scene, SceneError> {
     if super::mitsuba::is_mitsuba(path) {
         let mut scene = super::mitsuba::load(path)?;
         scene.name = scene_name(path);
@@ -215,7 +222,39 @@ fn build(file: &str, toml_text: &str, files: &Files) -> Result<Scene, SceneError
         hash.write(&bytes);
         let dir = rel.parent().unwrap_or(Path::new(""));
         let mut read_mtl = |name: &str, by: &str| files.read(&dir.join(name), by.to_string());
-        let mesh = obj::load(&obj_file, &String::from_utf8_lossy(&bytes), &mut read_mtl)?;
+        let bytes = if m.obj.ends_with(".gz") {
+            gunzip(&obj_file, &bytes)?
+        } else {
+            bytes
+        };
+        let given_in = format!("{file}: mesh[{i}].groups");
+        let groups =
+            match (&m.mtl, &m.groups) {
+                (Some(mtl), Some(groups)) => Some(obj::GroupMaterials {
+                    mtl: mtl.as_str(),
+                    groups,
+                    given_in: &given_in,
+                }),
+                (None, None) => None,
+                _ => return Err(SceneError::Invalid {
+                    file: file.to_string(),
+                    field: format!("mesh[{i}]"),
+                    value: format!(
+                        "mtl {:?}, groups {:?}",
+                        m.mtl,
+                        m.groups.as_ref().map(|g| g.len())
+                    ),
+                    problem:
+                        "`mtl` and `groups` go together: the MTL's materials for the OBJ's groups"
+                            .into(),
+                }),
+            };
+        let mesh = obj::load(
+            &obj_file,
+            &String::from_utf8_lossy(&bytes),
+            &mut read_mtl,
+            groups.as_ref(),
+        )?;
         for b in &mesh.mtl_bytes {
             hash.write(b);
         }
@@ -303,6 +342,7 @@ fn build(file: &str, toml_text: &str, files: &Files) -> Result<Scene, SceneError
         failure,
         warnings,
         animation: None,
+        load_ms: 0.0,
     };
     let sources = power::PowerSources {
         file,
@@ -488,6 +528,19 @@ fn drop_degenerate(
         }
     }
     kept
+}
+
+/// A gzip-compressed file's contents, read as a stream.
+fn gunzip(file: &str, bytes: &[u8]) -> Result<Vec<u8>, SceneError> {
+    use std::io::Read as _;
+    let mut out = Vec::new();
+    flate2::read::GzDecoder::new(bytes)
+        .read_to_end(&mut out)
+        .map_err(|e| SceneError::File {
+            file: file.to_string(),
+            message: format!("not a readable gzip file: {e}"),
+        })?;
+    Ok(out)
 }
 
 /// Whether a triangle has (near) zero area for its own size.

@@ -127,6 +127,9 @@ pub struct Scene {
     /// Keyframed tracks over animation frames (animation.rs): None for a still scene. A
     /// render shows one frame of it (`Scene::at_frame`), a sequence render every frame.
     pub animation: Option<animation::Animation>,
+    /// Wall milliseconds `load` took to read, decompress, parse and check the scene's files
+    /// (0 for a scene built in code).
+    pub load_ms: f64,
 }
 
 pub mod animation;

@@ -39,9 +39,26 @@ pub struct ObjMesh {
 /// -> (the name to use for it in messages, its bytes).
 pub type MtlReader<'a> = dyn FnMut(&str, &str) -> Result<(String, Vec<u8>), SceneError> + 'a;
 
-/// Loads the OBJ text `text`; `file` names it in messages; `read_mtl` fetches its MTL files.
-pub fn load(file: &str, text: &str, read_mtl: &mut MtlReader) -> Result<ObjMesh, SceneError> {
-    let checked = check(file, text)?;
+/// Materials for an OBJ that has none of its own: the MTL file (its name as `read_mtl` takes
+/// it) and each group's material.
+pub struct GroupMaterials<'a> {
+    pub mtl: &'a str,
+    /// Group name to material name; `"*"`: the groups not named.
+    pub groups: &'a std::collections::BTreeMap<String, String>,
+    /// Where the mapping was given, for messages ("scene.toml: mesh[0].groups").
+    pub given_in: &'a str,
+}
+
+/// Loads the OBJ text `text`; `file` names it in messages; `read_mtl` fetches its MTL files;
+/// `groups` assigns materials to its groups (the OBJ's own `usemtl` lines still apply after
+/// each group's first line).
+pub fn load(
+    file: &str,
+    text: &str,
+    read_mtl: &mut MtlReader,
+    groups: Option<&GroupMaterials>,
+) -> Result<ObjMesh, SceneError> {
+    let checked = check(file, text, groups)?;
     let mut warnings = checked.warnings;
 
     let mut materials = Vec::new();
@@ -205,13 +222,19 @@ struct Checked {
     warnings: Vec<String>,
 }
 
-fn check(file: &str, text: &str) -> Result<Checked, SceneError> {
+fn check(file: &str, text: &str, groups: Option<&GroupMaterials>) -> Result<Checked, SceneError> {
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     // Normal 1 (1-based) is the zero sentinel for corners without `vn`.
     let mut out = String::with_capacity(text.len() + 16);
     out.push_str("vn 0 0 0\n");
     let mut mtllibs = Vec::new();
     let mut usemtl = Vec::new();
+    // The scene's MTL for the groups, before any line of the file (tobj needs a library
+    // before the `usemtl` lines that use it).
+    if let Some(g) = groups {
+        mtllibs.push((0, g.mtl.to_string()));
+        out.push_str(&format!("mtllib {}\n", g.mtl));
+    }
     let (mut positions, mut texcoords, mut normals) = (0usize, 0usize, 0usize);
     let (mut small_faces, mut line_elements) = (0usize, 0usize);
     for (i, line) in text.lines().enumerate() {
@@ -349,6 +372,19 @@ fn check(file: &str, text: &str) -> Result<Checked, SceneError> {
                     out.push_str(&format!("usemtl {name}"));
                 }
             }
+            Some("g") if groups.is_some() => {
+                let g = groups.expect("checked");
+                let name = values.join(" ");
+                let Some(material) = g.groups.get(&name).or_else(|| g.groups.get("*")) else {
+                    return Err(error(format!(
+                        "group `{name}` has no material in {} (name it there, or give \"*\" \
+                         for the groups not named)",
+                        g.given_in
+                    )));
+                };
+                usemtl.push((n, material.clone()));
+                out.push_str(&format!("usemtl {material}"));
+            }
             Some("o") | Some("g") => out.push_str(line),
             // Everything else (comments, s, p, curves) is ignored by tobj and by irad.
             _ => {}
@@ -386,7 +422,7 @@ mod tests {
     fn quads_are_triangulated_and_normals_resolved_per_corner() {
         let text = "v 0 0 0\nv 1 0 0\nv 1 0 -1\nv 0 0 -1\nvn 0 2 0\nvn nan 0 0\n\
                     f 1//1 2//2 3 4\n";
-        let mesh = load("q.obj", text, &mut no_mtl).unwrap();
+        let mesh = load("q.obj", text, &mut no_mtl, None).unwrap();
         assert_eq!(mesh.triangles.len(), 2);
         let t = mesh.triangles[0];
         assert_eq!(
@@ -405,7 +441,7 @@ mod tests {
     #[test]
     fn relative_indices_and_w_are_resolved() {
         let text = "v 0 0 0 2\nv 2 0 0\nv 0 4 0 2\nf -3 -2 -1\n";
-        let mesh = load("r.obj", text, &mut no_mtl).unwrap();
+        let mesh = load("r.obj", text, &mut no_mtl, None).unwrap();
         assert_eq!(
             mesh.triangles[0].positions,
             [
@@ -439,7 +475,9 @@ mod tests {
             ("usemtl\n", "b.obj line 1: usemtl without a name"),
         ];
         for (text, expected) in cases {
-            let m = load("b.obj", text, &mut no_mtl).unwrap_err().to_string();
+            let m = load("b.obj", text, &mut no_mtl, None)
+                .unwrap_err()
+                .to_string();
             assert!(m.contains(expected), "{m}");
         }
     }
@@ -458,7 +496,7 @@ mod tests {
             };
             Ok((name.to_string(), body.as_bytes().to_vec()))
         };
-        let mesh = load("m.obj", text, &mut read).unwrap();
+        let mesh = load("m.obj", text, &mut read, None).unwrap();
         let names: Vec<_> = mesh
             .triangles
             .iter()

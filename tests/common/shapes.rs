@@ -117,5 +117,6 @@ pub fn scene(
         failure: None,
         warnings: Vec::new(),
         animation: None,
+        load_ms: 0.0,
     }
 }

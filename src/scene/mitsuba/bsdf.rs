@@ -48,19 +48,69 @@ fn property<'a, 'i>(node: Node<'a, 'i>, name: &str) -> Option<Node<'a, 'i>> {
         .find(|c| c.is_element() && c.attribute("name") == Some(name))
 }
 
-/// A colour property (or a bitmap texture's mean) named `name`, else `default`.
-fn colour(
+/// A colour property (or a bitmap texture's mean, nested or referenced) named `name`, else
+/// `default`.
+fn colour<'a, 'i>(
     ctx: &Context,
-    node: Node,
+    node: Node<'a, 'i>,
     name: &str,
     default: Vec3,
+    resolve: &dyn Fn(&str) -> Option<Node<'a, 'i>>,
     warnings: &mut Vec<String>,
 ) -> Result<Vec3, SceneError> {
     match property(node, name) {
         None => Ok(default),
         Some(p) if p.tag_name().name() == "texture" => textures::mean(ctx, p, warnings),
+        Some(p) if p.tag_name().name() == "ref" => {
+            let id = p.attribute("id").unwrap_or_default();
+            match resolve(id).filter(|t| t.has_tag_name("texture")) {
+                Some(t) => textures::mean(ctx, t, warnings),
+                None => Err(ctx.invalid(p, id, "names no <texture id> of the file")),
+            }
+        }
         Some(p) => ctx.colour(p),
     }
+}
+
+/// An index of refraction: a number or one of Mitsuba's named materials.
+fn ior(ctx: &Context, node: Node, name: &str, default: f64) -> Result<f64, SceneError> {
+    let Some(p) = property(node, name) else {
+        return Ok(default);
+    };
+    if p.tag_name().name() != "string" {
+        return ctx.float_attr(p, "value");
+    }
+    let v = ctx.required(p, "value")?;
+    let known = [
+        ("vacuum", 1.0),
+        ("helium", 1.000036),
+        ("hydrogen", 1.000132),
+        ("air", 1.000277),
+        ("carbon dioxide", 1.00045),
+        ("water", 1.333),
+        ("acetone", 1.36),
+        ("ethanol", 1.361),
+        ("carbon tetrachloride", 1.461),
+        ("glycerol", 1.4729),
+        ("benzene", 1.501),
+        ("silicone oil", 1.52045),
+        ("bromine", 1.661),
+        ("water ice", 1.31),
+        ("fused quartz", 1.458),
+        ("pyrex", 1.47),
+        ("acrylic glass", 1.49),
+        ("polypropylene", 1.49),
+        ("bk7", 1.5046),
+        ("sodium chloride", 1.544),
+        ("amber", 1.55),
+        ("pet", 1.575),
+        ("diamond", 2.419),
+    ];
+    known
+        .iter()
+        .find(|(n, _)| *n == v)
+        .map(|(_, x)| *x)
+        .ok_or_else(|| ctx.invalid(p, &v, "names no index of refraction Mitsuba knows"))
 }
 
 fn float(ctx: &Context, node: Node, name: &str, default: f64) -> Result<f64, SceneError> {
@@ -119,7 +169,14 @@ pub fn fit<'a, 'i>(
     let zero = Vec3::ZERO;
     Ok(match kind.as_str() {
         "diffuse" => Fit {
-            kd: colour(ctx, node, "reflectance", Vec3::splat(0.5), warnings)?,
+            kd: colour(
+                ctx,
+                node,
+                "reflectance",
+                Vec3::splat(0.5),
+                resolve,
+                warnings,
+            )?,
             ks: zero,
             ns: 0.0,
         },
@@ -128,7 +185,14 @@ pub fn fit<'a, 'i>(
             None => return Err(ctx.invalid(node, "twosided", "needs a nested <bsdf>")),
         },
         "roughconductor" | "conductor" => {
-            let ks = colour(ctx, node, "specular_reflectance", Vec3::ONE, warnings)?;
+            let ks = colour(
+                ctx,
+                node,
+                "specular_reflectance",
+                Vec3::ONE,
+                resolve,
+                warnings,
+            )?;
             if property(node, "material")
                 .is_some_and(|m| ctx.attr(m, "value").as_deref() != Some("none"))
                 || property(node, "eta").is_some()
@@ -172,11 +236,8 @@ pub fn fit<'a, 'i>(
             );
             if a.ks.max_element() > 0.0 && b.ks.max_element() > 0.0 && a.ns != b.ns {
                 warnings.push(format!(
-                    "{}: {at}: two glossy lobes (Ns {} and {}) as one of Ns {}",
-                    ctx.file,
-                    a.ns,
-                    b.ns,
-                    a.ns.max(b.ns)
+                    "{}: {at}: two glossy lobes (Ns {} and {}) as one of Ns {} (the second's)",
+                    ctx.file, a.ns, b.ns, b.ns
                 ));
             }
             Fit {
@@ -186,12 +247,26 @@ pub fn fit<'a, 'i>(
             }
         }
         "plastic" | "roughplastic" => {
-            let int_ior = float(ctx, node, "int_ior", 1.49)?;
-            let ext_ior = float(ctx, node, "ext_ior", 1.000277)?;
+            let int_ior = ior(ctx, node, "int_ior", 1.49)?;
+            let ext_ior = ior(ctx, node, "ext_ior", 1.000277)?;
             let eta = int_ior / ext_ior;
             let f0 = (((eta - 1.0) / (eta + 1.0)).powi(2)) as f32;
-            let kd = colour(ctx, node, "diffuse_reflectance", Vec3::splat(0.5), warnings)?;
-            let ks = colour(ctx, node, "specular_reflectance", Vec3::ONE, warnings)?;
+            let kd = colour(
+                ctx,
+                node,
+                "diffuse_reflectance",
+                Vec3::splat(0.5),
+                resolve,
+                warnings,
+            )?;
+            let ks = colour(
+                ctx,
+                node,
+                "specular_reflectance",
+                Vec3::ONE,
+                resolve,
+                warnings,
+            )?;
             let ns = if kind == "plastic" {
                 MIRROR_NS
             } else {
@@ -211,12 +286,20 @@ pub fn fit<'a, 'i>(
             }
         }
         "phong" => Fit {
-            kd: colour(ctx, node, "diffuse_reflectance", Vec3::splat(0.5), warnings)?,
+            kd: colour(
+                ctx,
+                node,
+                "diffuse_reflectance",
+                Vec3::splat(0.5),
+                resolve,
+                warnings,
+            )?,
             ks: colour(
                 ctx,
                 node,
                 "specular_reflectance",
                 Vec3::splat(0.2),
+                resolve,
                 warnings,
             )?,
             ns: float(ctx, node, "exponent", 30.0)? as f32,

@@ -25,6 +25,9 @@ use super::hash::Fnv1a64;
 use super::{environment, power};
 use super::{Camera, Environment, Light, Material, Scene, SceneError, Triangle};
 use props::Context;
+
+/// The diagonal of the 36 x 24 mm film a 35 mm-equivalent focal length is over.
+const DIAGONAL_MM: f64 = 43.266_615_305_567_87;
 use shapes::RawTriangle;
 
 pub use bsdf::{ns_of_alpha, MIRROR_NS};
@@ -61,6 +64,24 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
             ),
         });
     }
+    // Mitsuba 0.x files name properties in camelCase (toWorld, diffuseReflectance), which
+    // Mitsuba 3 upgrades on reading; irad reads Mitsuba 3's names only.
+    let version = root.attribute("version").unwrap_or("");
+    let major: u32 = version
+        .split('.')
+        .next()
+        .and_then(|m| m.parse().ok())
+        .unwrap_or(0);
+    if major < 2 {
+        return Err(SceneError::Unsupported {
+            file,
+            field: "<scene version>".into(),
+            value: format!("{version:?}"),
+            what: "Mitsuba 0.x scenes (camelCase property names; Mitsuba 3's \
+                   `mitsuba.xml.upgrade` or a load and save in Mitsuba 3 converts them)"
+                .into(),
+        });
+    }
     let mut hash = Fnv1a64::default();
     hash.write(text.as_bytes());
     let mut ctx = Context {
@@ -71,9 +92,10 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
         hash: std::cell::RefCell::new(hash),
     };
     for d in root.children().filter(|c| c.has_tag_name("default")) {
-        let name = d.attribute("name").unwrap_or_default().to_string();
-        let value = d.attribute("value").unwrap_or_default().to_string();
-        ctx.defaults.insert(name, value);
+        let (Some(name), Some(value)) = (d.attribute("name"), d.attribute("value")) else {
+            return Err(ctx.invalid(d, "", "a <default> needs a name and a value"));
+        };
+        ctx.defaults.insert(name.to_string(), value.to_string());
     }
     let mut builder = Builder::default();
     let ids: HashMap<String, Node> = root
@@ -192,7 +214,8 @@ fn sensor(ctx: &Context, node: Node) -> Result<Camera, SceneError> {
                 .unwrap_or_else(|| "x".into()),
         ),
         (None, Some(p)) => {
-            // A 35 mm equivalent focal length: the field of view over the film's 36 mm width.
+            // A 35 mm equivalent focal length: Mitsuba's field of view over the 36 x 24 mm
+            // film's diagonal (43.27 mm).
             let v = ctx.required(p, "value")?;
             let mm: f64 = v
                 .trim_end_matches("mm")
@@ -201,9 +224,16 @@ fn sensor(ctx: &Context, node: Node) -> Result<Camera, SceneError> {
                 .ok()
                 .filter(|f: &f64| *f > 0.0)
                 .ok_or_else(|| ctx.invalid(p, &v, "a focal length such as \"50mm\""))?;
-            (2.0 * (18.0 / mm).atan().to_degrees(), "x".to_string())
+            (
+                2.0 * (DIAGONAL_MM / (2.0 * mm)).atan().to_degrees(),
+                "diagonal".to_string(),
+            )
         }
-        (None, None) => (2.0 * (18.0f64 / 50.0).atan().to_degrees(), "x".to_string()),
+        // Mitsuba's default: a 50 mm focal length.
+        (None, None) => (
+            2.0 * (DIAGONAL_MM / 100.0).atan().to_degrees(),
+            "diagonal".to_string(),
+        ),
     };
     if !(fov > 0.0 && fov < 180.0) {
         return Err(ctx.invalid(node, &fov.to_string(), "fov must be in (0, 180) degrees"));
@@ -211,7 +241,7 @@ fn sensor(ctx: &Context, node: Node) -> Result<Camera, SceneError> {
     // tan(fov_y / 2) from the axis the fov is given over.
     let t = (fov.to_radians() / 2.0).tan();
     let diagonal = (1.0 + aspect * aspect).sqrt();
-    let ty = match axis.as_str() {
+    let ty = match axis.to_ascii_lowercase().as_str() {
         "x" => t / aspect,
         "y" => t,
         "diagonal" => t / diagonal,
@@ -246,18 +276,27 @@ fn sensor(ctx: &Context, node: Node) -> Result<Camera, SceneError> {
         (l.origin, l.target, l.up)
     } else {
         let m = to_world(ctx, node)?;
+        if m.determinant() <= 0.0 {
+            return Err(ctx.invalid(
+                node,
+                &format!("determinant {}", m.determinant()),
+                "the sensor's to_world mirrors or collapses the view (a negative or zero \
+                 scale), which irad's camera cannot",
+            ));
+        }
         let p = m.transform_point3(DVec3::ZERO);
         let forward = m.transform_vector3(DVec3::Z).normalize();
         (p, p + forward, m.transform_vector3(DVec3::Y).normalize())
     };
-    Ok(Camera {
-        position: position.as_vec3(),
-        look_at: look_at.as_vec3(),
-        up: up.as_vec3(),
+    // The TOML camera's checks (finite, within the coordinate limit, up off the view).
+    let file = super::file::CameraFile {
+        position: position.as_vec3().to_array(),
+        look_at: look_at.as_vec3().to_array(),
+        up: up.as_vec3().to_array(),
         fov_y,
-        width,
-        height,
-    })
+        resolution: [i64::from(width), i64::from(height)],
+    };
+    super::camera::build(&format!("{} ({})", ctx.file, ctx.at(node)), &file)
 }
 
 impl Builder {
@@ -299,18 +338,18 @@ impl Builder {
                     error,
                 })?;
                 ctx.hash.borrow_mut().write(&bytes);
-                let read = match kind.as_str() {
-                    "ply" => shapes::read_ply(&bytes),
-                    _ => shapes::read_obj(&path),
-                };
-                read.map_err(|message| SceneError::File {
-                    file: path.display().to_string(),
-                    message: format!(
-                        "{message} (the {kind} shape at {} of {})",
-                        ctx.at(node),
-                        ctx.file
-                    ),
-                })?
+                let display = path.display().to_string();
+                match kind.as_str() {
+                    "ply" => shapes::read_ply(&bytes).map_err(|message| SceneError::File {
+                        file: display,
+                        message: format!(
+                            "{message} (the ply shape at {} of {})",
+                            ctx.at(node),
+                            ctx.file
+                        ),
+                    })?,
+                    _ => shapes::read_obj(&display, &String::from_utf8_lossy(&bytes))?,
+                }
             }
             "rectangle" => shapes::rectangle(),
             "cube" => shapes::cube(),
@@ -354,13 +393,31 @@ impl Builder {
         let raw = shapes::to_world(local, m, bool_property(ctx, node, "flip_normals"));
         // Its BSDF: nested, referenced, or Mitsuba's default (diffuse 0.5).
         let mut warnings = Vec::new();
-        let bsdf = node.children().find_map(|c| match c.tag_name().name() {
-            "bsdf" => Some((c, None)),
-            "ref" => c
-                .attribute("id")
-                .and_then(|id| resolve(id).map(|n| (n, Some(id.to_string())))),
-            _ => None,
-        });
+        let mut bsdf = None;
+        for c in node.children().filter(|c| c.is_element()) {
+            match c.tag_name().name() {
+                "bsdf" => bsdf = bsdf.or(Some((c, None))),
+                "ref" if c.attribute("name").is_none_or(|n| n == "bsdf") => {
+                    let id = c.attribute("id").unwrap_or_default();
+                    let target = resolve(id)
+                        .filter(|t| t.has_tag_name("bsdf"))
+                        .ok_or_else(|| ctx.invalid(c, id, "names no <bsdf id> of the file"))?;
+                    bsdf = bsdf.or(Some((target, Some(id.to_string()))));
+                }
+                _ => {}
+            }
+        }
+        if let Some((b, _)) = bsdf
+            .as_ref()
+            .filter(|(b, _)| ctx.attr(*b, "type").as_deref() != Some("twosided"))
+        {
+            warnings.push(format!(
+                "{}: {}: a one-sided BSDF (black from behind in Mitsuba): irad's materials \
+                 reflect on both sides",
+                ctx.file,
+                ctx.at(*b)
+            ));
+        }
         let (fit, bsdf_name) = match bsdf {
             Some((b, id)) => (
                 bsdf::fit(ctx, b, resolve, &mut warnings)?,
@@ -394,6 +451,21 @@ impl Builder {
                 .unwrap_or_else(|| format!("shape {k} ({kind})"))
         });
         let material = self.material(ctx, node, name, fit, ke, warnings)?;
+        let limit = super::obj::MAX_COORDINATE;
+        if let Some(bad) = raw
+            .iter()
+            .flat_map(|t| t.positions)
+            .find(|p| !p.is_finite() || p.abs().max_element() > limit)
+        {
+            return Err(ctx.invalid(
+                node,
+                &format!("{bad}"),
+                &format!(
+                    "a vertex in the world is not finite or past {limit:e}, the most irad's f32 \
+                     rays and BVH handle"
+                ),
+            ));
+        }
         for t in raw {
             if super::load::is_degenerate(t.positions) {
                 self.dropped += 1;
@@ -425,6 +497,13 @@ impl Builder {
             if !(v.is_finite() && v.min_element() >= 0.0) {
                 return Err(ctx.invalid(node, &format!("{v}"), "colours must be finite and >= 0"));
             }
+        }
+        if !(fit.ns.is_finite() && fit.ns >= 0.0) {
+            return Err(ctx.invalid(
+                node,
+                &fit.ns.to_string(),
+                "the Phong exponent must be finite and >= 0",
+            ));
         }
         let sum = (fit.kd + fit.ks).max_element();
         if sum > 1.0 + 1e-5 {
@@ -471,10 +550,15 @@ impl Builder {
                     Some(p) => ctx.vector(p, 0.0)?,
                     None => m.transform_point3(DVec3::ZERO),
                 };
-                self.lights.push(Light::Point {
-                    position: position.as_vec3(),
-                    intensity: colour("intensity", Vec3::ONE)?,
-                });
+                let light = super::file::LightFile {
+                    kind: "point".into(),
+                    position: position.as_vec3().to_array(),
+                    intensity: colour("intensity", Vec3::ONE)?.to_array(),
+                    direction: None,
+                    cone_angle: None,
+                    falloff_angle: None,
+                };
+                self.lights.push(self.checked_light(ctx, node, &light)?);
             }
             "spot" => {
                 let cutoff = float_property(ctx, node, "cutoff_angle", 20.0)?;
@@ -493,13 +577,20 @@ impl Builder {
                     ctx.file,
                     ctx.at(node)
                 ));
-                self.lights.push(Light::Spot {
-                    position: m.transform_point3(DVec3::ZERO).as_vec3(),
-                    intensity: colour("intensity", Vec3::ONE)?,
-                    direction: m.transform_vector3(DVec3::Z).normalize().as_vec3(),
-                    cone_angle: beam as f32,
-                    falloff_angle: cutoff as f32,
-                });
+                let light = super::file::LightFile {
+                    kind: "spot".into(),
+                    position: m.transform_point3(DVec3::ZERO).as_vec3().to_array(),
+                    intensity: colour("intensity", Vec3::ONE)?.to_array(),
+                    direction: Some(
+                        m.transform_vector3(DVec3::Z)
+                            .normalize()
+                            .as_vec3()
+                            .to_array(),
+                    ),
+                    cone_angle: Some(beam as f32),
+                    falloff_angle: Some(cutoff as f32),
+                };
+                self.lights.push(self.checked_light(ctx, node, &light)?);
             }
             "envmap" | "constant" => {
                 if self.environment.is_some() {
@@ -514,8 +605,18 @@ impl Builder {
                     ));
                 }
                 let scale = float_property(ctx, node, "scale", 1.0)? as f32;
+                if scale < 0.0 {
+                    return Err(ctx.invalid(node, &scale.to_string(), "scale must be >= 0"));
+                }
                 let (map, source) = if kind == "constant" {
                     let radiance = colour("radiance", Vec3::ONE)?;
+                    if !(radiance.is_finite() && radiance.min_element() >= 0.0) {
+                        return Err(ctx.invalid(
+                            node,
+                            &format!("{radiance}"),
+                            "radiance must be finite and >= 0",
+                        ));
+                    }
                     let map = Environment {
                         width: 8,
                         height: 4,
@@ -558,6 +659,21 @@ impl Builder {
             }
         }
         Ok(())
+    }
+
+    /// A light through the TOML lights' checks (finite, within the coordinate limit, intensity
+    /// >= 0, angles in range).
+    fn checked_light(
+        &self,
+        ctx: &Context,
+        node: Node,
+        light: &super::file::LightFile,
+    ) -> Result<Light, SceneError> {
+        super::lights::build(
+            &format!("{} ({})", ctx.file, ctx.at(node)),
+            self.lights.len(),
+            light,
+        )
     }
 
     fn finish(self, ctx: &Context, path: &Path) -> Result<Scene, SceneError> {
@@ -617,6 +733,7 @@ impl Builder {
             failure: None,
             warnings,
             animation: None,
+            load_ms: 0.0,
         };
         let material_files = vec![Some(file.clone()); scene.materials.len()];
         power::check(

@@ -239,11 +239,20 @@ pub fn lookat(ctx: &Context, op: Node) -> Result<LookAt, SceneError> {
             (None, None) => Err(ctx.invalid(op, "", &format!("needs `{key}`"))),
         }
     };
-    let l = LookAt {
-        origin: point("origin", None)?,
-        target: point("target", None)?,
-        up: point("up", Some(DVec3::Y))?,
+    let origin = point("origin", None)?;
+    let target = point("target", None)?;
+    // Without an up (or a zero one), Mitsuba's: the first axis of coordinate_system(dir).
+    let up = point("up", Some(DVec3::ZERO))?;
+    let up = if up == DVec3::ZERO {
+        let n = (target - origin).normalize_or_zero();
+        let sign = 1f64.copysign(n.z);
+        let a = -1.0 / (sign + n.z);
+        let b = n.x * n.y * a;
+        DVec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x)
+    } else {
+        up
     };
+    let l = LookAt { origin, target, up };
     let dir = l.target - l.origin;
     if dir.length_squared() == 0.0 || l.up.cross(dir).length_squared() == 0.0 {
         return Err(ctx.invalid(

@@ -3,8 +3,6 @@
 //! facing +z, cube [-1, 1]^3 facing out, disk of radius 1 facing +z, sphere of `radius` about
 //! `center`), then taken to the world by `to_world`.
 
-use std::path::Path;
-
 use glam::{DMat4, DVec3, Vec3};
 
 /// A triangle before its material: counter-clockwise corners and their shading normals.
@@ -100,33 +98,36 @@ pub fn sphere(center: DVec3, radius: f64, segments: u32) -> Local {
 }
 
 /// Local triangles to the world: positions by `m`, normals by its inverse transpose;
-/// `flip` reverses the winding (and the normals).
+/// `flip` reverses the winding and the given normals. A mirroring `m` (det < 0) has its
+/// winding undone, as Mitsuba does; triangles without normals get the final face normal.
 pub fn to_world(local: Local, m: DMat4, flip: bool) -> Vec<RawTriangle> {
     // The identity keeps every bit (a mesh irad exported reads back as it was).
     let identity = m == DMat4::IDENTITY;
     let normal_matrix = m.inverse().transpose();
-    // A reflection (det < 0) turns counter-clockwise into clockwise: undo it.
     let mirror = m.determinant() < 0.0;
     local
         .into_iter()
         .map(|(p, n)| {
             let mut positions = p.map(|v| m.transform_point3(v));
-            let face = (positions[1] - positions[0]).cross(positions[2] - positions[0]);
-            let mut normals = match n {
-                Some(n) if identity => n,
-                Some(n) => n.map(|v| normal_matrix.transform_vector3(v).normalize_or_zero()),
-                None => [face.normalize_or_zero(); 3],
-            };
+            let mut normals = n.map(|n| match identity {
+                true => n,
+                false => n.map(|v| normal_matrix.transform_vector3(v).normalize_or_zero()),
+            });
             if mirror != flip {
                 positions.swap(1, 2);
-                normals.swap(1, 2);
+                if let Some(n) = normals.as_mut() {
+                    n.swap(1, 2);
+                }
             }
             if flip {
-                normals = normals.map(|v| -v);
+                normals = normals.map(|n| n.map(|v| -v));
             }
+            let face = (positions[1] - positions[0])
+                .cross(positions[2] - positions[0])
+                .normalize_or_zero();
             RawTriangle {
                 positions: positions.map(|v| v.as_vec3()),
-                normals: normals.map(|v| v.as_vec3()),
+                normals: normals.unwrap_or([face; 3]).map(|v| v.as_vec3()),
             }
         })
         .collect()
@@ -135,24 +136,35 @@ pub fn to_world(local: Local, m: DMat4, flip: bool) -> Vec<RawTriangle> {
 /// A PLY element's property: name, type, and for a list the type of its count.
 type Property = (String, String, Option<String>);
 
-/// A PLY file's triangles (polygons fanned), with its vertex normals where it has them.
+/// A PLY file's triangles (polygons fanned), with its vertex normals; where it has none,
+/// area-weighted vertex normals over the faces that share each vertex (Mitsuba's, unless the
+/// shape asks for face normals).
 pub fn read_ply(bytes: &[u8]) -> Result<Local, String> {
-    let end = bytes
-        .windows(11)
-        .position(|w| w == b"end_header\n")
-        .or_else(|| {
-            bytes
-                .windows(12)
-                .position(|w| w == b"end_header\r\n")
-                .map(|p| p + 1)
-        })
-        .ok_or("no end_header line")?;
-    let header = std::str::from_utf8(&bytes[..end]).map_err(|_| "a header that is not text")?;
-    let body = &bytes[end + 11..];
+    // The header: lines from the start up to `end_header`.
+    let mut at = 0;
+    let mut lines = Vec::new();
+    loop {
+        let end = bytes[at..]
+            .iter()
+            .position(|&b| b == b'\n')
+            .ok_or("no end_header line")?;
+        let line = std::str::from_utf8(&bytes[at..at + end])
+            .map_err(|_| "a header line that is not text")?
+            .trim_end_matches('\r');
+        at += end + 1;
+        if line == "end_header" {
+            break;
+        }
+        lines.push(line);
+    }
+    if lines.first() != Some(&"ply") {
+        return Err("not a PLY file (its first line is not `ply`)".into());
+    }
+    let body = &bytes[at..];
     let mut format = "";
-    // Elements: (name, count, properties (name, type, list count type)).
+    // Elements: (name, count, properties).
     let mut elements: Vec<(String, usize, Vec<Property>)> = Vec::new();
-    for line in header.lines() {
+    for line in &lines {
         let w: Vec<&str> = line.split_whitespace().collect();
         match w.as_slice() {
             ["format", f, ..] => format = f,
@@ -176,7 +188,22 @@ pub fn read_ply(bytes: &[u8]) -> Result<Local, String> {
             _ => {}
         }
     }
-    let mut reader = Reader::new(body, format)?;
+    // Each element's items take at least a byte (a character in ASCII): a count past the
+    // body's size is a broken header, not an allocation to try.
+    for (name, count, props) in &elements {
+        if *count > 0 && (props.is_empty() || *count > body.len()) {
+            return Err(format!(
+                "element `{name}`: {count} items do not fit the file"
+            ));
+        }
+    }
+    let text;
+    let mut reader = if format == "ascii" {
+        text = std::str::from_utf8(body).map_err(|_| "an ASCII body that is not text")?;
+        Reader::ascii(text)
+    } else {
+        Reader::binary(body, format)?
+    };
     let mut positions: Vec<DVec3> = Vec::new();
     let mut normals: Vec<DVec3> = Vec::new();
     let mut faces: Vec<Vec<usize>> = Vec::new();
@@ -184,82 +211,109 @@ pub fn read_ply(bytes: &[u8]) -> Result<Local, String> {
         let index = |n: &str| props.iter().position(|p| p.0 == n);
         let (x, y, z) = (index("x"), index("y"), index("z"));
         let (nx, ny, nz) = (index("nx"), index("ny"), index("nz"));
+        let list = index("vertex_indices").or_else(|| index("vertex_index"));
+        let mut values: Vec<Vec<f64>> = vec![Vec::new(); props.len()];
         for _ in 0..*count {
-            let mut values: Vec<Vec<f64>> = Vec::with_capacity(props.len());
-            for (_, ty, list) in props {
+            for (k, (_, ty, list)) in props.iter().enumerate() {
+                values[k].clear();
                 match list {
                     Some(count_type) => {
-                        let n = reader.scalar(count_type)? as usize;
-                        values.push(
-                            (0..n)
-                                .map(|_| reader.scalar(ty))
-                                .collect::<Result<_, _>>()?,
-                        );
+                        let n = reader.scalar(count_type)?;
+                        if !(n >= 0.0 && n.fract() == 0.0 && (n as usize) <= body.len()) {
+                            return Err(format!("a list of {n} items"));
+                        }
+                        for _ in 0..n as usize {
+                            values[k].push(reader.scalar(ty)?);
+                        }
                     }
-                    None => values.push(vec![reader.scalar(ty)?]),
+                    None => values[k].push(reader.scalar(ty)?),
                 }
             }
+            let one = |k: usize| {
+                values[k]
+                    .first()
+                    .copied()
+                    .ok_or("an empty list as a number")
+            };
             match name.as_str() {
                 "vertex" => {
                     let (Some(x), Some(y), Some(z)) = (x, y, z) else {
                         return Err("vertices without x, y and z".into());
                     };
-                    positions.push(DVec3::new(values[x][0], values[y][0], values[z][0]));
+                    positions.push(DVec3::new(one(x)?, one(y)?, one(z)?));
                     if let (Some(a), Some(b), Some(c)) = (nx, ny, nz) {
-                        normals.push(DVec3::new(values[a][0], values[b][0], values[c][0]));
+                        normals.push(DVec3::new(one(a)?, one(b)?, one(c)?));
                     }
                 }
                 "face" => {
-                    let list = index("vertex_indices")
-                        .or_else(|| index("vertex_index"))
-                        .ok_or("faces without vertex_indices")?;
-                    faces.push(values[list].iter().map(|&v| v as usize).collect());
+                    let list = list.ok_or("faces without vertex_indices")?;
+                    let mut face = Vec::with_capacity(values[list].len());
+                    for &v in &values[list] {
+                        if !(v >= 0.0 && v.fract() == 0.0) {
+                            return Err(format!("a face names vertex {v}"));
+                        }
+                        face.push(v as usize);
+                    }
+                    faces.push(face);
                 }
                 _ => {}
             }
         }
     }
-    let mut out = Vec::with_capacity(faces.len());
+    let mut triangles: Vec<[usize; 3]> = Vec::with_capacity(faces.len());
     for face in faces {
         if let Some(&bad) = face.iter().find(|&&i| i >= positions.len()) {
             return Err(format!("a face names vertex {bad} of {}", positions.len()));
         }
         for k in 1..face.len().saturating_sub(1) {
-            let idx = [face[0], face[k], face[k + 1]];
-            let n = (normals.len() == positions.len()).then(|| idx.map(|i| normals[i]));
-            out.push((idx.map(|i| positions[i]), n));
+            triangles.push([face[0], face[k], face[k + 1]]);
         }
     }
-    Ok(out)
+    if normals.len() != positions.len() {
+        // Area-weighted vertex normals (the cross product's length is twice the area).
+        normals = vec![DVec3::ZERO; positions.len()];
+        for t in &triangles {
+            let p = t.map(|i| positions[i]);
+            let n = (p[1] - p[0]).cross(p[2] - p[0]);
+            for &i in t {
+                normals[i] += n;
+            }
+        }
+    }
+    Ok(triangles
+        .into_iter()
+        .map(|t| (t.map(|i| positions[i]), Some(t.map(|i| normals[i]))))
+        .collect())
 }
 
 /// Reads PLY scalars from the body in its format.
 struct Reader<'a> {
     bytes: &'a [u8],
     at: usize,
-    ascii: Option<std::vec::IntoIter<String>>,
+    ascii: Option<std::str::SplitWhitespace<'a>>,
     big_endian: bool,
 }
 
 impl<'a> Reader<'a> {
-    fn new(bytes: &'a [u8], format: &str) -> Result<Self, String> {
-        let ascii = match format {
-            "ascii" => Some(
-                String::from_utf8_lossy(bytes)
-                    .split_whitespace()
-                    .map(str::to_string)
-                    .collect::<Vec<_>>()
-                    .into_iter(),
-            ),
-            "binary_little_endian" | "binary_big_endian" => None,
-            other => return Err(format!("format `{other}`")),
-        };
-        Ok(Reader {
-            bytes,
+    fn ascii(text: &'a str) -> Self {
+        Reader {
+            bytes: &[],
             at: 0,
-            ascii,
-            big_endian: format == "binary_big_endian",
-        })
+            ascii: Some(text.split_whitespace()),
+            big_endian: false,
+        }
+    }
+
+    fn binary(bytes: &'a [u8], format: &str) -> Result<Self, String> {
+        match format {
+            "binary_little_endian" | "binary_big_endian" => Ok(Reader {
+                bytes,
+                at: 0,
+                ascii: None,
+                big_endian: format == "binary_big_endian",
+            }),
+            other => Err(format!("format `{other}`")),
+        }
     }
 
     fn take<const N: usize>(&mut self) -> Result<[u8; N], String> {
@@ -295,43 +349,21 @@ impl<'a> Reader<'a> {
     }
 }
 
-/// An OBJ file's triangles (tobj, polygons fanned) with its `vn` normals where every corner
-/// has one; its materials are not read (the shape's BSDF applies).
-pub fn read_obj(path: &Path) -> Result<Local, String> {
-    let options = tobj::LoadOptions {
-        triangulate: true,
-        single_index: false,
-        ..Default::default()
-    };
-    let (models, _) = tobj::load_obj(path, &options).map_err(|e| e.to_string())?;
-    let mut out = Vec::new();
-    for m in models {
-        let mesh = m.mesh;
-        let p = |i: u32| {
-            let i = 3 * i as usize;
-            DVec3::new(
-                mesh.positions[i] as f64,
-                mesh.positions[i + 1] as f64,
-                mesh.positions[i + 2] as f64,
+/// An OBJ file's triangles through irad's own OBJ reader (src/scene/obj.rs: every line
+/// checked, coordinates bounded), its `vn` normals where given (the face normal elsewhere:
+/// Mitsuba would smooth a mesh without normals); its materials are not read (the shape's BSDF
+/// applies).
+pub fn read_obj(display: &str, text: &str) -> Result<Local, crate::scene::SceneError> {
+    let mut no_mtl = |_: &str, _: &str| Ok((String::new(), Vec::new()));
+    let mesh = crate::scene::obj::load(display, text, &mut no_mtl, None)?;
+    Ok(mesh
+        .triangles
+        .into_iter()
+        .map(|t| {
+            (
+                t.positions.map(|p| p.as_dvec3()),
+                Some(t.normals.map(|n| n.as_dvec3())),
             )
-        };
-        let n = |i: u32| {
-            let i = 3 * i as usize;
-            DVec3::new(
-                mesh.normals[i] as f64,
-                mesh.normals[i + 1] as f64,
-                mesh.normals[i + 2] as f64,
-            )
-        };
-        let with_normals =
-            !mesh.normals.is_empty() && mesh.normal_indices.len() == mesh.indices.len();
-        for (k, t) in mesh.indices.chunks_exact(3).enumerate() {
-            let normals = with_normals.then(|| {
-                let ni = &mesh.normal_indices[3 * k..3 * k + 3];
-                [n(ni[0]), n(ni[1]), n(ni[2])]
-            });
-            out.push(([p(t[0]), p(t[1]), p(t[2])], normals));
-        }
-    }
-    Ok(out)
+        })
+        .collect())
 }
