@@ -730,7 +730,33 @@ fn load_str_reads_files_relative_to_base_dir() {
 fn check_scene(scene: &Scene) {
     let label = &scene.name;
     assert!(!scene.triangles.is_empty(), "{label}");
-    assert!(scene.warnings.is_empty(), "{label}: {:?}", scene.warnings);
+    // Sponza is a model from elsewhere, stored unchanged: its one degenerate face is dropped
+    // with a warning, the only one a committed scene may have.
+    let expected: &[&str] = match label.as_str() {
+        "sponza" => &["sponza.obj.gz: dropped 1 degenerate triangles"],
+        _ => &[],
+    };
+    assert_eq!(
+        scene.warnings.len(),
+        expected.len(),
+        "{label}: {:?}",
+        scene.warnings
+    );
+    for (w, e) in scene.warnings.iter().zip(expected) {
+        assert!(w.contains(e), "{label}: {w}");
+    }
+    if label == "sponza" {
+        // Dabrovic's 66,454 faces, a material for every group from sponza.mtl.
+        assert!(scene.triangles.len() > 66_000, "{}", scene.triangles.len());
+        let mut used: Vec<&str> = scene
+            .triangles
+            .iter()
+            .map(|t| scene.materials[t.material as usize].name.as_str())
+            .collect();
+        used.sort();
+        used.dedup();
+        assert_eq!(used, ["ceiling", "floor", "glass", "stone", "wood"]);
+    }
     assert!(scene.camera.width > 0 && scene.camera.height > 0, "{label}");
     assert_ne!(scene.content_hash, 0);
     for m in &scene.materials {
@@ -1366,24 +1392,4 @@ fn gzip_meshes_and_group_materials() {
     std::fs::write(s.path("g.obj.gz"), b"not gzip").unwrap();
     s.write("scene.toml", &toml("left = \"red\"\nright = \"blue\""));
     s.error(&["g.obj.gz", "not a readable gzip file"]);
-}
-
-/// Dabrovic's Sponza (scenes/sponza) loads: its 66k faces, a material for every group.
-#[test]
-fn sponza_loads_with_its_group_materials() {
-    let scene = scene::load(&scenes_dir().join("sponza/scene.toml")).unwrap();
-    assert!(scene.triangles.len() > 66_000, "{}", scene.triangles.len());
-    let mut used: Vec<&str> = scene
-        .triangles
-        .iter()
-        .map(|t| scene.materials[t.material as usize].name.as_str())
-        .collect();
-    used.sort();
-    used.dedup();
-    assert_eq!(used, ["ceiling", "floor", "glass", "stone", "wood"]);
-    eprintln!(
-        "sponza: {} triangles loaded in {:.0} ms",
-        scene.triangles.len(),
-        scene.load_ms
-    );
 }
