@@ -1,5 +1,4 @@
-//! The HTML viewer in a real browser (issue 47's acceptance; docs/DESIGN.md "Looking at
-//! results"): Debian's chromium, headless, driven over WebDriver (tests/common/webdriver.rs)
+//! The HTML viewer in a real browser (docs/DESIGN.md "Looking at results"): Debian's chromium, headless, driven over WebDriver (tests/common/webdriver.rs)
 //! through pages `irad compare --html` writes from EXRs with known values. Each view's
 //! screenshot is checked where its layout says each thing should be, the values the readout
 //! shows against the EXRs, and the console for errors. The screenshots stay in

@@ -8,30 +8,13 @@
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 
+use crate::common::shipped_scenes;
 use glam::Vec3;
 use irad::export::{write_mitsuba, ExportError, MitsubaExport};
 use irad::scene::{Light, Scene};
 
 fn repo() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
-
-/// Every scenes/**/scene.toml, sorted.
-fn shipped_scenes() -> Vec<PathBuf> {
-    fn walk(dir: &Path, found: &mut Vec<PathBuf>) {
-        for entry in std::fs::read_dir(dir).unwrap() {
-            let path = entry.unwrap().path();
-            if path.is_dir() {
-                walk(&path, found);
-            } else if path.file_name().is_some_and(|n| n == "scene.toml") {
-                found.push(path);
-            }
-        }
-    }
-    let mut found = Vec::new();
-    walk(&repo().join("scenes"), &mut found);
-    found.sort();
-    found
 }
 
 fn temp_dir(name: &str) -> PathBuf {

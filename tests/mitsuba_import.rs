@@ -6,9 +6,10 @@
 //! `irad render scene.xml` renders.
 
 use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::Command;
 
+use crate::common::shipped_scenes;
 use glam::Vec3;
 use irad::export::write_mitsuba;
 use irad::scene::{Light, Scene, SceneError};
@@ -22,24 +23,6 @@ fn temp_dir(name: &str) -> PathBuf {
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     dir
-}
-
-/// Every scenes/**/scene.toml, sorted.
-fn shipped_scenes() -> Vec<PathBuf> {
-    fn walk(dir: &Path, found: &mut Vec<PathBuf>) {
-        for entry in std::fs::read_dir(dir).unwrap() {
-            let path = entry.unwrap().path();
-            if path.is_dir() {
-                walk(&path, found);
-            } else if path.file_name().is_some_and(|n| n == "scene.toml") {
-                found.push(path);
-            }
-        }
-    }
-    let mut found = Vec::new();
-    walk(&repo().join("scenes"), &mut found);
-    found.sort();
-    found
 }
 
 /// A triangle's bits, for comparing sets of triangles.

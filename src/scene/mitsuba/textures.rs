@@ -1,4 +1,4 @@
-//! Mitsuba `bitmap` textures, until irad renders textures (issue 48 item 1): each stands in
+//! Mitsuba `bitmap` textures, until irad renders textures (docs/scenes.md "Mitsuba scenes"): each stands in
 //! as its mean linear colour, with a warning. PNG (8 or 16 bits, sRGB-decoded unless `raw`)
 //! and EXR are read; other formats are refused by name.
 
