@@ -1222,6 +1222,7 @@ fn brdf_and_cosine_samples_follow_their_pdf() {
                 ks: Vec3::splat(ks),
                 ns,
                 ke: Vec3::ZERO,
+                albedo_texture: None,
             };
             let wo = at(angle);
             let mut cmd = Commands::new(ctx).unwrap();

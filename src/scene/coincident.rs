@@ -78,6 +78,7 @@ mod tests {
             positions: p.map(Vec3::from),
             normals: [Vec3::Y; 3],
             material,
+            uvs: [glam::Vec2::ZERO; 3],
         }
     }
 
@@ -88,6 +89,7 @@ mod tests {
             ks: Vec3::ZERO,
             ns: 0.0,
             ke: Vec3::splat(ke),
+            albedo_texture: None,
         }
     }
 

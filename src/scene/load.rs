@@ -208,6 +208,7 @@ fn build(file: &str, toml_text: &str, files: &Files) -> Result<Scene, SceneError
 
     let mut warnings = Vec::new();
     let mut materials: Vec<Material> = Vec::new();
+    let mut textures = Vec::new();
     // Each material's MTL file, for messages (None: the default material).
     let mut material_files: Vec<Option<String>> = Vec::new();
     let mut default_material = None;
@@ -260,7 +261,12 @@ fn build(file: &str, toml_text: &str, files: &Files) -> Result<Scene, SceneError
         }
         warnings.extend(mesh.warnings);
         let offset = materials.len() as u32;
-        materials.extend(mesh.materials);
+        let texture_offset = textures.len() as u32;
+        textures.extend(mesh.textures);
+        materials.extend(mesh.materials.into_iter().map(|m| Material {
+            albedo_texture: m.albedo_texture.map(|t| t + texture_offset),
+            ..m
+        }));
         material_files.extend(mesh.material_files.into_iter().map(Some));
         let mut triangles = Vec::with_capacity(mesh.triangles.len());
         for t in mesh.triangles {
@@ -273,6 +279,7 @@ fn build(file: &str, toml_text: &str, files: &Files) -> Result<Scene, SceneError
                         ks: Vec3::ZERO,
                         ns: 0.0,
                         ke: Vec3::ZERO,
+                        albedo_texture: None,
                     });
                     material_files.push(None);
                     materials.len() as u32 - 1
@@ -282,6 +289,7 @@ fn build(file: &str, toml_text: &str, files: &Files) -> Result<Scene, SceneError
                 positions: t.positions,
                 normals: t.normals,
                 material,
+                uvs: t.uvs,
             });
         }
         meshes.push((obj_file, triangles));
@@ -336,6 +344,7 @@ fn build(file: &str, toml_text: &str, files: &Files) -> Result<Scene, SceneError
         triangles,
         materials,
         lights,
+        textures,
         environment,
         environment_sequence,
         luminaires,

@@ -11,7 +11,7 @@
 //! geometric normal; triangles of area <= `DEGENERATE_AREA` x their longest edge squared are
 //! dropped with a warning; Kd + Ks may exceed 1 by at most 1e-5 per channel (decimal rounding).
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use std::path::PathBuf;
 
 /// A pinhole camera. Pixel (x, y) with subpixel offset (sx, sy) in [0, 1)^2 looks along
@@ -40,6 +40,9 @@ pub struct Material {
     pub ns: f32,
     /// Emitted radiance (MTL `Ke`), one-sided, on the side of the geometric normal.
     pub ke: Vec3,
+    /// An albedo texture (`Scene::textures` index; MTL `map_Kd`) that multiplies `kd` at
+    /// each point (docs/DESIGN.md "Textures").
+    pub albedo_texture: Option<u32>,
 }
 
 impl Material {
@@ -56,6 +59,9 @@ pub struct Triangle {
     pub positions: [Vec3; 3],
     pub normals: [Vec3; 3],
     pub material: u32,
+    /// Texture coordinates per corner, OBJ's convention: (0, 0) the image's bottom-left
+    /// corner, v up. Zero where the mesh has none.
+    pub uvs: [Vec2; 3],
 }
 
 impl Triangle {
@@ -90,6 +96,30 @@ pub struct Environment {
     pub source: PathBuf,
 }
 
+/// How a texture repeats outside [0, 1] on one axis.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Wrap {
+    Repeat,
+    Mirror,
+    /// The edge texel's value.
+    Clamp,
+}
+
+/// An albedo texture: linear RGB (sRGB-decoded from 8-bit files), each channel already rounded
+/// to the half float the GPU stores (so a CPU mirror reads the values the kernels read).
+/// Texel (i, j) is `texels[j * width + i]`, row 0 at the top of the image; sampled bilinearly
+/// with texel centres at half-integers (docs/DESIGN.md "Textures").
+#[derive(Clone, Debug, PartialEq)]
+pub struct Texture {
+    pub width: u32,
+    pub height: u32,
+    pub texels: Vec<Vec3>,
+    /// Across (u) and down (v).
+    pub wrap: [Wrap; 2],
+    /// The image file, for messages and reports.
+    pub source: PathBuf,
+}
+
 /// A stability-suite scene's `[failure]` table: the methods expected to fail on it (names as
 /// `irad render --method` spells them; the scene loader does not check them), why, and the
 /// paper figure the scene reproduces. Every field is non-empty.
@@ -118,6 +148,8 @@ pub struct Scene {
     /// A dynamic map's frames (an `exr` glob or a procedural sky), all of one size; frame f
     /// of a render shows map f mod len. Empty for a still map.
     pub environment_sequence: Vec<Environment>,
+    /// Albedo textures, which materials name by index.
+    pub textures: Vec<Texture>,
     /// Light-field luminaires placed in the scene.
     pub luminaires: Vec<luminaire::PlacedLuminaire>,
     /// The scene's `[failure]` table, for scenes under scenes/failure/; None elsewhere.
@@ -149,6 +181,7 @@ mod mtl;
 mod obj;
 mod power;
 pub mod sky;
+pub mod texture;
 pub(crate) mod toml_arrays;
 
 pub use camera::MAX_RESOLUTION;

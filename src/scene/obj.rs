@@ -12,7 +12,8 @@ use std::path::Path;
 use glam::{DVec3, Vec3};
 
 use super::file::fmt3;
-use super::{mtl, Material, SceneError};
+use super::{mtl, texture, Material, SceneError, Texture, Wrap};
+use glam::Vec2;
 
 /// A triangle as the OBJ gives it; `material` indexes `ObjMesh::materials`, None when the face
 /// has no (known) material.
@@ -21,6 +22,8 @@ pub struct ObjTriangle {
     pub positions: [Vec3; 3],
     pub normals: [Vec3; 3],
     pub material: Option<u32>,
+    /// `vt` per corner; zero where the face has none.
+    pub uvs: [Vec2; 3],
 }
 
 #[derive(Debug)]
@@ -30,8 +33,11 @@ pub struct ObjMesh {
     pub materials: Vec<Material>,
     /// The MTL file (as messages name it) of each material.
     pub material_files: Vec<String>,
-    /// Bytes of each MTL file in `mtllib` order (for the content hash).
+    /// Bytes of each MTL file in `mtllib` order, then of each texture (for the content hash).
     pub mtl_bytes: Vec<Vec<u8>>,
+    /// The albedo textures the materials' `albedo_texture` index, one per distinct file and
+    /// wrap.
+    pub textures: Vec<Texture>,
     pub warnings: Vec<String>,
 }
 
@@ -65,12 +71,56 @@ pub fn load(
     let mut material_files = Vec::new();
     let mut mtl_bytes = Vec::new();
     let mut tobj_libraries = Vec::new();
+    let mut textures: Vec<Texture> = Vec::new();
+    let mut texture_bytes = Vec::new();
+    let mut texture_index: std::collections::HashMap<(String, [Wrap; 2]), u32> =
+        Default::default();
     for (line, name) in &checked.mtllibs {
         let (mtl_file, bytes) = read_mtl(
             name,
             &format!("referenced by {file} line {line}: mtllib {name}"),
         )?;
-        let parsed = mtl::parse(&mtl_file, &String::from_utf8_lossy(&bytes))?;
+        let mtl::MtlFile {
+            materials: mut parsed,
+            albedo_maps,
+        } = mtl::parse(&mtl_file, &String::from_utf8_lossy(&bytes))?;
+        let mtl_dir = Path::new(name).parent().unwrap_or(Path::new(""));
+        for map in albedo_maps {
+            let m = &mut parsed[map.material];
+            let field = format!("material `{}` map_Kd (line {})", m.name, map.line);
+            if !map.ignored.is_empty() {
+                warnings.push(format!(
+                    "{mtl_file}: {field}: ignored {} (irad applies -clamp only)",
+                    map.ignored.join(", ")
+                ));
+            }
+            let rel = mtl_dir.join(&map.path);
+            let rel_name = rel.to_string_lossy().into_owned();
+            let wrap = [map.wrap; 2];
+            let index = match texture_index.get(&(rel_name.clone(), wrap)) {
+                Some(&k) => k,
+                None => {
+                    let (texture_file, image) = read_mtl(
+                        &rel_name,
+                        &format!("referenced by {mtl_file} line {}: map_Kd {}", map.line, map.path),
+                    )?;
+                    let t = texture::decode(&image, Path::new(&texture_file), wrap).map_err(
+                        |problem| SceneError::Invalid {
+                            file: mtl_file.clone(),
+                            field: field.clone(),
+                            value: texture_file.clone(),
+                            problem,
+                        },
+                    )?;
+                    texture_bytes.push(image);
+                    textures.push(t);
+                    let k = textures.len() as u32 - 1;
+                    texture_index.insert((rel_name, wrap), k);
+                    k
+                }
+            };
+            m.albedo_texture = Some(index);
+        }
         let mut names = Vec::new();
         let mut library = Vec::new();
         for (i, m) in parsed.iter().enumerate() {
@@ -124,6 +174,7 @@ pub fn load(
 
     let mut triangles = Vec::new();
     let mut without_material = 0usize;
+    let mut without_uvs = 0usize;
     for model in &models {
         let mesh = &model.mesh;
         let material = mesh
@@ -131,6 +182,21 @@ pub fn load(
             .filter(|&id| id < materials.len())
             .map(|id| id as u32);
         let has_normals = mesh.normal_indices.len() == mesh.indices.len();
+        let has_uvs = mesh.texcoord_indices.len() == mesh.indices.len();
+        let uv = |k: usize| {
+            if !has_uvs {
+                return Vec2::ZERO;
+            }
+            let i = mesh.texcoord_indices[k] as usize * 2;
+            mesh.texcoords
+                .get(i..i + 2)
+                .map_or(Vec2::ZERO, Vec2::from_slice)
+        };
+        let textured = material
+            .is_some_and(|m| materials[m as usize].albedo_texture.is_some());
+        if textured && !has_uvs {
+            without_uvs += mesh.indices.len() / 3;
+        }
         let position = |k: usize| {
             let i = mesh.indices[k] as usize * 3;
             Vec3::from_slice(&mesh.positions[i..i + 3])
@@ -170,6 +236,7 @@ pub fn load(
                 positions,
                 normals,
                 material,
+                uvs: [uv(3 * t), uv(3 * t + 1), uv(3 * t + 2)],
             });
         }
     }
@@ -179,11 +246,19 @@ pub fn load(
              material of its MTL files); they get the default material (Kd 0.5)"
         ));
     }
+    if without_uvs > 0 {
+        warnings.push(format!(
+            "{file}: {without_uvs} triangles of textured materials have no texture coordinates \
+             (no vt); they read the texture at (0, 0)"
+        ));
+    }
+    mtl_bytes.extend(texture_bytes);
     Ok(ObjMesh {
         triangles,
         materials,
         material_files,
         mtl_bytes,
+        textures,
         warnings,
     })
 }

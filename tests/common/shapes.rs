@@ -12,6 +12,7 @@ pub fn material(name: &str, kd: f32, ks: f32, ns: f32, ke: f32) -> Material {
         ks: Vec3::splat(ks),
         ns,
         ke: Vec3::splat(ke),
+        albedo_texture: None,
     }
 }
 
@@ -23,6 +24,7 @@ pub fn flat(positions: [Vec3; 3], material: u32) -> Triangle {
         positions,
         normals: [n; 3],
         material,
+        uvs: [glam::Vec2::ZERO; 3],
     }
 }
 
@@ -111,6 +113,7 @@ pub fn scene(
         triangles,
         materials,
         lights: Vec::new(),
+        textures: Vec::new(),
         environment: None,
         environment_sequence: vec![],
         luminaires: vec![],

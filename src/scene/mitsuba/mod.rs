@@ -530,6 +530,7 @@ impl Builder {
             ks: fit.ks,
             ns: fit.ns,
             ke,
+            albedo_texture: None,
         });
         self.material_index.insert(key, index);
         Ok(index)
@@ -727,6 +728,7 @@ impl Builder {
             triangles: self.triangles,
             materials: self.materials,
             lights: self.lights,
+            textures: Vec::new(),
             environment,
             environment_sequence: Vec::new(),
             luminaires: Vec::new(),
@@ -768,5 +770,6 @@ fn triangle(t: RawTriangle, material: u32) -> Triangle {
             }
         }),
         material,
+        uvs: [glam::Vec2::ZERO; 3],
     }
 }
