@@ -39,5 +39,6 @@ mod setting_maxima;
 mod shaders;
 mod state_across_frames;
 mod tables;
+mod textures;
 mod timing;
 mod vpl_reuse;

@@ -467,6 +467,7 @@ fn kernels_specialized_to_a_scene_give_the_general_kernels_bits() {
                 environment,
                 delta_lights,
                 glossy,
+                textures: false,
             };
             assert_eq!(gpu.features, features, "{name}");
             let specialized = reference

@@ -78,7 +78,7 @@ void main() {
     if (gbuffer_surface(g, wo, side, n)) {
         LightEntry e = light_entries[l];
         vec3 x = offset_origin(g.position.xyz, side);
-        Material m = materials[floatBitsToUint(g.shading_normal.w)];
+        Material m = gbuffer_material(g);
         value = luminance(direct_from(e, l, s, x, n, side, wo, m));
         // One bounce further: x2 by cosine sampling, weighted by Kd(x1).
         vec2 u = vec2(random(params.seed, s, 0x6c636466u, 0x10000u),
@@ -91,7 +91,7 @@ void main() {
             vec3 ns2 = shading_normal(hit.triangle, hit.barycentrics);
             vec3 n2 = dot(ns2, side2) >= 0.0 ? ns2 : -ns2;
             vec3 x2 = offset_origin(x + hit.t * w, side2);
-            Material m2 = materials[triangle_material(hit.triangle)];
+            Material m2 = surface_material(hit.triangle, x + hit.t * w);
             value += luminance(m.kd.rgb) * luminance(direct_from(e, l, s, x2, n2, side2, -w, m2));
         }
     }

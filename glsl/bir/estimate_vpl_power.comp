@@ -57,7 +57,7 @@ void main() {
         vec3 wo, side, n;
         if (!gbuffer_surface(g, wo, side, n)) continue;
         vec3 x = g.position.xyz;
-        Material mat = materials[floatBitsToUint(g.shading_normal.w)];
+        Material mat = gbuffer_material(g);
         sum += luminance(shade_from_vpl(v, x, offset_origin(x, side), n, side, wo, mat, 0.0));
     }
     float w = sum * params.scale * float(params.pixels) / float(max(params.samples, 1u));

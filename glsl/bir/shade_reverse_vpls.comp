@@ -90,7 +90,8 @@ void main() {
     vec3 x = v.position.xyz;      // already off the surface
     vec3 n = v.normal.xyz;
     vec3 side = v.incident.xyz;
-    Material m = materials[floatBitsToUint(v.normal.w)];
+    uint mat = floatBitsToUint(v.normal.w);
+    Material m = textured(materials[mat], mat, floatBitsToUint(v.incident.w), x);
     vec3 kd = m.kd.rgb;
     // Diffuse approximation: the Lambert part alone.
     m.kd.w = 0.0;
@@ -124,7 +125,7 @@ void main() {
             vec3 nsd = shading_normal(hit.triangle, hit.barycentrics);
             vec3 nd = dot(nsd, sided) >= 0.0 ? nsd : -nsd;
             vec3 od = offset_origin(xd, sided);
-            Material md = materials[triangle_material(hit.triangle)];
+            Material md = surface_material(hit.triangle, xd);
             if (next_events) {
                 incoming += beta * next_event(od, nd, sided, wod, md, k, dim + 2u + 8u * d);
             }

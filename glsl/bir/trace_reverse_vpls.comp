@@ -87,6 +87,6 @@ void main() {
     v.position = vec4(origin2, uintBitsToFloat(VPL_AREA));
     v.normal = vec4(n2, uintBitsToFloat(triangle_material(hit.triangle)));
     v.power = vec4(0.0, 0.0, 0.0, density);
-    v.incident = vec4(side2, 0.0);
+    v.incident = vec4(side2, uintBitsToFloat(hit.triangle));
     reverse_vpls[k] = v;
 }

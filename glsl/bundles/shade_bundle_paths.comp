@@ -130,7 +130,7 @@ vec3 two_bounce_compensation(uint index, uint k, uint base, vec3 x2, vec3 n2, ve
     if (!(g > b)) return vec3(0.0);
     vec3 weight = bsdf_eval(m2, n2, wo2, wi) * (cos_i / pdf) * (1.0 - b / g);
     if (!any_positive(weight)) return vec3(0.0);
-    Material my = materials[triangle_material(hit.triangle)];
+    Material my = surface_material(hit.triangle, y);
     vec3 origin_y = offset_origin(y, side_y);
     vec3 direct = vec3(0.0);
     // Do-whiles (slots and count are at least 1): gallivm tests a loop's lanes at the end of
@@ -166,7 +166,7 @@ void main() {
     if (!gbuffer_surface(g, wo3, side3, n3)) return;
     vec3 x3 = g.position.xyz;
     vec3 origin3 = offset_origin(x3, side3);
-    Material m3 = materials[floatBitsToUint(g.shading_normal.w)];
+    Material m3 = gbuffer_material(g);
     float m_prime = params.suppression_parameter;
 
     vec3 sum = vec3(0.0);
@@ -208,7 +208,7 @@ void main() {
                                                     uintBitsToFloat(h.triangle.z)));
                 side2 = dot(-d, ng2) >= 0.0 ? ng2 : -ng2;
                 n2 = dot(ns2, side2) >= 0.0 ? ns2 : -ns2;
-                m2 = materials[triangle_material(tri)];
+                m2 = surface_material(tri, x2);
                 origin2 = offset_origin(x2, side2);
                 cos2g_3 = -dot(side2, d);  // at x2, toward x3
             }
@@ -232,7 +232,8 @@ void main() {
             vec3 n1 = lv.normal.xyz;
             vec3 side1 = lv.side.xyz;
             vec3 w10 = normalize(x0 - x1);
-            Material m1 = materials[floatBitsToUint(lv.normal.w)];
+            // Triangle 0's material where the ray from x0 missed (unused: has_x1 is false).
+            Material m1 = surface_material(has_x1 ? floatBitsToUint(lv.normal.w) : 0u, x1);
 
             // One bounce through the VPL x1.
             if (has_x1 && params.strategy != STRATEGY_BUNDLE) {

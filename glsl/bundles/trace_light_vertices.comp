@@ -92,7 +92,7 @@ void main() {
         vec3 side = dot(-w, ng) >= 0.0 ? ng : -ng;
         vec3 n = dot(ns, side) >= 0.0 ? ns : -ns;
         lv.position = vec4(x1, 1.0);
-        lv.normal = vec4(n, uintBitsToFloat(triangle_material(hit.triangle)));
+        lv.normal = vec4(n, uintBitsToFloat(hit.triangle));
         lv.side = vec4(side, pe * dot(side, -w) / (hit.t * hit.t));
     }
     light_vertices[slot] = lv;

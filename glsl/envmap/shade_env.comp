@@ -264,7 +264,7 @@ void main() {
     GBufferTexel g = gbuffer[index];
     Shading p;
     if (!gbuffer_surface(g, p.wo, p.side, p.n)) return;
-    p.m = materials[floatBitsToUint(g.shading_normal.w)];
+    p.m = gbuffer_material(g);
     p.origin = offset_origin(g.position.xyz, p.side);
     p.pixel = index;
     float ns = params.spp;

@@ -17,7 +17,7 @@ struct LightVertex {
     vec4 power;     // rgb: I(w01) / (P_l p_e(w01)); w: P_l, the light's selection probability
                     // (1 when every light has a vertex; 0: no light, the slot holds w_k only)
     vec4 position;  // x1; w: 1 when the ray from x0 hit a surface, else 0
-    vec4 normal;    // shading normal at x1 on x0's side; w: material (uint bits)
+    vec4 normal;    // shading normal at x1 on x0's side; w: x1's GPU triangle (uint bits)
     vec4 side;      // geometric normal at x1 on x0's side; w: p_e(w01) |cos| / d01^2, the area
                     // density of x1 (without P_l)
     vec4 bundle;    // w_k, the iteration's bundle direction; w: p_r(w_k) = p_r(-w_k)

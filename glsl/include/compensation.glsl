@@ -13,7 +13,7 @@
 struct CompensationVertex {
     vec4 position;  // y; w: the pixel it adds into (uint bits)
     vec4 normal;    // shading normal at y on the side of wo; w: material (uint bits)
-    vec4 side;      // geometric normal at y on the side of wo
+    vec4 side;      // geometric normal at y on the side of wo; w: its GPU triangle (uint bits)
     vec4 wo;        // unit, toward the previous vertex
     vec4 beta;      // rgb: throughput from the pixel, the (1 - b / G) factors included
 };

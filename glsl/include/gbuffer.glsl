@@ -3,6 +3,8 @@
 #ifndef GBUFFER_GLSL
 #define GBUFFER_GLSL
 
+#include "scene.glsl"
+
 struct GBufferTexel {
     vec4 position;         // hit point; w: hit distance, negative when the ray missed
     vec4 shading_normal;   // unit, interpolated, as stored (not flipped); w: material (uint bits)
@@ -26,6 +28,14 @@ bool gbuffer_surface(GBufferTexel g, out vec3 wo, out vec3 side, out vec3 n) {
     vec3 ns = g.shading_normal.xyz;
     n = dot(ns, side) >= 0.0 ? ns : -ns;
     return g.position.w >= 0.0;
+}
+
+// The texel's material, textured at its point (material 0 where the camera ray missed).
+Material gbuffer_material(GBufferTexel g) {
+    bool hit = g.position.w >= 0.0;
+    uint material = hit ? floatBitsToUint(g.shading_normal.w) : 0u;
+    uint triangle = hit ? floatBitsToUint(g.geometric_normal.w) : 0u;
+    return textured(materials[material], material, triangle, g.position.xyz);
 }
 
 #endif

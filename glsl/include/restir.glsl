@@ -82,7 +82,8 @@ struct RestirPoint {
     vec3 side;  // geometric normal, viewer's side
     vec3 wo;    // toward the camera
     uint material;
-    Material m; // loaded once (gallivm runs a storage-buffer load as a loop over the lanes)
+    Material m; // loaded once (gallivm runs a storage-buffer load as a loop over the lanes);
+                // untextured: the target functions' (shade_restir.comp textures it)
     bool valid;
     bool previous; // a surface of the previous frame, lit as the previous frame was
 };

@@ -1,7 +1,8 @@
 // The scene as every method's kernels see it (src/scene/gpu.rs uploads it): shading data per
 // triangle in BVH order, materials, analytic lights, the light-selection table, emissive
-// triangles, the environment map and its CDF, and the scene constants. Bindings 2-9
-// (bvh.glsl holds 0, 1 and 63); kernels number their own from 10.
+// triangles, the environment map and its CDF, the scene constants, and the albedo textures
+// (texture.glsl). Bindings 2-9 and 60-62 (bvh.glsl holds 0, 1 and 63); kernels number their
+// own from 10.
 #ifndef SCENE_GLSL
 #define SCENE_GLSL
 
@@ -80,6 +81,8 @@ layout(constant_id = 2) const bool SCENE_HAS_GLOSSY = true;        // any Phong 
 uint triangle_material(uint triangle) {
     return floatBitsToUint(shading_triangles[triangle].n0.w);
 }
+
+#include "texture.glsl"
 
 // The interpolated shading normal of t at barycentrics uv.
 vec3 interpolated_normal(ShadingTriangle t, vec2 uv) {

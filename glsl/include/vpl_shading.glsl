@@ -27,7 +27,8 @@ vec3 shade_from_vpl(Vpl v, vec3 x, vec3 origin, vec3 n, vec3 side, vec3 wo, Mate
     if (kind == VPL_SURFACE) {
         cos_v = dot(v.normal.xyz, -w);
         if (cos_v <= 0.0) return vec3(0.0);
-        Material mv = materials[floatBitsToUint(v.normal.w)];
+        uint mat = floatBitsToUint(v.normal.w);
+        Material mv = textured(materials[mat], mat, floatBitsToUint(v.power.w), v.position.xyz);
         emitted = v.power.rgb * bsdf_eval(mv, v.normal.xyz, v.incident.xyz, -w);
         target = offset_origin(target, v.normal.xyz);
     } else if (kind == VPL_AREA) {

@@ -45,7 +45,7 @@ void main() {
     bool shading = gbuffer_surface(g, wo, side, n) && inside;
     vec3 x = g.position.xyz;
     vec3 origin = offset_origin(x, side);
-    Material m = materials[shading ? floatBitsToUint(g.shading_normal.w) : 0u];
+    Material m = gbuffer_material(g);
 
     uint k = max(params.interleave, 1u);
     uint subsets = k * k;

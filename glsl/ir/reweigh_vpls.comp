@@ -184,14 +184,14 @@ void main() {
     // The BSDF at x1 toward x2 for the vertices past it, as walked and now.
     vec3 bsdf_ratio = vec3(1.0);
     uint mat1 = floatBitsToUint(x1.normal.w);
-    bool glossy = SCENE_HAS_GLOSSY && max(max(materials[mat1].ks.r, materials[mat1].ks.g),
-                                          materials[mat1].ks.b) > 0.0;
+    Material m1 = textured(materials[mat1], mat1, floatBitsToUint(x1.power.w), p1);
+    bool glossy = SCENE_HAS_GLOSSY && max(max(m1.ks.r, m1.ks.g), m1.ks.b) > 0.0;
     if (glossy && params.vertex_count > 2u && slot_exists(schedule[2], path)) {
         Vpl x2 = base_vpls[schedule[2].y + path];
         if (vpl_kind(x2) != VPL_NONE && ratio > 0.0) {
             vec3 wi = normalize(x2.position.xyz - p1);
-            vec3 f_walked = bsdf_eval(materials[mat1], n1, x1.incident.xyz, wi);
-            vec3 f_now3 = bsdf_eval(materials[mat1], n1, -dir_now, wi);
+            vec3 f_walked = bsdf_eval(m1, n1, x1.incident.xyz, wi);
+            vec3 f_now3 = bsdf_eval(m1, n1, -dir_now, wi);
             bsdf_ratio = vec3(f_walked.r > 0.0 ? f_now3.r / f_walked.r : 0.0,
                               f_walked.g > 0.0 ? f_now3.g / f_walked.g : 0.0,
                               f_walked.b > 0.0 ? f_now3.b / f_walked.b : 0.0);

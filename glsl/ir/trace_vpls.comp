@@ -164,7 +164,7 @@ void main() {
         write_vpl(vertex, path, s);
 
         // Scatter on: the BSDF at the vertex, sampled with this vertex's Halton numbers.
-        Material m = materials[mat];
+        Material m = textured(materials[mat], mat, hit.triangle, p);
         uint dim = 4u + 3u * (vertex - 1u);
         vec3 u = vec3(walk_number(dim, path), walk_number(dim + 1u, path),
                       walk_number(dim + 2u, path));

@@ -150,7 +150,7 @@ void main() {
     GBufferTexel g = gbuffer[index];
     vec3 wo, side, n;
     if (!gbuffer_surface(g, wo, side, n)) return;
-    Material mat = materials[floatBitsToUint(g.shading_normal.w)];
+    Material mat = gbuffer_material(g);
     vec3 pw = g.position.xyz;
     vec3 origin = offset_origin(pw, side);
     vec3 p = to_luminaire(pw);

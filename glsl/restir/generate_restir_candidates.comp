@@ -56,7 +56,7 @@ layout(push_constant) uniform CandidateParams {
 
 // How light candidates are drawn (src/methods/restir/kernels.rs specializes it): through
 // the light BVH (true) or by power (false).
-layout(constant_id = 3) const bool LIGHT_BVH = true;
+layout(constant_id = 4) const bool LIGHT_BVH = true;
 
 const uint LIGHT_DIMENSIONS = 16u;
 // After the most light candidates (src/methods/restir/mod.rs's MAX_CANDIDATES)...

@@ -33,6 +33,11 @@ void main() {
         return;
     }
     if (!(r.weights.x > 0.0)) return;
+    // The integrand with the textured albedo; every target function (restir.glsl) takes the
+    // material's untextured Kd, which is positive wherever the textured one is, so the
+    // estimator stays unbiased, and a surface stored by the previous frame needs no texture
+    // coordinates.
+    s.m = gbuffer_material(gbuffer[index]);
     vec3 wi;
     float dist, to_area;
     vec3 c = restir_contribution(s, floatBitsToUint(r.sample_point.w), r.sample_point.xyz, wi,

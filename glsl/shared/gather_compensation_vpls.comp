@@ -46,7 +46,8 @@ void main() {
     vec3 side = v.side.xyz;
     vec3 wo = v.wo.xyz;
     vec3 origin = offset_origin(y, side);
-    Material m = materials[floatBitsToUint(v.normal.w)];
+    uint mat = live ? floatBitsToUint(v.normal.w) : 0u;
+    Material m = textured(materials[mat], mat, live ? floatBitsToUint(v.side.w) : 0u, y);
 
     vec3 sum = vec3(0.0);
     for (uint base = params.vpl_begin; base < params.vpl_end; base += CHUNK) {

@@ -64,7 +64,7 @@ void main() {
         accumulate_radiance(index, env_radiance(dir));
         return;
     }
-    Material m = materials[floatBitsToUint(g.shading_normal.w)];
+    Material m = gbuffer_material(g);
     vec3 ng = g.geometric_normal.xyz;
     if (m.ke.w > 0.0 && dot(wo, ng) > 0.0) L += m.ke.rgb;
     vec3 p = g.position.xyz;

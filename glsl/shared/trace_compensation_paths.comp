@@ -43,13 +43,14 @@ float max_component(vec3 v) {
 void main() {
     uint i = gl_GlobalInvocationID.x;
     vec3 x, n, side, wo, beta;
-    uint pixel, mat;
+    uint pixel, mat, tri;
     if (params.level <= 1u) {
         if (i >= scene.size.x * scene.size.y) return;
         GBufferTexel g = gbuffer[i];
         if (!gbuffer_surface(g, wo, side, n)) return;
         x = g.position.xyz;
         mat = floatBitsToUint(g.shading_normal.w);
+        tri = floatBitsToUint(g.geometric_normal.w);
         beta = vec3(1.0);
         pixel = i;
     } else {
@@ -59,11 +60,12 @@ void main() {
         pixel = floatBitsToUint(v.position.w);
         n = v.normal.xyz;
         mat = floatBitsToUint(v.normal.w);
+        tri = floatBitsToUint(v.side.w);
         side = v.side.xyz;
         wo = v.wo.xyz;
         beta = v.beta.rgb;
     }
-    Material m = materials[mat];
+    Material m = textured(materials[mat], mat, tri, x);
     uint dim = 8u * params.level;
     vec3 u = vec3(random(params.seed, pixel, params.frame, dim),
                   random(params.seed, pixel, params.frame, dim + 1u),
@@ -99,7 +101,7 @@ void main() {
 
     // Direct light at y by next-event estimation.
     uint mat_y = triangle_material(hit.triangle);
-    Material my = materials[mat_y];
+    Material my = textured(materials[mat_y], mat_y, hit.triangle, y);
     vec3 origin_y = offset_origin(y, side_y);
     LightSample ls;
     uint r_select = random_u31(params.seed, pixel, params.frame, dim + 3u);
@@ -130,7 +132,7 @@ void main() {
     CompensationVertex v;
     v.position = vec4(y, uintBitsToFloat(pixel));
     v.normal = vec4(n_y, uintBitsToFloat(mat_y));
-    v.side = vec4(side_y, 0.0);
+    v.side = vec4(side_y, uintBitsToFloat(hit.triangle));
     v.wo = vec4(wo_y, 0.0);
     v.beta = vec4(beta, 0.0);
     vertices_out[slot] = v;

@@ -70,10 +70,10 @@ layout(push_constant) uniform PathParams {
 // Where paths start (src/methods/paths.rs specializes it): false, the G-buffer's hit; true,
 // params.camera_samples camera rays traced here. A constant, not a push constant: gallivm
 // would run the other mode's copy of the path loop too, masked (scene.glsl says why).
-layout(constant_id = 3) const bool CAMERA_STARTS = false;
+layout(constant_id = 4) const bool CAMERA_STARTS = false;
 // How next-event estimation chooses its light (src/methods/paths.rs specializes it): false, by
 // power (the light table); true, through the light BVH. A constant for the same reason.
-layout(constant_id = 4) const bool LIGHT_BVH = false;
+layout(constant_id = 5) const bool LIGHT_BVH = false;
 
 const uint DIMENSIONS_PER_BOUNCE = 8u;
 
@@ -106,7 +106,7 @@ vec3 path_radiance(uint index, uint sample_index, vec3 dir, bool found, vec3 p, 
         return le;
     }
     // The material at the path's vertex, loaded once per hit.
-    Material m = materials[mat];
+    Material m = textured(materials[mat], mat, tri, p);
     if (m.ke.w > 0.0 && dot(-dir, ng) > 0.0) L += m.ke.rgb;
     if (params.max_depth == 0u) return L;
 
@@ -187,7 +187,7 @@ vec3 path_radiance(uint index, uint sample_index, vec3 dir, bool found, vec3 p, 
         ShadingTriangle st = shading_triangles[hit.triangle];
         ns = interpolated_normal(st, hit.barycentrics);
         ng = st.geometric_normal.xyz;
-        m = materials[floatBitsToUint(st.n0.w)];
+        m = textured(materials[floatBitsToUint(st.n0.w)], floatBitsToUint(st.n0.w), hit.triangle, p);
         if (m.ke.w > 0.0 && dot(-dir, ng) > 0.0) {
             float light_pdf = 0.0;
             if (mass > 0.0) {

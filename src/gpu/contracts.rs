@@ -125,6 +125,7 @@ pub(crate) fn mirrors() -> Vec<&'static GpuLayout> {
         crate::bvh::GPU_LAYOUTS,
         crate::trace::GPU_LAYOUTS,
         crate::scene::gpu::GPU_LAYOUTS,
+        crate::scene::texture_upload::GPU_LAYOUTS,
         crate::gpu::copy::GPU_LAYOUTS,
         crate::gpu::prefix_sum::GPU_LAYOUTS,
         m::bir::light_cdf::GPU_LAYOUTS,

@@ -1,7 +1,7 @@
 //! GpuScene: a `Scene` uploaded for the kernels (glsl/include/scene.glsl and bvh.glsl): the
 //! BVH, shading data per triangle in BVH order, materials, analytic lights, the light
 //! selection table (every light by power), the emissive triangles and the environment map
-//! with its texel CDF. Buffers are sized from the scene; an absent part gets a one-element
+//! with its texel CDF, and the albedo textures (texture_upload.rs). Buffers are sized from the scene; an absent part gets a one-element
 //! placeholder because every binding of a kernel must be bound.
 
 use std::f64::consts::PI;
@@ -15,6 +15,7 @@ use crate::sampling::distribution::Distribution1D;
 use crate::sampling::environment::{luminance, sampling_weights, texel_solid_angle};
 use crate::sampling::light_bvh::{LightBounds, LightBvh, LightNode};
 
+use super::texture_upload::{self, TriangleUv};
 use super::{Environment, Light, Scene};
 
 #[repr(C)]
@@ -122,6 +123,8 @@ pub struct SceneFeatures {
     pub delta_lights: bool,
     /// A material with a Phong lobe (Ks > 0).
     pub glossy: bool,
+    /// A material with an albedo texture.
+    pub textures: bool,
 }
 
 impl SceneFeatures {
@@ -130,18 +133,29 @@ impl SceneFeatures {
         environment: true,
         delta_lights: true,
         glossy: true,
+        textures: true,
     };
 
-    /// The values of specialization constants 0, 1, 2.
-    pub fn constants(self) -> [u32; 3] {
-        [self.environment, self.delta_lights, self.glossy].map(u32::from)
+    /// How many there are: SceneKernel's table holds 2^COUNT variants per own constant.
+    pub const COUNT: usize = 4;
+
+    /// The values of specialization constants 0, 1, 2, 3.
+    pub fn constants(self) -> [u32; Self::COUNT] {
+        [
+            self.environment,
+            self.delta_lights,
+            self.glossy,
+            self.textures,
+        ]
+        .map(u32::from)
     }
 
-    /// A dense index (0..8), for a kernel's table of specialized variants.
+    /// A dense index (0..16), for a kernel's table of specialized variants.
     pub fn index(self) -> usize {
         usize::from(self.environment)
             | usize::from(self.delta_lights) << 1
             | usize::from(self.glossy) << 2
+            | usize::from(self.textures) << 3
     }
 }
 
@@ -171,6 +185,11 @@ pub struct GpuScene {
     pub light_bvh: LightBvh,
     pub env_texels: Buffer<Vec4>,
     pub env_cdf: Buffer<u32>,
+    /// texture.glsl's tables: each triangle's texture coordinates (BVH order), each
+    /// material's texture and the texels; one-element placeholders without textures.
+    pub triangle_uvs: Buffer<TriangleUv>,
+    pub material_textures: Buffer<[u32; 4]>,
+    pub texels: Buffer<[u32; 2]>,
     /// A dynamic map's frames, copied into env_texels and env_cdf per frame.
     env_frames: Option<EnvironmentFrames>,
     pub constants: Buffer<SceneConstants>,
@@ -636,6 +655,15 @@ impl GpuScene {
             .map(|t| [*t as u32, (*t >> 32) as u32])
             .collect();
         let materials = gpu_materials(scene);
+        // Every material's header, textured or not: a kernel built without specialization
+        // (SCENE_HAS_TEXTURES true) reads it for any material.
+        let textured = texture_upload::has_textures(scene);
+        let (material_textures, texels) = texture_upload::texture_tables(scene);
+        let triangle_uvs = if textured {
+            texture_upload::triangle_uvs(scene, &bvh.triangle_order)
+        } else {
+            vec![TriangleUv::zeroed()]
+        };
         let constants = scene_constants(
             scene,
             &light_table,
@@ -669,6 +697,9 @@ impl GpuScene {
             light_bvh,
             env_texels: Buffer::from_slice(ctx, "EnvTexels", &env.texels)?,
             env_cdf: Buffer::from_slice(ctx, "EnvCdf", &env.cdf)?,
+            triangle_uvs: Buffer::from_slice(ctx, "TriangleUvs", &triangle_uvs)?,
+            material_textures: Buffer::from_slice(ctx, "MaterialTextures", &material_textures)?,
+            texels: Buffer::from_slice(ctx, "Texels", &or_placeholder(texels, [0; 2]))?,
             env_frames: env.frames,
             constants: Buffer::from_slice(ctx, "SceneParams", &[constants])?,
             light_table,
@@ -687,6 +718,7 @@ impl GpuScene {
                 environment: env.size[2] != 0,
                 delta_lights: !scene.lights.is_empty(),
                 glossy: scene.materials.iter().any(|m| m.ks.max_element() > 0.0),
+                textures: textured,
             },
         };
         gpu.build_ms.upload = upload_start.elapsed().as_secs_f64() * 1e3;
@@ -703,8 +735,8 @@ impl GpuScene {
     }
 
     /// Device bytes of everything the scene uploads: the BVH, the shading data, materials,
-    /// lights, the light data, the environment's tables (every map of a sequence) and the
-    /// constants.
+    /// lights, the light data, the environment's tables (every map of a sequence), the
+    /// textures' tables and the constants.
     pub fn device_bytes(&self) -> u64 {
         let frames = self
             .env_frames
@@ -720,6 +752,9 @@ impl GpuScene {
             + self.env_texels.byte_size()
             + self.env_cdf.byte_size()
             + frames
+            + self.triangle_uvs.byte_size()
+            + self.material_textures.byte_size()
+            + self.texels.byte_size()
             + self.constants.byte_size()
     }
 
@@ -788,6 +823,9 @@ impl GpuScene {
             bind("EnvTexels", &self.env_texels),
             bind("EnvCdf", &self.env_cdf),
             bind("SceneParams", &self.constants),
+            bind("TriangleUvs", &self.triangle_uvs),
+            bind("MaterialTextures", &self.material_textures),
+            bind("Texels", &self.texels),
         ]
     }
 

@@ -182,6 +182,7 @@ mod obj;
 mod power;
 pub mod sky;
 pub mod texture;
+pub mod texture_upload;
 pub(crate) mod toml_arrays;
 
 pub use camera::MAX_RESOLUTION;

@@ -154,7 +154,7 @@ impl Texture {
 }
 
 /// The continuous texel coordinate on one axis (u, or 1 - v: rows from the top), texel centres
-/// at half-integers: repeat reduces `t` mod 1, mirror mod 2
+/// at half-integers: repeat reduces `t` mod 1, mirror mod 2, clamp's is clamped to [-1, n]
 /// (texel indices then mirror), clamp keeps it.
 fn axis(t: f32, n: u32, wrap: Wrap) -> f32 {
     match wrap {
@@ -163,7 +163,7 @@ fn axis(t: f32, n: u32, wrap: Wrap) -> f32 {
             let t2 = t - 2.0 * (0.5 * t).floor();
             t2 * n as f32 - 0.5
         }
-        Wrap::Clamp => t * n as f32 - 0.5,
+        Wrap::Clamp => (t * n as f32 - 0.5).clamp(-1.0, n as f32),
     }
 }
 
