@@ -19,6 +19,7 @@ mod determinism;
 mod env;
 mod export;
 mod flip;
+mod gltf_import;
 mod image;
 mod ir;
 mod kernels;

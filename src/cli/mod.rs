@@ -180,12 +180,15 @@ pub(crate) fn progress(len: u64, what: &str) -> ProgressBar {
 }
 
 /// Loads the scene file at `path` under a spinner naming it (a large mesh takes seconds).
-pub(crate) fn load_scene(path: &std::path::Path) -> anyhow::Result<irad::scene::Scene> {
+pub(crate) fn load_scene(
+    path: &std::path::Path,
+    camera: Option<usize>,
+) -> anyhow::Result<irad::scene::Scene> {
     let spinner = ProgressBar::new_spinner();
     logger::on_screen(Some(logger::Bars::One(spinner.clone())));
     spinner.set_message(format!("loading {}", path.display()));
     spinner.enable_steady_tick(std::time::Duration::from_millis(120));
-    let scene = irad::scene::load(path);
+    let scene = irad::scene::load_with_camera(path, camera);
     spinner.finish_and_clear();
     logger::on_screen(None);
     Ok(scene?)

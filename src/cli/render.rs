@@ -15,7 +15,8 @@ use super::{device_line, progress};
 
 #[derive(clap::Args)]
 pub struct RenderArgs {
-    /// Scene TOML file (format: docs/scenes.md); default: the embedded Cornell box.
+    /// Scene file: TOML, Mitsuba .xml or glTF .gltf/.glb (formats: docs/scenes.md); default: the
+    /// embedded Cornell box.
     scene: Option<PathBuf>,
     /// Rendering method (`irad methods` lists them and their settings).
     #[arg(long, default_value = "reference", value_parser = method_names())]
@@ -45,6 +46,10 @@ pub struct RenderArgs {
     /// for bit.
     #[arg(long, value_name = "N")]
     frame: Option<u32>,
+    /// A glTF scene's camera: `cameras[N]` of the file (0-based) [default: the lowest-numbered
+    /// camera a node places].
+    #[arg(long, value_name = "N")]
+    camera: Option<usize>,
     /// Render an animated scene frame by frame, each frame its own image from the method's
     /// count (`--samples-per-frame`), into the folder OUT: frame_NNNN.exr, .png and .json,
     /// sequence.json (each frame's GPU time per pass, seed and files; device and settings once)
@@ -93,6 +98,7 @@ impl RenderArgs {
 /// Renders, writes and prints the summary.
 pub fn run(options: &ContextOptions, args: RenderArgs) -> Result<()> {
     let method = args.method()?;
+    let camera = args.camera;
     let scene = match &args.scene {
         Some(path) => {
             // `--two-bounce off`: a switch's value goes after `=`, so clap took it as SCENE.
@@ -104,8 +110,9 @@ pub fn run(options: &ContextOptions, args: RenderArgs) -> Result<()> {
                     method_flags::switch_written(&flag, &text)
                 );
             }
-            super::load_scene(path)?
+            super::load_scene(path, camera)?
         }
+        None if camera.is_some() => bail!("--camera picks a glTF scene's camera: give one"),
         None => scene::default_scene(),
     };
     let scene = match args.resolution {

@@ -44,7 +44,7 @@ pub fn over(bytes: u64, limit: u64) -> String {
     )
 }
 
-/// The scene's image size, triangles, lights and environment maps against `limit`
+/// The scene's image size, triangles, lights, albedo textures and environment maps against `limit`
 /// (maxStorageBufferRange).
 pub fn check_scene(scene: &Scene, limit: u64) -> Result<(), String> {
     check_pixels(scene, PIXEL_BYTES, "", limit)?;
@@ -74,6 +74,24 @@ pub fn check_scene(scene: &Scene, limit: u64) -> Result<(), String> {
              BVH {}; this device holds at most {} lights a scene",
             over(nodes * node_bytes, limit),
             (limit / node_bytes).div_ceil(2)
+        ));
+    }
+    // Texels: every albedo texture's texels in one buffer, 8 bytes a texel (half RGB).
+    let texel_bytes = crate::scene::texture_upload::texel_bytes(scene);
+    if texel_bytes > limit {
+        let mut largest: Vec<&crate::scene::Texture> = scene.textures.iter().collect();
+        largest.sort_by_key(|t| std::cmp::Reverse(t.width as u64 * t.height as u64));
+        let named: Vec<String> = largest
+            .iter()
+            .take(3)
+            .map(|t| format!("{} ({}x{})", t.source.display(), t.width, t.height))
+            .collect();
+        return Err(format!(
+            "{file}: {} albedo textures {}; this device holds at most {} texels of texture a              scene (8 bytes each): scale the largest down ({})",
+            scene.textures.len(),
+            over(texel_bytes, limit),
+            limit / 8,
+            named.join(", ")
         ));
     }
     if let Some(env) = &scene.environment {
@@ -206,6 +224,30 @@ mod tests {
         );
         scene.environment.as_mut().unwrap().height = 1024;
         assert_eq!(check_scene(&scene, 134_217_728), Ok(()));
+    }
+
+    #[test]
+    fn textures_over_the_limit_are_refused_naming_the_largest() {
+        let mut scene = crate::scene::default_scene();
+        (scene.camera.width, scene.camera.height) = (1, 1);
+        let texture = |name: &str, side: u32| crate::scene::Texture {
+            width: side,
+            height: side,
+            texels: vec![glam::Vec3::ONE; (side * side) as usize],
+            wrap: [crate::scene::Wrap::Repeat; 2],
+            source: name.into(),
+        };
+        scene.textures = vec![texture("small.png", 4), texture("wall.jpg", 64)];
+        let limit = (64 * scene.triangles.len() as u64).max(8 * (64 * 64 + 16));
+        assert_eq!(check_scene(&scene, limit), Ok(()));
+        scene.textures.push(texture("more.png", 8));
+        let e = check_scene(&scene, limit).unwrap_err();
+        assert!(
+            e.contains("3 albedo textures")
+                && e.contains(&format!("at most {} texels", limit / 8))
+                && e.contains("wall.jpg (64x64), more.png (8x8), small.png (4x4)"),
+            "{e}"
+        );
     }
 
     #[test]

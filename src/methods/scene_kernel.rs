@@ -50,10 +50,9 @@ impl SceneKernel {
 
     /// The kernel for a scene with `features`, its constants 4 and 5 set to `flags`.
     pub fn get_with_pair(&self, features: SceneFeatures, flags: [bool; 2]) -> GpuResult<&Kernel> {
-        let cell =
-            &self.pairs[features.index()
-                + VARIANTS * usize::from(flags[0])
-                + 2 * VARIANTS * usize::from(flags[1])];
+        let cell = &self.pairs[features.index()
+            + VARIANTS * usize::from(flags[0])
+            + 2 * VARIANTS * usize::from(flags[1])];
         if let Some(kernel) = cell.get() {
             return Ok(kernel);
         }

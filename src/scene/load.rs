@@ -19,15 +19,35 @@ pub const DEGENERATE_AREA: f64 = 1e-12;
 
 /// Loads the scene file at `path`; files it names are relative to its folder.
 pub fn load(path: &Path) -> Result<Scene, SceneError> {
+    load_with_camera(path, None)
+}
+
+/// `load`, seen through a glTF scene's `cameras[n]` for `camera` = Some(n) (an error for any
+/// other format: only glTF files hold several cameras).
+pub fn load_with_camera(path: &Path, camera: Option<usize>) -> Result<Scene, SceneError> {
     let start = std::time::Instant::now();
-    let mut scene = load_file(path)?;
+    let mut scene = load_file(path, camera)?;
     scene.load_ms = start.elapsed().as_secs_f64() * 1e3;
     Ok(scene)
 }
 
-fn load_file(path: &Path) -> Result<Scene, SceneError> {
+fn load_file(path: &Path, camera: Option<usize>) -> Result<Scene, SceneError> {
+    if let (Some(n), false) = (camera, super::gltf::is_gltf(path)) {
+        return Err(SceneError::Invalid {
+            file: path.display().to_string(),
+            field: "--camera".into(),
+            value: n.to_string(),
+            problem: "picks a glTF scene's camera; this is not a .gltf or .glb file".into(),
+        });
+    }
     if super::mitsuba::is_mitsuba(path) {
         let mut scene = super::mitsuba::load(path)?;
+        scene.name = scene_name(path);
+        log_warnings(&scene);
+        return Ok(scene);
+    }
+    if super::gltf::is_gltf(path) {
+        let mut scene = super::gltf::load_with_camera(path, camera)?;
         scene.name = scene_name(path);
         log_warnings(&scene);
         return Ok(scene);

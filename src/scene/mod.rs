@@ -171,6 +171,7 @@ mod environment;
 mod error;
 mod failure;
 mod file;
+pub mod gltf;
 pub mod gpu;
 pub mod hash;
 mod lights;
@@ -187,5 +188,5 @@ pub(crate) mod toml_arrays;
 
 pub use camera::MAX_RESOLUTION;
 pub use error::SceneError;
-pub use load::{default_scene, load, load_str, DEGENERATE_AREA};
+pub use load::{default_scene, load, load_str, load_with_camera, DEGENERATE_AREA};
 pub use power::{MAX_POWER, MAX_RADIANCE};

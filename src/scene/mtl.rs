@@ -42,10 +42,11 @@ fn albedo_map(material: usize, line: usize, args: &str) -> Result<AlbedoMap, Str
     let mut rest = args.trim();
     let mut wrap = Wrap::Repeat;
     let mut ignored = Vec::new();
-    loop {
-        let Some(option) = rest.split_whitespace().next().filter(|w| w.starts_with('-')) else {
-            break;
-        };
+    while let Some(option) = rest
+        .split_whitespace()
+        .next()
+        .filter(|w| w.starts_with('-'))
+    {
         let Some(&(_, count)) = MAP_OPTIONS
             .iter()
             .chain(&[("-t", 3)])
@@ -141,13 +142,11 @@ pub fn parse(file: &str, text: &str) -> Result<MtlFile, SceneError> {
         };
         if key == "map_Kd" {
             let args = line.trim_start()[6..].trim();
-            let map = albedo_map(index, n, args).map_err(|problem| {
-                SceneError::Invalid {
-                    file: file.to_string(),
-                    field: format!("material `{}` map_Kd (line {n})", m.name),
-                    value: args.to_string(),
-                    problem,
-                }
+            let map = albedo_map(index, n, args).map_err(|problem| SceneError::Invalid {
+                file: file.to_string(),
+                field: format!("material `{}` map_Kd (line {n})", m.name),
+                value: args.to_string(),
+                problem,
             })?;
             albedo_maps.retain(|a| a.material != map.material);
             albedo_maps.push(map);
@@ -257,15 +256,23 @@ mod tests {
         assert_eq!(map.path, "tex/my wall.png");
         assert_eq!(map.wrap, Wrap::Clamp);
         assert_eq!(map.ignored, ["-s 2 2 1", "-bm 0.5"]);
-        let map = &parse("m.mtl", "newmtl a\nmap_Kd -o 0.5 b.jpg\n").unwrap().albedo_maps[0];
+        let map = &parse("m.mtl", "newmtl a\nmap_Kd -o 0.5 b.jpg\n")
+            .unwrap()
+            .albedo_maps[0];
         assert_eq!((map.path.as_str(), map.ignored.len()), ("b.jpg", 1));
         for (text, expected) in [
             ("newmtl a\nmap_Kd\n", "no image file named"),
-            ("newmtl a\nmap_Kd -clamp maybe x.png\n", "-clamp maybe: expected on or off"),
+            (
+                "newmtl a\nmap_Kd -clamp maybe x.png\n",
+                "-clamp maybe: expected on or off",
+            ),
             ("newmtl a\nmap_Kd -warp 1 x.png\n", "unknown option -warp"),
         ] {
             let e = parse("m.mtl", text).unwrap_err().to_string();
-            assert!(e.contains("material `a` map_Kd (line 2)") && e.contains(expected), "{e}");
+            assert!(
+                e.contains("material `a` map_Kd (line 2)") && e.contains(expected),
+                "{e}"
+            );
         }
     }
 

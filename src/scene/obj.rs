@@ -73,8 +73,7 @@ pub fn load(
     let mut tobj_libraries = Vec::new();
     let mut textures: Vec<Texture> = Vec::new();
     let mut texture_bytes = Vec::new();
-    let mut texture_index: std::collections::HashMap<(String, [Wrap; 2]), u32> =
-        Default::default();
+    let mut texture_index: std::collections::HashMap<(String, [Wrap; 2]), u32> = Default::default();
     for (line, name) in &checked.mtllibs {
         let (mtl_file, bytes) = read_mtl(
             name,
@@ -102,7 +101,10 @@ pub fn load(
                 None => {
                     let (texture_file, image) = read_mtl(
                         &rel_name,
-                        &format!("referenced by {mtl_file} line {}: map_Kd {}", map.line, map.path),
+                        &format!(
+                            "referenced by {mtl_file} line {}: map_Kd {}",
+                            map.line, map.path
+                        ),
                     )?;
                     let t = texture::decode(&image, Path::new(&texture_file), wrap).map_err(
                         |problem| SceneError::Invalid {
@@ -192,8 +194,7 @@ pub fn load(
                 .get(i..i + 2)
                 .map_or(Vec2::ZERO, Vec2::from_slice)
         };
-        let textured = material
-            .is_some_and(|m| materials[m as usize].albedo_texture.is_some());
+        let textured = material.is_some_and(|m| materials[m as usize].albedo_texture.is_some());
         if textured && !has_uvs {
             without_uvs += mesh.indices.len() / 3;
         }

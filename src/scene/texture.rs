@@ -28,7 +28,13 @@ pub fn decode(bytes: &[u8], source: &Path, wrap: [Wrap; 2]) -> Result<Texture, S
     let table = srgb_table();
     let texels = rgb8
         .chunks_exact(3)
-        .map(|c| Vec3::new(table[c[0] as usize], table[c[1] as usize], table[c[2] as usize]))
+        .map(|c| {
+            Vec3::new(
+                table[c[0] as usize],
+                table[c[1] as usize],
+                table[c[2] as usize],
+            )
+        })
         .collect();
     Ok(Texture {
         width,
@@ -57,7 +63,9 @@ fn check_side(width: u32, height: u32) -> Result<(), String> {
 fn decode_png(bytes: &[u8]) -> Result<(u32, u32, Vec<u8>), String> {
     let mut decoder = png::Decoder::new(std::io::Cursor::new(bytes));
     decoder.set_transformations(png::Transformations::normalize_to_color8());
-    let mut reader = decoder.read_info().map_err(|e| format!("not a readable PNG: {e}"))?;
+    let mut reader = decoder
+        .read_info()
+        .map_err(|e| format!("not a readable PNG: {e}"))?;
     let (width, height) = (reader.info().width, reader.info().height);
     check_side(width, height)?;
     let mut buffer = vec![0; reader.output_buffer_size().ok_or("PNG too large")?];
@@ -96,9 +104,15 @@ fn decode_jpeg(bytes: &[u8]) -> Result<(u32, u32, Vec<u8>), String> {
 fn to_rgb(data: &[u8], channels: usize) -> Result<Vec<u8>, String> {
     Ok(match channels {
         1 => data.iter().flat_map(|&g| [g, g, g]).collect(),
-        2 => data.chunks_exact(2).flat_map(|c| [c[0], c[0], c[0]]).collect(),
+        2 => data
+            .chunks_exact(2)
+            .flat_map(|c| [c[0], c[0], c[0]])
+            .collect(),
         3 => data.to_vec(),
-        4 => data.chunks_exact(4).flat_map(|c| [c[0], c[1], c[2]]).collect(),
+        4 => data
+            .chunks_exact(4)
+            .flat_map(|c| [c[0], c[1], c[2]])
+            .collect(),
         n => return Err(format!("a PNG of {n} channels")),
     })
 }

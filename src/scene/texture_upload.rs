@@ -122,12 +122,19 @@ mod tests {
     #[test]
     fn the_affine_uv_gives_each_corner_its_uv() {
         let mut scene = crate::scene::default_scene();
-        scene.triangles[0].uvs = [Vec2::new(0.1, 0.2), Vec2::new(3.0, -1.0), Vec2::new(0.5, 7.0)];
+        scene.triangles[0].uvs = [
+            Vec2::new(0.1, 0.2),
+            Vec2::new(3.0, -1.0),
+            Vec2::new(0.5, 7.0),
+        ];
         let uv = triangle_uvs(&scene, &[0])[0];
         let t = &scene.triangles[0];
         for (p, expected) in t.positions.iter().zip(t.uvs) {
             let d = *p - uv.origin.truncate();
-            let got = Vec2::new(uv.origin.w + uv.du.truncate().dot(d), uv.du.w + uv.dv.truncate().dot(d));
+            let got = Vec2::new(
+                uv.origin.w + uv.du.truncate().dot(d),
+                uv.du.w + uv.dv.truncate().dot(d),
+            );
             assert!((got - expected).length() < 1e-5, "{got} vs {expected}");
         }
         // A point off the plane maps as its projection: the gradients lie in the plane.
