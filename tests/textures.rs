@@ -419,3 +419,69 @@ fn light_off_a_textured_floor_reaches_the_ceiling_in_every_vpl_method() {
         }
     });
 }
+
+/// scenes/textured-cornell: map_Kd reads its PNG (repeated) and JPEG (`-clamp on`), the floor's
+/// `vt` reach its triangles; a missing texture and one that is not an image are refused naming
+/// the MTL file, the line and the image.
+#[test]
+fn an_obj_scene_reads_its_png_and_jpeg_textures_and_names_bad_ones() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/textured-cornell");
+    let scene = irad::scene::load(&root.join("scene.toml")).unwrap();
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    assert_eq!(scene.textures.len(), 2);
+    let [checker, poster] = [0, 1].map(|k| &scene.textures[k]);
+    assert_eq!(
+        (checker.width, checker.height, checker.wrap),
+        (64, 64, [Wrap::Repeat; 2])
+    );
+    assert_eq!(
+        (poster.width, poster.height, poster.wrap),
+        (128, 128, [Wrap::Clamp; 2])
+    );
+    // Texel (0, 0) is warm white, sRGB (230, 220, 200): linear 0.7913, 0.7157, 0.5776.
+    let t = checker.texels[0];
+    assert!(
+        (t - Vec3::new(0.7913, 0.7157, 0.5776)).abs().max_element() < 1e-3,
+        "{t}"
+    );
+    let floor = scene
+        .materials
+        .iter()
+        .position(|m| m.name == "checker")
+        .unwrap() as u32;
+    assert_eq!(scene.materials[floor as usize].albedo_texture, Some(0));
+    let floor_uvs: Vec<Vec2> = scene
+        .triangles
+        .iter()
+        .filter(|t| t.material == floor)
+        .flat_map(|t| t.uvs)
+        .collect();
+    assert!(floor_uvs.contains(&Vec2::new(4.0, 4.0)) && floor_uvs.contains(&Vec2::ZERO));
+
+    let dir = Scratch::new("textures", "bad");
+    for f in [
+        "scene.toml",
+        "textured-cornell.obj",
+        "textured-cornell.mtl",
+        "poster.jpg",
+    ] {
+        std::fs::copy(root.join(f), dir.0.join(f)).unwrap();
+    }
+    let e = irad::scene::load(&dir.0.join("scene.toml"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("checker.png") && e.contains("textured-cornell.mtl line 14: map_Kd checker.png"),
+        "{e}"
+    );
+    std::fs::write(dir.0.join("checker.png"), "not an image").unwrap();
+    let e = irad::scene::load(&dir.0.join("scene.toml"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("textured-cornell.mtl")
+            && e.contains("material `checker` map_Kd (line 14)")
+            && e.contains("not a PNG or JPEG"),
+        "{e}"
+    );
+}

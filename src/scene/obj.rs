@@ -195,9 +195,6 @@ pub fn load(
                 .map_or(Vec2::ZERO, Vec2::from_slice)
         };
         let textured = material.is_some_and(|m| materials[m as usize].albedo_texture.is_some());
-        if textured && !has_uvs {
-            without_uvs += mesh.indices.len() / 3;
-        }
         let position = |k: usize| {
             let i = mesh.indices[k] as usize * 3;
             Vec3::from_slice(&mesh.positions[i..i + 3])
@@ -232,6 +229,10 @@ pub fn load(
             });
             if material.is_none() {
                 without_material += 1;
+            }
+            // Texture coordinate 0 is check's sentinel for a corner without `vt`.
+            if textured && (!has_uvs || (0..3).all(|c| mesh.texcoord_indices[3 * t + c] == 0)) {
+                without_uvs += 1;
             }
             triangles.push(ObjTriangle {
                 positions,
@@ -303,6 +304,9 @@ fn check(file: &str, text: &str, groups: Option<&GroupMaterials>) -> Result<Chec
     // Normal 1 (1-based) is the zero sentinel for corners without `vn`.
     let mut out = String::with_capacity(text.len() + 16);
     out.push_str("vn 0 0 0\n");
+    // Texture coordinate 1 is the sentinel for corners without `vt` (obj.rs's load reads a
+    // triangle whose corners all name it as one without texture coordinates).
+    out.push_str("vt 0 0\n");
     let mut mtllibs = Vec::new();
     let mut usemtl = Vec::new();
     // The scene's MTL for the groups, before any line of the file (tobj needs a library
@@ -389,7 +393,18 @@ fn check(file: &str, text: &str, groups: Option<&GroupMaterials>) -> Result<Chec
                     )));
                 }
                 texcoords += 1;
-                // Unused: dropping them keeps tobj from checking their indices again.
+                let u = values[0].parse::<f32>().unwrap_or(0.0);
+                let v = values
+                    .get(1)
+                    .and_then(|v| v.parse::<f32>().ok())
+                    .unwrap_or(0.0);
+                if !(u.is_finite() && v.is_finite()) {
+                    return Err(error(format!(
+                        "texture coordinate: not finite: `{}`",
+                        values.join(" ")
+                    )));
+                }
+                out.push_str(&format!("vt {u} {v}"));
             }
             Some("f") => {
                 let mut corners = Vec::with_capacity(values.len());
@@ -418,14 +433,15 @@ fn check(file: &str, text: &str, groups: Option<&GroupMaterials>) -> Result<Chec
                         Ok(resolved as usize)
                     };
                     let v = index(parts[0], "vertex", positions)?;
-                    if let Some(vt) = parts.get(1).filter(|s| !s.is_empty()) {
-                        index(vt, "texture coordinate", texcoords)?;
-                    }
+                    let vt = match parts.get(1).filter(|s| !s.is_empty()) {
+                        Some(vt) => index(vt, "texture coordinate", texcoords)? + 2,
+                        None => 1,
+                    };
                     let vn = match parts.get(2).filter(|s| !s.is_empty()) {
                         Some(vn) => index(vn, "normal", normals)? + 2,
                         None => 1,
                     };
-                    corners.push(format!("{}//{}", v + 1, vn));
+                    corners.push(format!("{}/{vt}/{vn}", v + 1));
                 }
                 if corners.len() < 3 {
                     small_faces += 1;
@@ -512,6 +528,28 @@ mod tests {
             .warnings
             .iter()
             .any(|w| w.contains("2 triangles have no material")));
+    }
+
+    #[test]
+    fn texture_coordinates_are_kept_per_corner() {
+        let text = "v 0 0 0\nv 1 0 0\nv 1 0 -1\nv 0 0 -1\nvt 0.25 0.5\nvt 1 0 0\nvt -2 3\n\
+                    f 1/1 2/2 3/3\nf 1/-3/ 3 4\n";
+        let mesh = load("t.obj", text, &mut no_mtl, None).unwrap();
+        assert_eq!(
+            mesh.triangles[0].uvs,
+            [Vec2::new(0.25, 0.5), Vec2::X, Vec2::new(-2.0, 3.0)]
+        );
+        // A corner without vt gets (0, 0).
+        assert_eq!(
+            mesh.triangles[1].uvs,
+            [Vec2::new(0.25, 0.5), Vec2::ZERO, Vec2::ZERO]
+        );
+        let e = load("t.obj", "v 0 0 0\nvt 0 inf\n", &mut no_mtl, None).unwrap_err();
+        assert!(
+            e.to_string()
+                .contains("t.obj line 2: texture coordinate: not finite"),
+            "{e}"
+        );
     }
 
     #[test]
