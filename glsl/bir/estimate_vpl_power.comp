@@ -50,6 +50,7 @@ void main() {
         weights[params.row_length + c] = 0.0;
         return;
     }
+    Material mv = vpl_material(v);
     float sum = 0.0;
     for (uint m = params.sample_begin; m < min(params.sample_end, params.samples); ++m) {
         uint pixel = hash4(params.seed, c, m, 0x706f7772u) % params.pixels;
@@ -58,7 +59,7 @@ void main() {
         if (!gbuffer_surface(g, wo, side, n)) continue;
         vec3 x = g.position.xyz;
         Material mat = gbuffer_material(g);
-        sum += luminance(shade_from_vpl(v, x, offset_origin(x, side), n, side, wo, mat, 0.0));
+        sum += luminance(shade_from_vpl(v, mv, x, offset_origin(x, side), n, side, wo, mat, 0.0));
     }
     float w = sum * params.scale * float(params.pixels) / float(max(params.samples, 1u));
     if (params.sample_begin > 0u) w += weights[c];

@@ -136,15 +136,18 @@ void main() {
                     uint end = params.vpl_begin + min(params.connection_end, slots);
                     for (uint s = params.vpl_begin + min(params.connection_begin, slots); s < end;
                          ++s) {
-                        sum += shade_from_vpl(vpls[s], xd, od, nd, sided, wod, md, 0.0);
+                        Vpl source = vpls[s];
+                        sum += shade_from_vpl(source, vpl_material(source), xd, od, nd, sided, wod, md,
+                                              0.0);
                     }
                 } else {
                     uint end = min(params.connection_end, params.connections);
                     for (uint c = params.connection_begin; c < end; ++c) {
                         // Sample and connection keyed apart: no two share picks at any count.
                         uint pick = random_u31(params.seed, k, 0x636f6e6eu + j, c) % slots;
-                        sum += shade_from_vpl(vpls[params.vpl_begin + pick], xd, od, nd, sided,
-                                              wod, md, 0.0);
+                        Vpl source = vpls[params.vpl_begin + pick];
+                        sum += shade_from_vpl(source, vpl_material(source), xd, od, nd, sided, wod, md,
+                                              0.0);
                     }
                     sum *= float(slots) / float(params.connections);
                 }

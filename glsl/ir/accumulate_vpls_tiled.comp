@@ -35,6 +35,7 @@ layout(set = 0, binding = 15, std430) buffer VplRadiance { vec4 vpl_radiance[]; 
 
 #define CHUNK 64u
 shared Vpl chunk[CHUNK];
+shared Material chunk_materials[CHUNK];  // vpl_material of each
 
 void main() {
     uvec2 pixel = gl_GlobalInvocationID.xy;
@@ -54,7 +55,9 @@ void main() {
     for (uint base = params.vpl_begin; base < params.vpl_end; base += CHUNK) {
         uint slot = base + gl_LocalInvocationIndex;
         if (slot < params.vpl_end) {
-            chunk[gl_LocalInvocationIndex] = vpls[slot];
+            Vpl v = vpls[slot];
+            chunk[gl_LocalInvocationIndex] = v;
+            chunk_materials[gl_LocalInvocationIndex] = vpl_material(v);
         } else {
             chunk[gl_LocalInvocationIndex].position = vec4(0.0, 0.0, 0.0, uintBitsToFloat(VPL_NONE));
         }
@@ -64,7 +67,8 @@ void main() {
             // The first slot of this chunk in my subset, then every subsets-th.
             uint first = (subset + subsets - base % subsets) % subsets;
             for (uint j = first; j < CHUNK; j += subsets) {
-                sum += shade_from_vpl(chunk[j], x, origin, n, side, wo, m, params.g_clamp);
+                sum += shade_from_vpl(chunk[j], chunk_materials[j], x, origin, n, side, wo, m,
+                                      params.g_clamp);
             }
         }
         barrier();

@@ -33,6 +33,7 @@ layout(set = 0, binding = 14, std430) readonly buffer CompensationIn { Compensat
 
 #define CHUNK 64u
 shared Vpl chunk[CHUNK];
+shared Material chunk_materials[CHUNK];  // vpl_material of each
 
 void main() {
     uint count = counts[params.level];
@@ -53,7 +54,9 @@ void main() {
     for (uint base = params.vpl_begin; base < params.vpl_end; base += CHUNK) {
         uint slot = base + gl_LocalInvocationIndex;
         if (slot < params.vpl_end) {
-            chunk[gl_LocalInvocationIndex] = vpls[slot];
+            Vpl vpl = vpls[slot];
+            chunk[gl_LocalInvocationIndex] = vpl;
+            chunk_materials[gl_LocalInvocationIndex] = vpl_material(vpl);
         } else {
             chunk[gl_LocalInvocationIndex].position = vec4(0.0, 0.0, 0.0, uintBitsToFloat(VPL_NONE));
         }
@@ -61,7 +64,8 @@ void main() {
         barrier();
         if (live) {
             for (uint j = 0u; j < CHUNK; ++j) {
-                sum += shade_from_vpl(chunk[j], y, origin, n, side, wo, m, params.g_clamp);
+                sum += shade_from_vpl(chunk[j], chunk_materials[j], y, origin, n, side, wo, m,
+                                      params.g_clamp);
             }
         }
         barrier();
