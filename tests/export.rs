@@ -3,7 +3,8 @@
 //! scene (one sensor with the camera's field of view, size and view, not mirrored; one shape
 //! per material in use, whose PLY files hold the scene's triangles; one emitter per emissive
 //! material, point and spot light and environment; every referenced file written); each scene
-//! with luminaires is refused with the message that says so.
+//! with luminaires is refused with the message that says so; albedo textures are written as
+//! bitmaps beside the XML (copied, or baked with a note).
 
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
@@ -47,6 +48,12 @@ fn children<'a, 'i>(node: roxmltree::Node<'a, 'i>, tag: &str) -> Vec<roxmltree::
 /// (faces, vertices) from a PLY file's header; checks the binary layout ply.rs writes and that
 /// the body has exactly the size the header promises.
 fn ply_counts(path: &Path) -> (usize, usize) {
+    let (faces, vertices, _) = ply_layout(path);
+    (faces, vertices)
+}
+
+/// (faces, vertices, bytes per vertex: 24, or 32 with `u v`) as `ply_counts` checks them.
+fn ply_layout(path: &Path) -> (usize, usize, usize) {
     let bytes = std::fs::read(path).unwrap();
     let end = bytes
         .windows(11)
@@ -72,14 +79,16 @@ fn ply_counts(path: &Path) -> (usize, usize) {
         );
     }
     assert!(header.contains("property list uchar uint vertex_indices\n"));
+    let uvs = header.contains("property float nz\nproperty float u\nproperty float v\n");
+    let stride = if uvs { 32 } else { 24 };
     let (faces, vertices) = (count("face"), count("vertex"));
     assert_eq!(
         bytes.len() - end,
-        vertices * 24 + faces * 13,
+        vertices * stride + faces * 13,
         "{}",
         path.display()
     );
-    (faces, vertices)
+    (faces, vertices, stride)
 }
 
 /// The PLY's vertex positions and normals.
@@ -90,11 +99,11 @@ fn ply_vertices(path: &Path) -> Vec<(Vec3, Vec3)> {
         .position(|w| w == b"end_header\n")
         .unwrap()
         + 11;
-    let (_, vertices) = ply_counts(path);
+    let (_, vertices, stride) = ply_layout(path);
     let f = |at: usize| f32::from_le_bytes(bytes[at..at + 4].try_into().unwrap());
     (0..vertices)
         .map(|k| {
-            let at = end + 24 * k;
+            let at = end + stride * k;
             (
                 Vec3::new(f(at), f(at + 4), f(at + 8)),
                 Vec3::new(f(at + 12), f(at + 16), f(at + 20)),
@@ -434,4 +443,92 @@ fn values_mitsuba_cannot_parse_are_refused_by_name() {
         "{e}"
     );
     assert!(!dir.exists());
+}
+
+/// The textured Cornell box: its checker (Kd 1, PNG) and poster (Kd 0.9, JPEG) are copied
+/// beside the XML byte for byte, the checker as the bare bitmap, the poster in a blend with
+/// black of weight 0.9 (exact); textured meshes carry u v and flip_tex_coords; nothing is
+/// approximate. A coloured Kd is baked into its own PNG, with a note.
+#[test]
+fn textured_materials_write_their_images_beside_the_xml() {
+    let folder = repo().join("scenes/textured-cornell");
+    let mut scene = irad::scene::load(&folder.join("scene.toml")).unwrap();
+    let dir = temp_dir("textured");
+    let out = write_mitsuba(&scene, &dir).unwrap();
+    check_export(&scene, &dir, &out);
+    assert!(out.approximations.is_empty(), "{:?}", out.approximations);
+    let text = std::fs::read_to_string(&out.xml).unwrap();
+    let doc = roxmltree::Document::parse(&text).unwrap();
+    let shape = |material: &str| {
+        let i = scene
+            .materials
+            .iter()
+            .position(|m| m.name == material)
+            .unwrap();
+        doc.root_element()
+            .children()
+            .find(|c| {
+                c.has_tag_name("shape")
+                    && c.attribute("id")
+                        .is_some_and(|id| id.starts_with(&format!("mesh-{i:03}-")))
+            })
+            .unwrap()
+    };
+    for (material, image, wrap) in [
+        ("checker", "checker.png", "repeat"),
+        ("poster", "poster.jpg", "clamp"),
+    ] {
+        let s = shape(material);
+        assert_eq!(property(s, "boolean", "flip_tex_coords"), Some("true"));
+        let ply = dir.join(property(s, "string", "filename").unwrap());
+        assert_eq!(ply_layout(&ply).2, 32, "{material}: u v");
+        let bitmap = s
+            .descendants()
+            .find(|n| n.has_tag_name("texture"))
+            .unwrap_or_else(|| panic!("{material}: no bitmap"));
+        assert_eq!(bitmap.attribute("type"), Some("bitmap"));
+        assert_eq!(bitmap.attribute("name"), Some("reflectance"));
+        assert_eq!(property(bitmap, "string", "wrap_mode"), Some(wrap));
+        let file = property(bitmap, "string", "filename").unwrap();
+        assert_eq!(
+            std::fs::read(dir.join(file)).unwrap(),
+            std::fs::read(folder.join(image)).unwrap(),
+            "{material}: {file} is {image}'s copy"
+        );
+        let blend = s
+            .descendants()
+            .find(|n| n.has_tag_name("bsdf") && n.attribute("type") == Some("blendbsdf"));
+        match material {
+            "checker" => assert!(blend.is_none()),
+            _ => assert_eq!(property(blend.unwrap(), "float", "weight"), Some("0.9")),
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+
+    // A coloured Kd times the checker: baked.
+    let red = scene
+        .materials
+        .iter()
+        .position(|m| m.name == "red")
+        .unwrap();
+    let checker = scene
+        .materials
+        .iter()
+        .find(|m| m.name == "checker")
+        .unwrap()
+        .albedo_texture;
+    scene.materials[red].albedo_texture = checker;
+    let dir = temp_dir("baked");
+    let out = write_mitsuba(&scene, &dir).unwrap();
+    check_export(&scene, &dir, &out);
+    let baked = format!("mesh-{red:03}-red-albedo.png");
+    assert!(
+        out.approximations
+            .iter()
+            .any(|a| a.starts_with("material `red`: Kd") && a.contains(&baked)),
+        "{:?}",
+        out.approximations
+    );
+    assert!(dir.join(&baked).is_file());
+    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -1,7 +1,8 @@
 //! Mitsuba 3 XML import (src/scene/mitsuba), CPU only: every shipped scene exported by
 //! `irad export mitsuba` reads back as the scene it was (camera bit for bit, each material's
 //! triangles bit for bit, the BSDF fit inverted within f32 rounding, lights, the environment's
-//! mean); the research subset (primitives, transforms, defaults, BSDFs, emitters) reads as
+//! mean), textured scenes with their textures and texture coordinates; the research subset
+//! (primitives, transforms, defaults, BSDFs, emitters, bitmaps the right way up) reads as
 //! Mitsuba defines it; bad input is refused naming the file, the element's line and the value;
 //! `irad render scene.xml` renders.
 
@@ -443,6 +444,33 @@ fn bad_mitsuba_input_names_the_file_the_element_and_the_value() {
             RESEARCH.replace("</scene>", ""),
             vec!["not well-formed XML".into()],
         ),
+        (
+            RESEARCH.replace(
+                "<rgb name=\"reflectance\" value=\"0.8, 0.7, 0.6\"/>",
+                "<texture type=\"bitmap\" name=\"reflectance\">\
+                 <string name=\"filename\" value=\"maps/missing.png\"/></texture>",
+            ),
+            vec![
+                line_of("0.8, 0.7, 0.6") + " <string name=\"filename\">",
+                format!(
+                    "maps{}missing.png: cannot read it",
+                    std::path::MAIN_SEPARATOR
+                ),
+            ],
+        ),
+        (
+            RESEARCH.replace(
+                "<rgb name=\"reflectance\" value=\"0.8, 0.7, 0.6\"/>",
+                "<texture type=\"bitmap\" name=\"reflectance\">\
+                 <string name=\"filename\" value=\"missing.png\"/>\
+                 <string name=\"wrap_mode\" value=\"tile\"/></texture>",
+            ),
+            vec![
+                line_of("0.8, 0.7, 0.6") + " <string name=\"wrap_mode\">",
+                "tile".into(),
+                "wrap_mode is repeat, mirror or clamp".into(),
+            ],
+        ),
     ];
     for (k, (text, needles)) in cases.iter().enumerate() {
         let e = load_text(&format!("bad-{k}"), text)
@@ -563,5 +591,291 @@ fn focal_lengths_and_ply_formats_read_as_mitsuba_reads_them() {
         big.len() >= 2,
         "the fold's first face and the big-endian triangle"
     );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// A material's triangles as the bits of their positions and texture coordinates, sorted.
+fn uv_bits(scene: &Scene, material: u32) -> Vec<Vec<u32>> {
+    let mut out: Vec<Vec<u32>> = scene
+        .triangles
+        .iter()
+        .filter(|t| t.material == material)
+        .map(|t| {
+            t.positions
+                .iter()
+                .flat_map(|v| v.to_array())
+                .chain(t.uvs.iter().flat_map(|v| v.to_array()))
+                .map(f32::to_bits)
+                .collect()
+        })
+        .collect();
+    out.sort();
+    out
+}
+
+/// The 8-bit sRGB code (unrounded) of a linear value.
+fn srgb(linear: f32) -> f64 {
+    let x = linear as f64;
+    255.0
+        * if x <= 0.0031308 {
+            12.92 * x
+        } else {
+            1.055 * x.powf(1.0 / 2.4) - 0.055
+        }
+}
+
+/// The textured Cornell box (checker: Kd 1, PNG, repeat; poster: Kd 0.9, JPEG, clamp) with a
+/// coloured Kd on the checker (red: baked), a glossy material on the poster (green: a grey
+/// diffuse part, the file copied) and a texture whose file is gone (white: written as PNG,
+/// u and v wrapping differently) reads back with every texture, Kd, wrap and texture
+/// coordinate: texels bit for bit where the file is copied or written from 8-bit texels,
+/// within half an 8-bit code where a colour is baked in; uvs bit for bit.
+#[test]
+fn textured_scenes_read_back_with_their_textures_and_uvs() {
+    let mut scene = irad::scene::load(&repo().join("scenes/textured-cornell/scene.toml")).unwrap();
+    let find = |scene: &Scene, name: &str| {
+        scene
+            .materials
+            .iter()
+            .position(|m| m.name == name)
+            .unwrap_or_else(|| panic!("no material {name}"))
+    };
+    let (red, green, white) = (
+        find(&scene, "red"),
+        find(&scene, "green"),
+        find(&scene, "white"),
+    );
+    let checker = scene.materials[find(&scene, "checker")].albedo_texture;
+    let poster = scene.materials[find(&scene, "poster")].albedo_texture;
+    scene.materials[red].albedo_texture = checker;
+    let g = &mut scene.materials[green];
+    (g.kd, g.ks, g.ns, g.albedo_texture) = (Vec3::splat(0.3), Vec3::splat(0.2), 50.0, poster);
+    let mut gone = scene.textures[checker.unwrap() as usize].clone();
+    gone.source = PathBuf::from("/nonexistent/irad/checker.png");
+    gone.wrap = [irad::scene::Wrap::Mirror, irad::scene::Wrap::Repeat];
+    scene.textures.push(gone);
+    let w = &mut scene.materials[white];
+    (w.kd, w.albedo_texture) = (Vec3::splat(0.7), Some(scene.textures.len() as u32 - 1));
+    for t in scene.triangles.iter_mut() {
+        if [red, green, white].contains(&(t.material as usize)) {
+            t.uvs = t
+                .positions
+                .map(|p| glam::Vec2::new(1.7 * p.x - 0.3, 2.3 * p.z + 0.9 * p.y - 1.1));
+        }
+    }
+
+    let dir = temp_dir("textured-round-trip");
+    let export = write_mitsuba(&scene, &dir).unwrap();
+    let notes = export.approximations.join("\n");
+    assert!(notes.contains("material `red`: Kd"), "{notes}");
+    assert!(notes.contains("wraps u mirror and v repeat"), "{notes}");
+    let back = irad::scene::load(&export.xml).unwrap();
+    for (i, m) in scene.materials.iter().enumerate() {
+        if !scene.triangles.iter().any(|t| t.material as usize == i) {
+            continue;
+        }
+        let j = back
+            .materials
+            .iter()
+            .position(|b| b.name.starts_with(&format!("mesh-{i:03}-")))
+            .unwrap();
+        let b = &back.materials[j];
+        assert_eq!(
+            uv_bits(&back, j as u32),
+            uv_bits(&scene, i as u32),
+            "{}: positions and uvs",
+            m.name
+        );
+        let Some(t) = m.albedo_texture else {
+            assert_eq!(b.albedo_texture, None, "{}", m.name);
+            continue;
+        };
+        let (a, t2) = (
+            &scene.textures[t as usize],
+            &back.textures[b.albedo_texture.expect("a texture") as usize],
+        );
+        assert_eq!((t2.width, t2.height), (a.width, a.height), "{}", m.name);
+        assert_eq!(t2.wrap, [a.wrap[0]; 2], "{}: u's wrap", m.name);
+        assert!(
+            close(b.ks, m.ks, 1e-6),
+            "{}: Ks {} as {}",
+            m.name,
+            m.ks,
+            b.ks
+        );
+        if i == red {
+            // Kd baked into the image: Kd 1, each texel Kd x the checker's to 8 bits.
+            assert_eq!(b.kd, Vec3::ONE);
+            for (x, y) in a.texels.iter().zip(&t2.texels) {
+                for c in 0..3 {
+                    let (want, got) = (srgb(x[c] * m.kd[c]), srgb(y[c]));
+                    assert!(
+                        (want - got).abs() <= 0.6,
+                        "{}: code {want} as {got}",
+                        m.name
+                    );
+                }
+            }
+        } else {
+            assert!(
+                close(b.kd, m.kd, 1e-6),
+                "{}: Kd {} as {}",
+                m.name,
+                m.kd,
+                b.kd
+            );
+            assert!(t2.texels == a.texels, "{}: texels bit for bit", m.name);
+        }
+    }
+    // Copied files keep their names' extensions; the lost one was written as PNG.
+    let names: Vec<String> = export
+        .files
+        .iter()
+        .map(|f| f.file_name().unwrap().to_string_lossy().into_owned())
+        .collect();
+    for suffix in ["-checker.png", "-poster.jpg"] {
+        assert!(names.iter().any(|n| n.ends_with(suffix)), "{names:?}");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// A 2x2 image, red green over blue white, on rectangles, PLY meshes and through to_uv:
+/// Mitsuba's uv (0, 0) is the image's top-left corner, at the rectangle's (-1, -1).
+#[test]
+fn bitmaps_read_the_right_way_up() {
+    let dir = temp_dir("bitmap-orientation");
+    irad::image::png::write_rgb8(
+        &dir.join("quad.png"),
+        2,
+        2,
+        &[255, 0, 0, 0, 255, 0, 0, 0, 255, 255, 255, 255],
+    )
+    .unwrap();
+    let ply = |name: &str, flip: bool| {
+        let text = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n\
+                    property float y\nproperty float z\nproperty float s\nproperty float t\n\
+                    element face 1\nproperty list uchar int vertex_indices\nend_header\n\
+                    0 0 -2 0.75 0.75\n1 0 -2 0.75 0.75\n0 1 -2 0.75 0.75\n3 0 1 2\n";
+        std::fs::write(dir.join(format!("{name}.ply")), text).unwrap();
+        format!(
+            r#"<shape type="ply" id="{name}"><string name="filename" value="{name}.ply"/>
+               <boolean name="flip_tex_coords" value="{flip}"/>
+               <bsdf type="diffuse"><ref name="reflectance" id="quad"/></bsdf></shape>"#
+        )
+    };
+    let xml = format!(
+        r#"<scene version="3.0.0">
+    <sensor type="perspective">
+        <transform name="to_world"><lookat origin="0, 0, 5" target="0, 0, 0" up="0, 1, 0"/></transform>
+        <film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/></film>
+    </sensor>
+    <texture type="bitmap" id="quad">
+        <string name="filename" value="quad.png"/>
+        <string name="wrap_mode" value="clamp"/>
+        <string name="filter_type" value="nearest"/>
+    </texture>
+    <shape type="rectangle" id="plain">
+        <bsdf type="twosided"><bsdf type="diffuse"><ref name="reflectance" id="quad"/></bsdf></bsdf>
+    </shape>
+    <shape type="rectangle" id="shifted">
+        <transform name="to_world"><translate z="-1"/></transform>
+        <bsdf type="diffuse">
+            <texture type="bitmap" name="reflectance">
+                <string name="filename" value="quad.png"/>
+                <transform name="to_uv"><scale x="2" y="2"/><translate x="0.5"/></transform>
+            </texture>
+        </bsdf>
+    </shape>
+    {}
+    {}
+    <shape type="rectangle" id="coated">
+        <transform name="to_world"><translate z="-3"/></transform>
+        <bsdf type="roughplastic"><ref name="diffuse_reflectance" id="quad"/></bsdf>
+    </shape>
+    <shape type="rectangle" id="mixed">
+        <transform name="to_world"><translate z="-4"/></transform>
+        <bsdf type="blendbsdf">
+            <ref name="weight" id="quad"/>
+            <bsdf type="diffuse"><ref name="reflectance" id="quad"/></bsdf>
+            <bsdf type="diffuse"><rgb name="reflectance" value="0.2"/></bsdf>
+        </bsdf>
+    </shape>
+    <emitter type="constant"/>
+</scene>"#,
+        ply("unflipped", false),
+        ply("flipped", true)
+    );
+    std::fs::write(dir.join("scene.xml"), xml).unwrap();
+    let scene = irad::scene::load(&dir.join("scene.xml")).unwrap();
+    let (red, green, blue, white) = (Vec3::X, Vec3::Y, Vec3::Z, Vec3::ONE);
+    // The albedo (Kd x texture) of `material` at the point `p` of one of its triangles.
+    let albedo = |material: &str, p: Vec3| -> Vec3 {
+        let (i, m) = scene
+            .materials
+            .iter()
+            .enumerate()
+            .find(|(_, m)| m.name == material)
+            .unwrap_or_else(|| panic!("no material {material}"));
+        for t in scene.triangles.iter().filter(|t| t.material as usize == i) {
+            let [a, b, c] = t.positions;
+            let n = (b - a).cross(c - a);
+            let w = [
+                (c - b).cross(p - b),
+                (a - c).cross(p - c),
+                (b - a).cross(p - a),
+            ]
+            .map(|x| x.dot(n) / n.length_squared());
+            if w.iter().all(|&x| x >= -1e-6) && (p - a).dot(n).abs() < 1e-6 {
+                let uv = t.uvs[0] * w[0] + t.uvs[1] * w[1] + t.uvs[2] * w[2];
+                let texture = &scene.textures[m.albedo_texture.unwrap() as usize];
+                return m.kd * texture.sample(uv);
+            }
+        }
+        panic!("{material}: no triangle at {p}")
+    };
+    let near = |a: Vec3, b: Vec3| (a - b).abs().max_element() < 1e-4;
+    for (x, y, want) in [
+        (-0.5, -0.5, red),
+        (0.5, -0.5, green),
+        (-0.5, 0.5, blue),
+        (0.5, 0.5, white),
+    ] {
+        let got = albedo("plain", Vec3::new(x, y, 0.0));
+        assert!(near(got, want), "plain at ({x}, {y}): {got}, not {want}");
+    }
+    // to_uv 2 uv + (0.5, 0), repeated: (-0.75, -0.75) is uv (0.125, 0.125) -> (0.75, 0.25),
+    // top-right; (-0.25, -0.75) -> (1.25, 0.25), top-left.
+    assert!(near(
+        albedo("shifted", Vec3::new(-0.75, -0.75, -1.0)),
+        green
+    ));
+    assert!(near(albedo("shifted", Vec3::new(-0.25, -0.75, -1.0)), red));
+    // s t = (0.75, 0.75): Mitsuba's bottom-right; flip_tex_coords: top-right.
+    let inside = Vec3::new(0.25, 0.25, -2.0);
+    assert!(near(albedo("unflipped", inside), white));
+    assert!(near(albedo("flipped", inside), green));
+    // roughplastic keeps the texture, Kd 1 - F0.
+    let f0 = ((1.49 / 1.000277f64 - 1.0) / (1.49 / 1.000277f64 + 1.0)).powi(2) as f32;
+    assert!(near(
+        albedo("coated", Vec3::new(-0.5, -0.5, -3.0)),
+        red * (1.0 - f0)
+    ));
+    // A blend of a texture and a colour: the texture's mean, with a warning; the weight a
+    // bitmap too (its mean, 0.5).
+    let mixed = scene.materials.iter().find(|m| m.name == "mixed").unwrap();
+    assert_eq!(mixed.albedo_texture, None);
+    assert!(near(
+        mixed.kd,
+        0.5 * Vec3::splat(0.5) + 0.5 * Vec3::splat(0.2)
+    ));
+    let warnings = scene.warnings.join("\n");
+    for needle in ["as its mean colour", "filter_type nearest read as bilinear"] {
+        assert!(
+            warnings.contains(needle),
+            "{needle} missing from:\n{warnings}"
+        );
+    }
+    // One scene texture per wrap (clamp, repeat), the file decoded once.
+    assert_eq!(scene.textures.len(), 2);
     std::fs::remove_dir_all(&dir).ok();
 }

@@ -1,8 +1,8 @@
 //! A `Scene` as a Mitsuba 3 scene (`<scene version="3.0.0">`), for cross-checking irad's
-//! images in Mitsuba: `DIR/scene.xml`, one PLY mesh per material (ply.rs) and, with an
-//! environment, `DIR/environment.exr`. Render it with an RGB variant (`scalar_rgb`,
-//! `llvm_ad_rgb`, `cuda_ad_rgb`): spectral variants upsample every RGB value and multiply
-//! emitters by D65, which irad does not.
+//! images in Mitsuba: `DIR/scene.xml`, one PLY mesh per material (ply.rs), the albedo
+//! textures' images (texture.rs) and, with an environment, `DIR/environment.exr`. Render it
+//! with an RGB variant (`scalar_rgb`, `llvm_ad_rgb`, `cuda_ad_rgb`): spectral variants upsample
+//! every RGB value and multiply emitters by D65, which irad does not.
 //!
 //! Exact (the same function of the scene as irad's, docs/DESIGN.md "Conventions"):
 //! - camera: `perspective`, `fov_axis` y, `to_world` `lookat` with irad's position, target and
@@ -12,8 +12,12 @@
 //!   Mitsuba's rays).
 //! - meshes: irad's triangles, counter-clockwise, with irad's per-corner shading normals
 //!   (which irad's BSDFs use; the geometric normal where the OBJ has no `vn`), every triangle
-//!   its own three vertices.
+//!   its own three vertices; a mesh with texture coordinates (a textured material's, or any
+//!   that are not all zero) has irad's (v up) as PLY `u v` and its shape `flip_tex_coords`,
+//!   which makes them Mitsuba's (v = 0 at the image's top; Mitsuba 3.4 or later reads it).
 //! - Lambert: `twosided` `diffuse`, reflectance Kd (f = Kd / pi on both sides, as irad).
+//! - albedo textures: a `bitmap` reflectance (texture.rs): the image file copied, with its
+//!   wrap mode; Kd 1 or grey (a blend with black) exactly, other Kd baked into the image.
 //! - emission: an `area` emitter with radiance Ke on the material's shape (one-sided, on the
 //!   normal's side; counter-clockwise corners keep irad's side), besides the shape's BSDF.
 //! - point lights: `point`, intensity in W/sr as irad's.
@@ -33,7 +37,9 @@
 //!   with its own power (envmap.rs);
 //! - a map sequence (glob or procedural sky): frame 0 only;
 //! - interpolated shading normals: irad also requires both directions on one side of the
-//!   geometric normal; Mitsuba looks at the shading normal only.
+//!   geometric normal; Mitsuba looks at the shading normal only;
+//! - a coloured Kd times a texture, baked into an 8-bit PNG; a texture not read from an 8-bit
+//!   PNG or JPEG written as one; different wrap modes on u and v (texture.rs).
 //!
 //! Refused: light-field luminaires (Mitsuba has no such emitter).
 
@@ -47,6 +53,7 @@ use crate::scene::{Environment, Light, Material, Scene};
 pub mod bsdf;
 pub mod envmap;
 pub mod spot;
+pub mod texture;
 
 use bsdf::{phong_alpha, split_glossy, GlossySplit};
 use envmap::{environment_factor, resample_environment};
@@ -57,7 +64,8 @@ use spot::fit_spot;
 pub struct MitsubaExport {
     /// `DIR/scene.xml`.
     pub xml: PathBuf,
-    /// The files it references, in `DIR`: the PLY meshes in material order, then the EXR.
+    /// The files it references, in `DIR`: the PLY meshes in material order, each followed by
+    /// the texture images it is the first to use, then the EXR.
     pub files: Vec<PathBuf>,
     /// What Mitsuba does not reproduce exactly, one line each, for the CLI to print.
     pub approximations: Vec<String>,
@@ -90,6 +98,9 @@ pub enum ExportError {
     /// The environment map could not be written as EXR.
     #[error("{path}: cannot write the environment map: {message}")]
     Exr { path: String, message: String },
+    /// A texture could not be written as PNG.
+    #[error("{path}: cannot write the texture: {message}")]
+    Texture { path: String, message: String },
 }
 
 /// Writes `scene` as a Mitsuba 3 scene into `dir` (created if missing; files of an earlier
@@ -176,6 +187,7 @@ fn write_meshes(xml: &mut Xml, scene: &Scene, dir: &Path) -> Result<Written, Exp
     let mut approximations = Vec::new();
     let mut flat_only = Vec::new();
     let mut smooth = Vec::new();
+    let mut textures = texture::TextureFiles::default();
     for (index, triangles) in material_groups(scene).iter().enumerate() {
         if triangles.is_empty() {
             continue;
@@ -187,9 +199,16 @@ fn write_meshes(xml: &mut Xml, scene: &Scene, dir: &Path) -> Result<Written, Exp
             Normals::Face => flat_only.push(format!("`{}`", m.name)),
             Normals::Shading { smooth: false } => {}
         }
-        let (path, note) = write_mesh(xml, dir, index, m, triangles, normals)?;
+        let mesh = Mesh {
+            index,
+            material: m,
+            triangles,
+            normals,
+        };
+        let (path, notes) = write_mesh(xml, scene, dir, &mesh, &mut textures)?;
         files.push(path);
-        approximations.extend(note);
+        files.append(&mut textures.files);
+        approximations.extend(notes);
     }
     for note in normals_notes(&smooth, &flat_only) {
         xml.comment(&note);
@@ -201,27 +220,65 @@ fn write_meshes(xml: &mut Xml, scene: &Scene, dir: &Path) -> Result<Written, Exp
     })
 }
 
-/// Material `index`'s triangles as `DIR/mesh-NNN-name.ply` with `normals`, and its
-/// `<shape>` with its BSDF and, when emissive, its area emitter. Returns the PLY's path and
-/// the BSDF's approximation note.
+/// One material's mesh to write.
+struct Mesh<'a> {
+    index: usize,
+    material: &'a Material,
+    triangles: &'a [&'a crate::scene::Triangle],
+    normals: Normals,
+}
+
+/// The diffuse reflectance `write_bsdf` writes for `m` (Kd, or Kd / (1 - w) in a glossy
+/// blend); None without a diffuse part.
+fn diffuse_factor(m: &Material) -> Option<[f64; 3]> {
+    if m.kd.max_element() <= 0.0 {
+        return None;
+    }
+    if m.ks.max_element() <= 0.0 {
+        return Some(m.kd.as_dvec3().to_array());
+    }
+    match split_glossy(m.kd, m.ks) {
+        GlossySplit::SpecularOnly => None,
+        GlossySplit::Blend { diffuse, .. } => Some(diffuse),
+    }
+}
+
+/// Material `index`'s triangles as `DIR/mesh-NNN-name.ply` with `normals` (and texture
+/// coordinates where it has any), its texture's image (texture.rs), and its `<shape>` with
+/// its BSDF and, when emissive, its area emitter. Returns the PLY's path and the
+/// approximation notes of the texture and the BSDF.
 fn write_mesh(
     xml: &mut Xml,
+    scene: &Scene,
     dir: &Path,
-    index: usize,
-    m: &Material,
-    triangles: &[&crate::scene::Triangle],
-    normals: Normals,
-) -> Result<(PathBuf, Option<String>), ExportError> {
+    mesh: &Mesh,
+    textures: &mut texture::TextureFiles,
+) -> Result<(PathBuf, Vec<String>), ExportError> {
+    let (index, m, triangles, normals) = (mesh.index, mesh.material, mesh.triangles, mesh.normals);
     let name = format!("mesh-{index:03}-{}", file_stem(&m.name));
     let file = format!("{name}.ply");
+    let with_uvs = m.albedo_texture.is_some()
+        || triangles
+            .iter()
+            .any(|t| t.uvs.iter().any(|&uv| uv != glam::Vec2::ZERO));
     let mesh = ply_triangles(triangles, normals);
     let path = dir.join(&file);
     let comment = format!("irad material {}", m.name);
-    ply::write(&path, &comment, &mesh).map_err(|error| ExportError::Write {
+    ply::write(&path, &comment, &mesh, with_uvs).map_err(|error| ExportError::Write {
         path: path.display().to_string(),
         what: format!("mesh of material `{}`", m.name),
         error,
     })?;
+    let (bitmap, mut notes) = match (m.albedo_texture, diffuse_factor(m)) {
+        (Some(t), Some(factor)) => {
+            let (b, notes) = textures.reflectance(scene, t, factor, dir, &name, &m.name)?;
+            (Some(b), notes)
+        }
+        _ => (None, Vec::new()),
+    };
+    for note in &notes {
+        xml.comment(note);
+    }
 
     xml.comment(&format!(
         "material `{}`: {} triangles{}",
@@ -235,7 +292,14 @@ fn write_mesh(
     ));
     xml.open("shape", &[("type", "ply"), ("id", &name)]);
     xml.string("filename", &file);
-    let note = write_bsdf(xml, m);
+    if with_uvs {
+        xml.comment(
+            "Texture coordinates as irad's (v up, OBJ's convention); flip_tex_coords makes \
+             them Mitsuba's (v = 0 at the image's top). Mitsuba 3.4 or later.",
+        );
+        xml.leaf("boolean", &[("name", "flip_tex_coords"), ("value", "true")]);
+    }
+    notes.extend(write_bsdf(xml, m, bitmap.as_ref()));
     if m.is_emissive() {
         if matches!(normals, Normals::Face) {
             xml.comment(
@@ -249,7 +313,7 @@ fn write_mesh(
         xml.close("emitter");
     }
     xml.close("shape");
-    Ok((path, note))
+    Ok((path, notes))
 }
 
 /// The triangles with the corner normals `normals` chose.
@@ -264,6 +328,7 @@ fn ply_triangles(triangles: &[&crate::scene::Triangle], normals: Normals) -> Vec
             PlyTriangle {
                 positions: t.positions,
                 normals,
+                uvs: t.uvs,
             }
         })
         .collect()
@@ -368,7 +433,34 @@ fn check(label: &str, scene: &Scene) -> Result<(), ExportError> {
             ));
         }
     }
+    for m in &scene.materials {
+        if let Some(t) = m.albedo_texture {
+            if t as usize >= scene.textures.len() {
+                return Err(invalid(
+                    format!("material `{}` albedo_texture", m.name),
+                    t.to_string(),
+                    &format!("the scene has {} textures", scene.textures.len()),
+                ));
+            }
+        }
+    }
+    for (k, t) in scene.textures.iter().enumerate() {
+        if t.width == 0 || t.height == 0 || t.texels.len() != t.width as usize * t.height as usize {
+            return Err(invalid(
+                format!("texture {k}"),
+                format!("{}x{}, {} texels", t.width, t.height, t.texels.len()),
+                "must be a non-empty width x height texels",
+            ));
+        }
+    }
     for (k, t) in scene.triangles.iter().enumerate() {
+        if !t.uvs.iter().all(|uv| uv.is_finite()) {
+            return Err(invalid(
+                format!("triangle {k} uvs"),
+                format!("{:?}", t.uvs),
+                "must be finite",
+            ));
+        }
         if t.material as usize >= scene.materials.len() {
             return Err(invalid(
                 format!("triangle {k} material"),
@@ -526,14 +618,47 @@ fn write_sensor(xml: &mut Xml, scene: &Scene) {
     xml.close("sensor");
 }
 
-/// Writes the material's BSDF; returns the approximation note of a Phong lobe.
-fn write_bsdf(xml: &mut Xml, m: &Material) -> Option<String> {
+/// A `diffuse` BSDF of reflectance `rgb`, or of the texture `bitmap` (which stands for `rgb`
+/// times the material's texture: texture.rs).
+fn write_diffuse(xml: &mut Xml, rgb: [f64; 3], bitmap: Option<&texture::Bitmap>) {
+    let Some(b) = bitmap else {
+        xml.open("bsdf", &[("type", "diffuse")]);
+        xml.reflectance("reflectance", rgb);
+        xml.close("bsdf");
+        return;
+    };
+    let textured = |xml: &mut Xml| {
+        xml.open("bsdf", &[("type", "diffuse")]);
+        xml.open("texture", &[("type", "bitmap"), ("name", "reflectance")]);
+        xml.string("filename", &b.file);
+        xml.string("wrap_mode", b.wrap_mode);
+        xml.close("texture");
+        xml.close("bsdf");
+    };
+    match b.blend {
+        None => textured(xml),
+        Some(g) => {
+            xml.comment(&format!(
+                "reflectance {g} times the texture: (1 - {g}) black + {g} the bitmap"
+            ));
+            xml.open("bsdf", &[("type", "blendbsdf")]);
+            xml.float("weight", g);
+            xml.open("bsdf", &[("type", "diffuse")]);
+            xml.rgb("reflectance", Vec3::ZERO);
+            xml.close("bsdf");
+            textured(xml);
+            xml.close("bsdf");
+        }
+    }
+}
+
+/// Writes the material's BSDF, its diffuse part `bitmap` where it has one; returns the
+/// approximation note of a Phong lobe.
+fn write_bsdf(xml: &mut Xml, m: &Material, bitmap: Option<&texture::Bitmap>) -> Option<String> {
     let glossy = m.ks.max_element() > 0.0;
     xml.open("bsdf", &[("type", "twosided")]);
     if !glossy {
-        xml.open("bsdf", &[("type", "diffuse")]);
-        xml.reflectance("reflectance", m.kd.as_dvec3().to_array());
-        xml.close("bsdf");
+        write_diffuse(xml, m.kd.as_dvec3().to_array(), bitmap);
         xml.close("bsdf");
         return None;
     }
@@ -573,9 +698,7 @@ fn write_bsdf(xml: &mut Xml, m: &Material) -> Option<String> {
             ));
             xml.open("bsdf", &[("type", "blendbsdf")]);
             xml.float("weight", weight as f32);
-            xml.open("bsdf", &[("type", "diffuse")]);
-            xml.reflectance("reflectance", diffuse);
-            xml.close("bsdf");
+            write_diffuse(xml, diffuse, bitmap);
             conductor(xml, specular);
             xml.close("bsdf");
         }

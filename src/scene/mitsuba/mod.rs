@@ -5,7 +5,8 @@
 //! Read: `<default>` values (`$name`); `sensor` perspective (fov and fov_axis, or
 //! focal_length; `to_world`; `hdrfilm` width and height); shapes ply, obj, rectangle, cube,
 //! disk, sphere (tessellated: `<integer name="tessellation">` segments, 64 by default), each
-//! with `to_world`, `flip_normals`, `face_normals`, a nested or referenced BSDF (bsdf.rs) and
+//! with `to_world`, `flip_normals`, `face_normals`, texture coordinates (shapes.rs), a nested
+//! or referenced BSDF (bsdf.rs, its bitmap reflectance an albedo texture: textures.rs) and
 //! an `area` emitter; emitters point, spot, envmap (EXR) and constant. Ignored without a word:
 //! `integrator`, `sampler`, `rfilter`, a film's formats (irad has its own). Refused: other
 //! emitters and shapes, `include`, a second sensor is ignored with a warning.
@@ -23,7 +24,7 @@ use roxmltree::{Document, Node};
 
 use super::hash::Fnv1a64;
 use super::{environment, power};
-use super::{Camera, Environment, Light, Material, Scene, SceneError, Triangle};
+use super::{Camera, Environment, Light, Material, Scene, SceneError, Texture, Triangle, Wrap};
 use props::Context;
 
 /// The diagonal of the 36 x 24 mm film a 35 mm-equivalent focal length is over.
@@ -31,6 +32,7 @@ const DIAGONAL_MM: f64 = 43.266_615_305_567_87;
 use shapes::RawTriangle;
 
 pub use bsdf::{ns_of_alpha, MIRROR_NS};
+pub(crate) use textures::{srgb_code, srgb_table};
 
 /// Whether `path` names a Mitsuba XML scene (by its extension).
 pub fn is_mitsuba(path: &Path) -> bool {
@@ -90,6 +92,7 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
         base: path.parent().unwrap_or(Path::new("")).to_path_buf(),
         defaults: HashMap::new(),
         hash: std::cell::RefCell::new(hash),
+        textures: Default::default(),
     };
     for d in root.children().filter(|c| c.has_tag_name("default")) {
         let (Some(name), Some(value)) = (d.attribute("name"), d.attribute("value")) else {
@@ -143,6 +146,9 @@ struct Builder {
     /// Material index by its key (BSDF id or shape, and emitted radiance bits).
     material_index: HashMap<String, u32>,
     lights: Vec<Light>,
+    textures: Vec<Texture>,
+    /// Scene texture by file, `raw` flag and wrap.
+    texture_index: HashMap<(PathBuf, bool, [Wrap; 2]), u32>,
     environment: Option<(Environment, f32, String)>,
     warnings: Vec<String>,
     dropped: usize,
@@ -339,16 +345,23 @@ impl Builder {
                 })?;
                 ctx.hash.borrow_mut().write(&bytes);
                 let display = path.display().to_string();
+                // Mitsuba's defaults: ply false, obj true.
+                let flip = match property(node, "flip_tex_coords") {
+                    Some(p) => ctx.attr(p, "value").is_some_and(|v| v == "true"),
+                    None => kind == "obj",
+                };
                 match kind.as_str() {
-                    "ply" => shapes::read_ply(&bytes).map_err(|message| SceneError::File {
-                        file: display,
-                        message: format!(
-                            "{message} (the ply shape at {} of {})",
-                            ctx.at(node),
-                            ctx.file
-                        ),
-                    })?,
-                    _ => shapes::read_obj(&display, &String::from_utf8_lossy(&bytes))?,
+                    "ply" => {
+                        shapes::read_ply(&bytes, flip).map_err(|message| SceneError::File {
+                            file: display,
+                            message: format!(
+                                "{message} (the ply shape at {} of {})",
+                                ctx.at(node),
+                                ctx.file
+                            ),
+                        })?
+                    }
+                    _ => shapes::read_obj(&display, &String::from_utf8_lossy(&bytes), flip)?,
                 }
             }
             "rectangle" => shapes::rectangle(),
@@ -386,7 +399,10 @@ impl Builder {
             }
         };
         let local = if bool_property(ctx, node, "face_normals") {
-            local.into_iter().map(|(p, _)| (p, None)).collect()
+            local
+                .into_iter()
+                .map(|t| shapes::LocalTriangle { normals: None, ..t })
+                .collect()
         } else {
             local
         };
@@ -428,10 +444,22 @@ impl Builder {
                     kd: Vec3::splat(0.5),
                     ks: Vec3::ZERO,
                     ns: 0.0,
+                    texture: None,
                 },
                 None,
             ),
         };
+        // A texture reads the shape's coordinates through its to_uv; Mitsuba reads (0, 0)
+        // where a mesh has none.
+        let uv_map = fit.texture.as_ref().map(|t| t.uv);
+        if fit.texture.is_some() && raw.iter().any(|t| t.uvs.is_none()) {
+            self.warnings.push(format!(
+                "{}: {}: a textured shape without texture coordinates: its texture is read at \
+                 uv (0, 0), one texel's colour, as Mitsuba reads it",
+                ctx.file,
+                ctx.at(node)
+            ));
+        }
         let ke = match node.children().find(|c| c.has_tag_name("emitter")) {
             Some(e) => {
                 let kind = ctx.attr(e, "type").unwrap_or_default();
@@ -471,7 +499,13 @@ impl Builder {
                 self.dropped += 1;
                 continue;
             }
-            self.triangles.push(triangle(t, material));
+            let uvs = match (uv_map, t.uvs) {
+                (Some(map), uvs) => uvs
+                    .unwrap_or([glam::Vec2::new(0.0, 1.0); 3])
+                    .map(|uv| map.apply(uv)),
+                (None, uvs) => uvs.unwrap_or([glam::Vec2::ZERO; 3]),
+            };
+            self.triangles.push(triangle(t, uvs, material));
         }
         Ok(())
     }
@@ -487,7 +521,11 @@ impl Builder {
         ke: Vec3,
         warnings: Vec<String>,
     ) -> Result<u32, SceneError> {
-        let key = format!("{name}|{:?}|{:?}|{:?}|{:?}", fit.kd, fit.ks, fit.ns, ke);
+        let texture = fit.texture.as_ref().map(|t| self.texture(t));
+        let key = format!(
+            "{name}|{:?}|{:?}|{:?}|{:?}|{texture:?}",
+            fit.kd, fit.ks, fit.ns, ke
+        );
         if let Some(&i) = self.material_index.get(&key) {
             return Ok(i);
         }
@@ -530,10 +568,25 @@ impl Builder {
             ks: fit.ks,
             ns: fit.ns,
             ke,
-            albedo_texture: None,
+            albedo_texture: texture,
         });
         self.material_index.insert(key, index);
         Ok(index)
+    }
+
+    /// The scene texture of `albedo` (one per file, `raw` flag and wrap).
+    fn texture(&mut self, albedo: &textures::Albedo) -> u32 {
+        let key = (albedo.path.clone(), albedo.raw, albedo.wrap);
+        if let Some(&i) = self.texture_index.get(&key) {
+            return i;
+        }
+        let index = self.textures.len() as u32;
+        self.textures.push(Texture {
+            wrap: albedo.wrap,
+            ..albedo.image.texture.clone()
+        });
+        self.texture_index.insert(key, index);
+        index
     }
 
     fn emitter(&mut self, ctx: &Context, node: Node) -> Result<(), SceneError> {
@@ -728,7 +781,7 @@ impl Builder {
             triangles: self.triangles,
             materials: self.materials,
             lights: self.lights,
-            textures: Vec::new(),
+            textures: self.textures,
             environment,
             environment_sequence: Vec::new(),
             luminaires: Vec::new(),
@@ -751,7 +804,7 @@ impl Builder {
 }
 
 /// A shape's triangle with unit shading normals (the geometric one where a normal is zero).
-fn triangle(t: RawTriangle, material: u32) -> Triangle {
+fn triangle(t: RawTriangle, uvs: [glam::Vec2; 3], material: u32) -> Triangle {
     let p = t.positions;
     let face = (p[1] - p[0]).cross(p[2] - p[0]).normalize_or_zero();
     Triangle {
@@ -770,6 +823,6 @@ fn triangle(t: RawTriangle, material: u32) -> Triangle {
             }
         }),
         material,
-        uvs: [glam::Vec2::ZERO; 3],
+        uvs,
     }
 }

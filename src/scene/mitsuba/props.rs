@@ -18,6 +18,11 @@ pub struct Context<'a> {
     pub defaults: HashMap<String, String>,
     /// The content hash: the XML and every file it names.
     pub hash: std::cell::RefCell<crate::scene::hash::Fnv1a64>,
+    /// Bitmaps decoded so far, by file and `raw` flag (a BSDF shared by many shapes is fitted
+    /// once per shape, its bitmap decoded once).
+    pub textures: std::cell::RefCell<
+        HashMap<(std::path::PathBuf, bool), std::rc::Rc<super::textures::Image>>,
+    >,
 }
 
 impl Context<'_> {
