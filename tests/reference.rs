@@ -446,12 +446,13 @@ fn alpha_direct_light_is_unbiased_and_lowers_the_variance() {
 fn kernels_specialized_to_a_scene_give_the_general_kernels_bits() {
     use irad::scene::gpu::SceneFeatures;
     let cases = [
-        // (scene, its features: environment, delta lights, glossy)
-        ("cornell-box", [false, false, false]),
-        ("failure/corner-light", [false, true, false]),
-        ("spot-light", [false, true, true]),
-        ("failure/glossy-cornell", [false, true, true]),
-        ("glossy-env", [true, false, true]),
+        // (scene, its features: environment, delta lights, glossy, textures)
+        ("cornell-box", [false, false, false, false]),
+        ("failure/corner-light", [false, true, false, false]),
+        ("spot-light", [false, true, true, false]),
+        ("failure/glossy-cornell", [false, true, true, false]),
+        ("glossy-env", [true, false, true, false]),
+        ("textured-cornell", [false, false, false, true]),
     ];
     with_gpu(|ctx| {
         let reference = Renderer::<Reference>::new(ctx).expect("kernels");
@@ -460,14 +461,14 @@ fn kernels_specialized_to_a_scene_give_the_general_kernels_bits() {
             seed: 3,
             ..Default::default()
         };
-        for (name, [environment, delta_lights, glossy]) in cases {
+        for (name, [environment, delta_lights, glossy, textures]) in cases {
             let scene = common::scene_file(name, 24, 24);
             let mut gpu = GpuScene::upload(ctx, &scene).expect("upload");
             let features = SceneFeatures {
                 environment,
                 delta_lights,
                 glossy,
-                textures: false,
+                textures,
             };
             assert_eq!(gpu.features, features, "{name}");
             let specialized = reference

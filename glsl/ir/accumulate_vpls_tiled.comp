@@ -60,6 +60,7 @@ void main() {
             chunk_materials[gl_LocalInvocationIndex] = vpl_material(v);
         } else {
             chunk[gl_LocalInvocationIndex].position = vec4(0.0, 0.0, 0.0, uintBitsToFloat(VPL_NONE));
+            chunk_materials[gl_LocalInvocationIndex] = materials[0];
         }
         memoryBarrierShared();
         barrier();

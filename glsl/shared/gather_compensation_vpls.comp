@@ -59,6 +59,7 @@ void main() {
             chunk_materials[gl_LocalInvocationIndex] = vpl_material(vpl);
         } else {
             chunk[gl_LocalInvocationIndex].position = vec4(0.0, 0.0, 0.0, uintBitsToFloat(VPL_NONE));
+            chunk_materials[gl_LocalInvocationIndex] = materials[0];
         }
         memoryBarrierShared();
         barrier();

@@ -76,6 +76,28 @@ pub fn check_scene(scene: &Scene, limit: u64) -> Result<(), String> {
             (limit / node_bytes).div_ceil(2)
         ));
     }
+    // A scene built in code may name a texture it lacks, or give one the wrong texel count: the
+    // kernels would read another texture's texels.
+    for m in &scene.materials {
+        if let Some(k) = m.albedo_texture {
+            let Some(t) = scene.textures.get(k as usize) else {
+                return Err(format!(
+                    "{file}: material `{}` names albedo texture {k}, but the scene has {}",
+                    m.name,
+                    scene.textures.len()
+                ));
+            };
+            if t.texels.len() as u64 != t.width as u64 * t.height as u64 || t.width == 0 {
+                return Err(format!(
+                    "{file}: albedo texture {} is {}x{} but holds {} texels",
+                    t.source.display(),
+                    t.width,
+                    t.height,
+                    t.texels.len()
+                ));
+            }
+        }
+    }
     // Texels: every albedo texture's texels in one buffer, 8 bytes a texel (half RGB).
     let texel_bytes = crate::scene::texture_upload::texel_bytes(scene);
     if texel_bytes > limit {
@@ -87,7 +109,8 @@ pub fn check_scene(scene: &Scene, limit: u64) -> Result<(), String> {
             .map(|t| format!("{} ({}x{})", t.source.display(), t.width, t.height))
             .collect();
         return Err(format!(
-            "{file}: {} albedo textures {}; this device holds at most {} texels of texture a              scene (8 bytes each): scale the largest down ({})",
+            "{file}: {} albedo textures {}; this device holds at most {} texels of texture a \
+             scene (8 bytes each): scale the largest down ({})",
             scene.textures.len(),
             over(texel_bytes, limit),
             limit / 8,

@@ -72,7 +72,7 @@ fn albedo_map(material: usize, line: usize, args: &str) -> Result<AlbedoMap, Str
             return Err(format!("{option} without its value"));
         }
         if option == "-clamp" {
-            wrap = match values[0].as_str() {
+            wrap = match values[0].to_ascii_lowercase().as_str() {
                 "on" => Wrap::Clamp,
                 "off" => Wrap::Repeat,
                 v => return Err(format!("-clamp {v}: expected on or off")),

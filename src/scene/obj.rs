@@ -41,6 +41,11 @@ pub struct ObjMesh {
     pub warnings: Vec<String>,
 }
 
+/// The value of `check`'s sentinel texture coordinate (a corner without `vt`), which no kept
+/// coordinate reaches: those are below UV_LIMIT in magnitude.
+const NO_UV: f32 = 3e38;
+const UV_LIMIT: f32 = 1e30;
+
 /// Reads an MTL file named by an OBJ: (name as written after `mtllib`, what referenced it)
 /// -> (the name to use for it in messages, its bytes).
 pub type MtlReader<'a> = dyn FnMut(&str, &str) -> Result<(String, Vec<u8>), SceneError> + 'a;
@@ -185,14 +190,16 @@ pub fn load(
             .map(|id| id as u32);
         let has_normals = mesh.normal_indices.len() == mesh.indices.len();
         let has_uvs = mesh.texcoord_indices.len() == mesh.indices.len();
+        // None for a corner without `vt` (check's sentinel).
         let uv = |k: usize| {
             if !has_uvs {
-                return Vec2::ZERO;
+                return None;
             }
             let i = mesh.texcoord_indices[k] as usize * 2;
             mesh.texcoords
                 .get(i..i + 2)
-                .map_or(Vec2::ZERO, Vec2::from_slice)
+                .map(Vec2::from_slice)
+                .filter(|uv| uv.x.abs() < UV_LIMIT)
         };
         let textured = material.is_some_and(|m| materials[m as usize].albedo_texture.is_some());
         let position = |k: usize| {
@@ -230,15 +237,15 @@ pub fn load(
             if material.is_none() {
                 without_material += 1;
             }
-            // Texture coordinate 0 is check's sentinel for a corner without `vt`.
-            if textured && (!has_uvs || (0..3).all(|c| mesh.texcoord_indices[3 * t + c] == 0)) {
+            let uvs = [uv(3 * t), uv(3 * t + 1), uv(3 * t + 2)];
+            if textured && uvs.contains(&None) {
                 without_uvs += 1;
             }
             triangles.push(ObjTriangle {
                 positions,
                 normals,
                 material,
-                uvs: [uv(3 * t), uv(3 * t + 1), uv(3 * t + 2)],
+                uvs: uvs.map(|uv| uv.unwrap_or(Vec2::ZERO)),
             });
         }
     }
@@ -250,8 +257,8 @@ pub fn load(
     }
     if without_uvs > 0 {
         warnings.push(format!(
-            "{file}: {without_uvs} triangles of textured materials have no texture coordinates \
-             (no vt); they read the texture at (0, 0)"
+            "{file}: {without_uvs} triangles of textured materials lack texture coordinates at a \
+             corner (no vt); such corners read the texture at (0, 0)"
         ));
     }
     mtl_bytes.extend(texture_bytes);
@@ -304,9 +311,11 @@ fn check(file: &str, text: &str, groups: Option<&GroupMaterials>) -> Result<Chec
     // Normal 1 (1-based) is the zero sentinel for corners without `vn`.
     let mut out = String::with_capacity(text.len() + 16);
     out.push_str("vn 0 0 0\n");
-    // Texture coordinate 1 is the sentinel for corners without `vt` (obj.rs's load reads a
-    // triangle whose corners all name it as one without texture coordinates).
-    out.push_str("vt 0 0\n");
+    // Texture coordinate 1 is the sentinel for corners without `vt`: its value, which no
+    // coordinate kept takes (`load` reads it as none; tobj renumbers coordinates per mesh, so
+    // only a value marks it).
+    out.push_str(&format!("vt {NO_UV} {NO_UV}\n"));
+    let mut unusable_uvs = 0usize;
     let mut mtllibs = Vec::new();
     let mut usemtl = Vec::new();
     // The scene's MTL for the groups, before any line of the file (tobj needs a library
@@ -398,13 +407,12 @@ fn check(file: &str, text: &str, groups: Option<&GroupMaterials>) -> Result<Chec
                     .get(1)
                     .and_then(|v| v.parse::<f32>().ok())
                     .unwrap_or(0.0);
-                if !(u.is_finite() && v.is_finite()) {
-                    return Err(error(format!(
-                        "texture coordinate: not finite: `{}`",
-                        values.join(" ")
-                    )));
+                if u.abs() < UV_LIMIT && v.abs() < UV_LIMIT {
+                    out.push_str(&format!("vt {u} {v}"));
+                } else {
+                    unusable_uvs += 1;
+                    out.push_str(&format!("vt {NO_UV} {NO_UV}"));
                 }
-                out.push_str(&format!("vt {u} {v}"));
             }
             Some("f") => {
                 let mut corners = Vec::with_capacity(values.len());
@@ -484,6 +492,11 @@ fn check(file: &str, text: &str, groups: Option<&GroupMaterials>) -> Result<Chec
         out.push('\n');
     }
     let mut warnings = Vec::new();
+    if unusable_uvs > 0 {
+        warnings.push(format!(
+            "{file}: {unusable_uvs} texture coordinates not finite or beyond 1e30 read as none"
+        ));
+    }
     if small_faces > 0 {
         warnings.push(format!(
             "{file}: ignored {small_faces} faces with fewer than 3 vertices"
@@ -544,11 +557,22 @@ mod tests {
             mesh.triangles[1].uvs,
             [Vec2::new(0.25, 0.5), Vec2::ZERO, Vec2::ZERO]
         );
-        let e = load("t.obj", "v 0 0 0\nvt 0 inf\n", &mut no_mtl, None).unwrap_err();
+        // A coordinate past 1e30 or not finite is read as none, with a warning.
+        let mesh = load(
+            "t.obj",
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 inf\nvt 0.5 0.5\nf 1/1 2/2 3/2\n",
+            &mut no_mtl,
+            None,
+        )
+        .unwrap();
+        assert_eq!(mesh.triangles[0].uvs[0], Vec2::ZERO);
+        assert_eq!(mesh.triangles[0].uvs[1], Vec2::splat(0.5));
         assert!(
-            e.to_string()
-                .contains("t.obj line 2: texture coordinate: not finite"),
-            "{e}"
+            mesh.warnings
+                .iter()
+                .any(|w| w.contains("1 texture coordinates not finite or beyond 1e30")),
+            "{:?}",
+            mesh.warnings
         );
     }
 

@@ -149,7 +149,8 @@ fn wrap_index(i: i64, n: u32, wrap: Wrap) -> u32 {
 
 impl Texture {
     /// The bilinear value at `uv` (OBJ's convention, v up): glsl/include/texture.glsl's
-    /// `sample_texture`, in the same f32 operations. Repeat and mirror wrap take `uv` mod 1
+    /// `sample_texture`, in the same f32 operations (a driver may fuse a multiply and an add,
+    /// so the kernels' value may differ in the last bits). Repeat and mirror wrap take `uv` mod 1
     /// first (mirror's period is 2 texture widths, so `uv`'s integer part is kept for it).
     pub fn sample(&self, uv: Vec2) -> Vec3 {
         let x = axis(uv.x, self.width, self.wrap[0]);
@@ -168,8 +169,8 @@ impl Texture {
 }
 
 /// The continuous texel coordinate on one axis (u, or 1 - v: rows from the top), texel centres
-/// at half-integers: repeat reduces `t` mod 1, mirror mod 2, clamp's is clamped to [-1, n]
-/// (texel indices then mirror), clamp keeps it.
+/// at half-integers: repeat reduces `t` mod 1 and mirror mod 2 (`wrap_index` then mirrors the
+/// texel indices), clamp's is clamped to [-1, n] (`wrap_index` then clamps the indices).
 fn axis(t: f32, n: u32, wrap: Wrap) -> f32 {
     match wrap {
         Wrap::Repeat => (t - t.floor()) * n as f32 - 0.5,

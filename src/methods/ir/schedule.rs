@@ -120,13 +120,30 @@ impl Schedule {
 }
 
 /// Keller's mean reflectivity: the area-weighted mean over all triangles of the luminance of
-/// their albedo, Kd + Ks (the normalized Phong lobe's albedo at normal incidence).
+/// their albedo, Kd + Ks (the normalized Phong lobe's albedo at normal incidence), a textured
+/// Kd times its texture's mean (a glTF base colour of 1 carries its colour in the texture:
+/// taken as 1, the walk's absorption would keep every path to its last vertex).
 pub fn mean_albedo(scene: &Scene) -> f64 {
+    let texture_means: Vec<glam::Vec3> = scene
+        .textures
+        .iter()
+        .map(|t| {
+            let sum = t
+                .texels
+                .iter()
+                .fold(glam::DVec3::ZERO, |s, c| s + c.as_dvec3());
+            (sum / t.texels.len().max(1) as f64).as_vec3()
+        })
+        .collect();
     let (mut weighted, mut area) = (0.0, 0.0);
     for t in &scene.triangles {
         let a = t.area();
         let m = &scene.materials[t.material as usize];
-        weighted += a * luminance(m.kd + m.ks);
+        let kd = match m.albedo_texture.and_then(|k| texture_means.get(k as usize)) {
+            Some(mean) => m.kd * *mean,
+            None => m.kd,
+        };
+        weighted += a * luminance(kd + m.ks);
         area += a;
     }
     if area > 0.0 {

@@ -453,7 +453,8 @@ fn local(ctx: &Ctx, node: &gltf::Node) -> Result<DMat4, SceneError> {
 }
 
 /// The camera and its index: `cameras[n]` where one is asked for, else the lowest-numbered
-/// camera a node places, else one framing the triangles (with a warning; index None).
+/// perspective camera a node places, else one framing the triangles (with a warning; index
+/// None).
 fn choose_camera(
     ctx: &mut Ctx,
     doc: &gltf::Document,
@@ -484,7 +485,19 @@ fn choose_camera(
             }
             n
         }
-        None => match placed.iter().map(|(c, ..)| *c).min() {
+        // The lowest-numbered perspective camera placed (an orthographic one is refused only
+        // when asked for), else the lowest placed (refused by name below).
+        None => match placed
+            .iter()
+            .map(|(c, ..)| *c)
+            .filter(|&c| {
+                doc.cameras().nth(c).is_some_and(|cam| {
+                    matches!(cam.projection(), gltf::camera::Projection::Perspective(_))
+                })
+            })
+            .min()
+            .or_else(|| placed.iter().map(|(c, ..)| *c).min())
+        {
             Some(n) => n,
             None => {
                 let why = match count {
