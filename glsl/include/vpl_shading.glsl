@@ -8,8 +8,8 @@
 // A surface VPL's material at its point, textured (texture.glsl); material 0 for the other
 // kinds, which do not read it. Kernels that shade many points from one VPL look it up once
 // (accumulate_vpls_tiled.comp keeps it beside the VPL in shared memory): looked up per pair,
-// the texture made ir 1.62x slower on scenes/textured-cornell (128x128, 16 frames, lavapipe:
-// 24.5 s against 39.6 s GPU).
+// two textured materials made ir 1.3x slower, once per VPL 1.04x (docs/DESIGN.md
+// "Textures" has the measurement).
 Material vpl_material(Vpl v) {
     bool surface = vpl_kind(v) == VPL_SURFACE;
     uint material = surface ? floatBitsToUint(v.normal.w) : 0u;
