@@ -57,7 +57,7 @@ fn read_json(path: &Path) -> Value {
 }
 
 /// `doc` with a white point light of 1 cd on a new root node at `at`: the Khronos samples have
-/// no light of their own, and irad refuses a scene without one.
+/// no light of their own (irad would light them by its default sky).
 fn with_light(mut doc: Value, at: [f32; 3]) -> Value {
     let nodes = doc["nodes"].as_array_mut().unwrap();
     nodes.push(json!({"translation": at, "extensions": {"KHR_lights_punctual": {"light": 0}}}));
@@ -680,23 +680,29 @@ fn bad_files_are_refused_by_field_and_value() {
             "[0, 1]",
         ],
     );
-    // No light; only a directional one.
+    // No light, or only a directional one: lit by a uniform white sky, with a warning.
     let mut doc = square(4, &[0, 1, 2, 1, 3, 2]);
     doc["materials"] = json!([{}]);
-    let e = error(
-        &dir.write_json("dark.gltf", &doc),
-        &["dark.gltf", "no light"],
-    );
-    assert!(matches!(e, SceneError::NoLight { .. }));
+    let lit = |file: &str, doc: &Value, why: &str| {
+        let scene = irad::scene::load(&dir.write_json(file, doc)).unwrap();
+        let env = scene.environment.as_ref().expect("the default sky");
+        assert!(env.texels.iter().all(|t| *t == Vec3::ONE));
+        assert!(
+            scene
+                .warnings
+                .iter()
+                .any(|w| w.contains(file) && w.contains(why) && w.contains("uniform white sky")),
+            "{:?}",
+            scene.warnings
+        );
+    };
+    lit("dark.gltf", &doc, "it has no light");
     doc["extensionsUsed"] = json!(["KHR_lights_punctual"]);
     doc["extensions"] =
         json!({"KHR_lights_punctual": {"lights": [{"name": "sun", "type": "directional"}]}});
     doc["nodes"] = json!([{"mesh": 0}, {"extensions": {"KHR_lights_punctual": {"light": 0}}}]);
     doc["scenes"][0]["nodes"] = json!([0, 1]);
-    error(
-        &dir.write_json("sun.gltf", &doc),
-        &["lights[0] `sun`", "\"directional\"", "no other light"],
-    );
+    lit("sun.gltf", &doc, "lights[0] `sun`, is directional");
     // Not JSON; glTF 1.0.
     std::fs::write(dir.path("text.gltf"), "{\"asset\": ").unwrap();
     error(
@@ -826,6 +832,26 @@ fn irad_renders_a_gltf_scene() {
     assert!(image.pixels.iter().flatten().all(|x| x.is_finite()));
     let mean = image.mean();
     assert!(mean.iter().all(|m| *m > 0.0), "{mean:?}");
+    // A Khronos sample as it is: no light of its own (the default sky), no camera (a framing
+    // one).
+    let sample = samples().join("BoxTextured/BoxTextured.gltf");
+    let o = Command::new(env!("CARGO_BIN_EXE_irad"))
+        .args([
+            "render",
+            sample.to_str().unwrap(),
+            "--spp",
+            "4",
+            "--resolution",
+            "32x24",
+            "-o",
+        ])
+        .arg(dir.path("box"))
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let image = irad::image::exr::read(&dir.path("box.exr")).unwrap();
+    assert!(image.pixels.iter().flatten().all(|x| x.is_finite()));
+    assert!(image.mean().iter().all(|m| *m > 0.0));
     let o = Command::new(env!("CARGO_BIN_EXE_irad"))
         .args([
             "render",

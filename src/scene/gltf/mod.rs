@@ -161,17 +161,27 @@ pub fn load_with_camera(path: &Path, camera: Option<usize>) -> Result<Scene, Sce
                 intensity.max_element() > 0.0
             }
         });
-    if !emits {
-        return Err(match ctx.skipped_directional {
-            Some(field) => SceneError::Unsupported {
-                file: ctx.file,
-                field,
-                value: "\"directional\"".into(),
-                what: "directional lights (irad has none, and the scene has no other light)".into(),
-            },
-            None => SceneError::NoLight { file: ctx.file },
-        });
-    }
+    // A model without light (most glTF samples: a viewer lights them with an environment) is
+    // lit by a uniform white sky, with a warning, so that `irad render model.gltf` renders it.
+    let environment = if emits {
+        None
+    } else {
+        let why = match &ctx.skipped_directional {
+            Some(field) => format!("its only light, {field}, is directional (irad has none)"),
+            None => "it has no light (no emissive material, no point or spot light)".into(),
+        };
+        ctx.warn(format!(
+            "{why}: lit by a uniform white sky of radiance {DEFAULT_SKY} instead (ir and bir \
+             decline skies)"
+        ));
+        ctx.hash.write(b"default sky");
+        Some(super::Environment {
+            width: 16,
+            height: 8,
+            texels: vec![glam::Vec3::splat(DEFAULT_SKY); 16 * 8],
+            source: PathBuf::from("the default sky of a glTF scene without lights"),
+        })
+    };
     let scene = Scene {
         source: Some(path.to_path_buf()),
         name: path
@@ -184,7 +194,7 @@ pub fn load_with_camera(path: &Path, camera: Option<usize>) -> Result<Scene, Sce
         materials: materials.list,
         lights,
         textures: materials.textures,
-        environment: None,
+        environment,
         environment_sequence: Vec::new(),
         luminaires: Vec::new(),
         failure: None,
@@ -198,7 +208,10 @@ pub fn load_with_camera(path: &Path, camera: Option<usize>) -> Result<Scene, Sce
         &power::PowerSources {
             file: &ctx.file,
             material_files: &material_files,
-            environment: None,
+            environment: scene
+                .environment
+                .as_ref()
+                .map(|_| (1.0, "the default sky".to_string())),
         },
     )?;
     Ok(Scene {
@@ -206,6 +219,9 @@ pub fn load_with_camera(path: &Path, camera: Option<usize>) -> Result<Scene, Sce
         ..scene
     })
 }
+
+/// The radiance of the sky a scene without lights gets.
+const DEFAULT_SKY: f32 = 1.0;
 
 /// What the loader's parts share: the file's name and folder, the content hash, the warnings.
 pub(crate) struct Ctx {
