@@ -31,6 +31,17 @@ pub fn load_with_camera(path: &Path, camera: Option<usize>) -> Result<Scene, Sce
     Ok(scene)
 }
 
+/// The scene file's name for messages and its bytes: every format's first step.
+pub(crate) fn read_scene_file(path: &Path) -> Result<(String, Vec<u8>), SceneError> {
+    let file = path.display().to_string();
+    let bytes = std::fs::read(path).map_err(|error| SceneError::Read {
+        path: file.clone(),
+        referenced_by: "the scene file".into(),
+        error,
+    })?;
+    Ok((file, bytes))
+}
+
 fn load_file(path: &Path, camera: Option<usize>) -> Result<Scene, SceneError> {
     if let (Some(n), false) = (camera, super::gltf::is_gltf(path)) {
         return Err(SceneError::Invalid {
@@ -52,12 +63,7 @@ fn load_file(path: &Path, camera: Option<usize>) -> Result<Scene, SceneError> {
         log_warnings(&scene);
         return Ok(scene);
     }
-    let display = path.display().to_string();
-    let bytes = std::fs::read(path).map_err(|error| SceneError::Read {
-        path: display.clone(),
-        referenced_by: "the scene file".into(),
-        error,
-    })?;
+    let (display, bytes) = read_scene_file(path)?;
     let text = String::from_utf8(bytes).map_err(|e| SceneError::File {
         file: display.clone(),
         message: format!("not UTF-8 text (TOML must be): {e}"),

@@ -117,8 +117,9 @@ fn to_rgb(data: &[u8], channels: usize) -> Result<Vec<u8>, String> {
     })
 }
 
-/// Each 8-bit sRGB code's linear value, rounded to half precision.
-fn srgb_table() -> [f32; 256] {
+/// Each 8-bit sRGB code's linear value, rounded to half precision: `decode`'s table (strictly
+/// increasing, so a decoded texel names its code: `srgb_code`).
+pub fn srgb_table() -> [f32; 256] {
     std::array::from_fn(|i| {
         let c = i as f64 / 255.0;
         let linear = if c <= 0.04045 {
@@ -128,6 +129,23 @@ fn srgb_table() -> [f32; 256] {
         };
         f16::from_f64(linear).to_f32()
     })
+}
+
+/// The 8-bit code whose decoded value is nearest `linear` (clamped to [0, 1]): the code a
+/// texel decoded from an 8-bit file came from.
+pub fn srgb_code(table: &[f32; 256], linear: f32) -> u8 {
+    let i = table.partition_point(|&t| t < linear);
+    if i == 0 {
+        return 0;
+    }
+    if i == 256 {
+        return 255;
+    }
+    if linear - table[i - 1] <= table[i] - linear {
+        (i - 1) as u8
+    } else {
+        i as u8
+    }
 }
 
 /// A texel index on one axis: `i` wrapped into 0..n.

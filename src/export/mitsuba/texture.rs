@@ -21,7 +21,7 @@ use std::path::{Path, PathBuf};
 use glam::Vec3;
 
 use super::{file_stem, ExportError};
-use crate::scene::mitsuba::{srgb_code, srgb_table};
+use crate::scene::texture::{srgb_code, srgb_table};
 use crate::scene::{Scene, Texture, Wrap};
 
 /// How a material's diffuse reflectance reads its texture.

@@ -53,12 +53,7 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
 /// `Scene::name` is the file's stem; the warnings are in `Scene::warnings`, not logged.
 pub fn load_with_camera(path: &Path, camera: Option<usize>) -> Result<Scene, SceneError> {
     let start = std::time::Instant::now();
-    let file = path.display().to_string();
-    let bytes = std::fs::read(path).map_err(|error| SceneError::Read {
-        path: file.clone(),
-        referenced_by: "the scene file".into(),
-        error,
-    })?;
+    let (file, bytes) = crate::scene::load::read_scene_file(path)?;
     let mut ctx = Ctx {
         file,
         base: path.parent().unwrap_or(Path::new("")).to_path_buf(),

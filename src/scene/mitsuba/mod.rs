@@ -32,7 +32,6 @@ const DIAGONAL_MM: f64 = 43.266_615_305_567_87;
 use shapes::RawTriangle;
 
 pub use bsdf::{ns_of_alpha, MIRROR_NS};
-pub(crate) use textures::{srgb_code, srgb_table};
 
 /// Whether `path` names a Mitsuba XML scene (by its extension).
 pub fn is_mitsuba(path: &Path) -> bool {
@@ -42,12 +41,7 @@ pub fn is_mitsuba(path: &Path) -> bool {
 
 /// Loads the Mitsuba scene at `path`; the files it names are relative to its folder.
 pub fn load(path: &Path) -> Result<Scene, SceneError> {
-    let file = path.display().to_string();
-    let bytes = std::fs::read(path).map_err(|error| SceneError::Read {
-        path: file.clone(),
-        referenced_by: "the scene file".into(),
-        error,
-    })?;
+    let (file, bytes) = crate::scene::load::read_scene_file(path)?;
     let text = String::from_utf8(bytes).map_err(|e| SceneError::File {
         file: file.clone(),
         message: format!("not UTF-8 text: {e}"),

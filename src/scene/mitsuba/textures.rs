@@ -20,7 +20,7 @@ use half::f16;
 use roxmltree::Node;
 
 use super::props::Context;
-use crate::scene::texture::MAX_SIDE;
+use crate::scene::texture::{srgb_code, srgb_table, MAX_SIDE};
 use crate::scene::{SceneError, Texture, Wrap};
 
 /// A bitmap's image, decoded once per file and `raw` flag (`Context::textures`).
@@ -273,37 +273,6 @@ fn exr_texture(path: &std::path::Path) -> Result<Texture, String> {
         wrap: [Wrap::Repeat; 2],
         source: path.to_path_buf(),
     })
-}
-
-/// Each 8-bit sRGB code's linear value rounded to half precision: `scene::texture::decode`'s
-/// table (strictly increasing, so a decoded texel names its code).
-pub fn srgb_table() -> [f32; 256] {
-    std::array::from_fn(|i| {
-        let c = i as f64 / 255.0;
-        let linear = if c <= 0.04045 {
-            c / 12.92
-        } else {
-            ((c + 0.055) / 1.055).powf(2.4)
-        };
-        f16::from_f64(linear).to_f32()
-    })
-}
-
-/// The 8-bit code whose decoded value is nearest `linear` (clamped to [0, 1]): the code a
-/// texel decoded from an 8-bit file came from.
-pub fn srgb_code(table: &[f32; 256], linear: f32) -> u8 {
-    let i = table.partition_point(|&t| t < linear);
-    if i == 0 {
-        return 0;
-    }
-    if i == 256 {
-        return 255;
-    }
-    if linear - table[i - 1] <= table[i] - linear {
-        (i - 1) as u8
-    } else {
-        i as u8
-    }
 }
 
 /// A texel `decode` took through the sRGB curve, as the code / 255 a `raw` bitmap means.
